@@ -1,0 +1,100 @@
+#include "apps/image_io.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include "scene/input_error.h"
+
+namespace cuberille::apps {
+namespace {
+
+std::string lowerExtension(const std::filesystem::path& p) {
+    std::string e = p.extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+    return e;
+}
+
+// thresholds[c] = the smallest linear value that encodes to c + 1.
+const std::array<float, 255>& srgbThresholds() {
+    static const std::array<float, 255> table = [] {
+        std::array<float, 255> t{};
+        for (int c = 0; c < 255; ++c) {
+            const double encoded = (c + 0.5) / 255.0;
+            const double linear = encoded <= 0.04045 ? encoded / 12.92
+                                                     : std::pow((encoded + 0.055) / 1.055, 2.4);
+            t[c] = static_cast<float>(linear);
+        }
+        return t;
+    }();
+    return table;
+}
+
+}  // namespace
+
+ImageFormat imageFormatFor(const std::filesystem::path& path) {
+    const std::string e = lowerExtension(path);
+    if (e == ".png") return ImageFormat::Png;
+    if (e == ".exr") return ImageFormat::Exr;
+    throw scene::InputError(path.string() + ": unsupported output format '" + e +
+                            "' (use .png or .exr)");
+}
+
+uint8_t encodeSrgb8(float linear) {
+    if (!(linear > 0.0f)) return 0;  // also NaN
+    const auto& t = srgbThresholds();
+    return static_cast<uint8_t>(std::upper_bound(t.begin(), t.end(), linear) - t.begin());
+}
+
+void writeImageAtomically(const std::filesystem::path& path, const raster::Image& image) {
+    const ImageFormat format = imageFormatFor(path);
+    const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+    const std::filesystem::path temp =
+        dir / ("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) +
+               path.extension().string());
+    auto out = OIIO::ImageOutput::create(temp.string());
+    if (!out) throw std::runtime_error(path.string() + ": cannot create image writer");
+    bool ok = false;
+    if (format == ImageFormat::Exr) {
+        OIIO::ImageSpec spec(image.width, image.height, 4, OIIO::TypeDesc::FLOAT);
+        spec.attribute("compression", "zip");
+        ok = out->open(temp.string(), spec) &&
+             out->write_image(OIIO::TypeDesc::FLOAT, image.rgba.data());
+    } else {
+        std::vector<uint8_t> rgb(size_t(image.width) * image.height * 3);
+        for (size_t i = 0; i < size_t(image.width) * image.height; ++i)
+            for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = encodeSrgb8(image.rgba[i * 4 + c]);
+        OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::UINT8);
+        ok = out->open(temp.string(), spec) && out->write_image(OIIO::TypeDesc::UINT8, rgb.data());
+    }
+    ok = out->close() && ok;
+    if (!ok) {
+        std::error_code ignored;
+        std::filesystem::remove(temp, ignored);
+        throw std::runtime_error(path.string() + ": cannot write image: " + out->geterror());
+    }
+    std::filesystem::rename(temp, path);
+}
+
+raster::Image readImage(const std::filesystem::path& path) {
+    auto in = OIIO::ImageInput::open(path.string());
+    if (!in) throw scene::InputError(path.string() + ": cannot read image: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    raster::Image image;
+    image.width = spec.width;
+    image.height = spec.height;
+    std::vector<float> pixels(size_t(spec.width) * spec.height * spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
+        throw scene::InputError(path.string() + ": cannot read image: " + in->geterror());
+    image.rgba.assign(size_t(spec.width) * spec.height * 4, 1.0f);
+    for (size_t i = 0; i < size_t(spec.width) * spec.height; ++i)
+        for (int c = 0; c < std::min(4, spec.nchannels); ++c)
+            image.rgba[i * 4 + c] = pixels[i * spec.nchannels + c];
+    return image;
+}
+
+}  // namespace cuberille::apps

@@ -1,0 +1,47 @@
+#pragma once
+// `cuberille render`: one frame of a scene (a `.tri` file or a built-in scene) to an image.
+// Also the library entry point tests and benchmarks call, so they exercise the tool's path.
+
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "raster/resolve.h"
+#include "raster/stats.h"
+
+namespace cuberille::apps {
+
+enum class View { Color, Depth, Tiles, Overdraw };
+
+struct RenderOptions {
+    std::string scene;  // a .tri path or a built-in scene name
+    int width = 1280;
+    int height = 720;
+    int msaa = 1;
+    int threads = 0;  // 0 = all cores
+    View view = View::Color;
+    float detail = 1.0f;  // tessellation scale of built-in scenes
+    std::filesystem::path out;
+    std::filesystem::path statsPath;
+    bool quiet = false;
+};
+
+struct RenderResult {
+    raster::Image image;
+    raster::PipelineStats stats;
+    size_t sceneTriangles = 0;
+    double loadMs = 0;
+};
+
+View parseView(const std::string& name);  // throws scene::InputError
+/// Loads the scene and renders it; throws scene::InputError for bad input.
+RenderResult renderScene(const RenderOptions& options);
+
+nlohmann::json statsToJson(const RenderOptions& options, const RenderResult& result);
+
+/// The whole subcommand: render, write the image and stats, print a summary. Returns the
+/// exit code.
+int runRenderCommand(const RenderOptions& options);
+
+}  // namespace cuberille::apps

@@ -1,0 +1,50 @@
+#pragma once
+// Depth stage: per-sample depth from the triangle's plane equation, and the LESS test.
+//
+// Depth is evaluated directly at each sample, relative to the snapped vertex 0: the offset
+// X - originX is an integer below 2^24 and so exact in float, and the evaluation order is
+// fixed, so a sample's depth never depends on which tile or thread computed it. Values are
+// clamped to [0, 1] (the viewport's depth range).
+
+#include <algorithm>
+#include <cstdint>
+
+#include "raster/sample_pattern.h"
+#include "raster/setup.h"
+
+namespace cuberille::raster {
+
+template <int S>
+struct SampleSubpixelOffsets {
+    int32_t x[S], y[S];  // from the pixel centre
+};
+
+template <int S>
+void computeSampleSubpixelOffsets(const SamplePattern& sp, SampleSubpixelOffsets<S>& out) {
+    for (int s = 0; s < S; ++s) {
+        out.x[s] = sp.dx[s] * kSampleOffsetUnitSubpixels;
+        out.y[s] = sp.dy[s] * kSampleOffsetUnitSubpixels;
+    }
+}
+
+template <int S>
+inline void sampleDepths(const TriangleSetup& t, int32_t pixelX, int32_t pixelY,
+                         const SampleSubpixelOffsets<S>& o, float out[S]) {
+    const int32_t cx = pixelX * kSubpixelsPerPixel + kPixelCentreSubpixels - t.originXSubpixels;
+    const int32_t cy = pixelY * kSubpixelsPerPixel + kPixelCentreSubpixels - t.originYSubpixels;
+    for (int s = 0; s < S; ++s) {
+        const float z = t.depthAtOrigin + t.depthPerSubpixelX * float(cx + o.x[s]) +
+                        t.depthPerSubpixelY * float(cy + o.y[s]);
+        out[s] = std::clamp(z, 0.0f, 1.0f);
+    }
+}
+
+/// Samples of `covered` whose depth is less than the stored depth.
+template <int S>
+inline uint32_t depthTestLess(uint32_t covered, const float depth[S], const float* stored) {
+    uint32_t pass = 0;
+    for (int s = 0; s < S; ++s) pass |= uint32_t(depth[s] < stored[s]) << s;
+    return pass & covered;
+}
+
+}  // namespace cuberille::raster

@@ -1,0 +1,44 @@
+#include "raster/framebuffer.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace cuberille::raster {
+
+void Framebuffer::reset(const FramebufferDesc& desc) {
+    if (desc.widthPixels <= 0 || desc.heightPixels <= 0 ||
+        desc.widthPixels > kMaxFramebufferPixels || desc.heightPixels > kMaxFramebufferPixels)
+        throw std::invalid_argument("framebuffer size must be 1.." +
+                                    std::to_string(kMaxFramebufferPixels) + " pixels per side");
+    desc_ = desc;
+    tilesX_ = (desc.widthPixels + kTileSizePixels - 1) / kTileSizePixels;
+    tilesY_ = (desc.heightPixels + kTileSizePixels - 1) / kTileSizePixels;
+    // resize() keeps capacity across frames of the same size: no per-frame allocation.
+    color_.resize(size_t(tileCount()) * samplesPerTile());
+    depth_.resize(size_t(tileCount()) * samplesPerTile());
+    tileTouched_.assign(tileCount(), 0);
+    const size_t pixels = size_t(desc.widthPixels) * desc.heightPixels;
+    const size_t blocks = size_t(blocksX()) * blocksY();
+    if (desc.recordOverdraw) overdraw_.assign(pixels, 0); else overdraw_.clear();
+    if (desc.recordBlockClasses) {
+        blockPartial_.assign(blocks, 0);
+        blockFull_.assign(blocks, 0);
+    } else {
+        blockPartial_.clear();
+        blockFull_.clear();
+    }
+}
+
+void Framebuffer::touchTile(int tile) {
+    if (tileTouched_[tile]) return;
+    tileTouched_[tile] = 1;
+    std::fill_n(tileColor(tile), samplesPerTile(), desc_.clearColor);
+    std::fill_n(tileDepth(tile), samplesPerTile(), desc_.clearDepth);
+}
+
+size_t Framebuffer::memoryBytes() const {
+    return color_.size() * sizeof(glm::vec4) + depth_.size() * sizeof(float) +
+           (overdraw_.size() + blockPartial_.size() + blockFull_.size()) * sizeof(uint32_t);
+}
+
+}  // namespace cuberille::raster

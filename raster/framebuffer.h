@@ -1,0 +1,75 @@
+#pragma once
+// The multisampled render target: per-sample linear RGBA colour and float depth, stored tile by
+// tile (64x64 pixels, pixel-major inside a tile, samples of a pixel adjacent), so one back-end
+// task touches one contiguous piece of memory.
+//
+// Clearing is lazy: a tile is cleared by the back-end task that first draws into it, and a
+// tile nothing drew into resolves straight to the clear values (a frame that covers a small
+// part of the screen pays for that part only).
+//
+// Debug buffers (overdraw counts, coarse classes per block) exist only when a view asks.
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "raster/limits.h"
+
+namespace cuberille::raster {
+
+struct FramebufferDesc {
+    int widthPixels = 0;
+    int heightPixels = 0;
+    int samples = 1;
+    glm::vec4 clearColor{0.0f};
+    float clearDepth = 1.0f;
+    bool recordOverdraw = false;     // depth-passing samples per pixel
+    bool recordBlockClasses = false; // coarse classifications per 8x8 block
+};
+
+class Framebuffer {
+public:
+    void reset(const FramebufferDesc& desc);
+
+    const FramebufferDesc& desc() const { return desc_; }
+    int width() const { return desc_.widthPixels; }
+    int height() const { return desc_.heightPixels; }
+    int samples() const { return desc_.samples; }
+    int tilesX() const { return tilesX_; }
+    int tilesY() const { return tilesY_; }
+    int tileCount() const { return tilesX_ * tilesY_; }
+
+    /// Sample storage of one tile, index (pixelY * 64 + pixelX) * samples + sample.
+    glm::vec4* tileColor(int tile) { return color_.data() + size_t(tile) * samplesPerTile(); }
+    float* tileDepth(int tile) { return depth_.data() + size_t(tile) * samplesPerTile(); }
+    const glm::vec4* tileColor(int tile) const { return color_.data() + size_t(tile) * samplesPerTile(); }
+    const float* tileDepth(int tile) const { return depth_.data() + size_t(tile) * samplesPerTile(); }
+
+    bool tileTouched(int tile) const { return tileTouched_[tile] != 0; }
+    /// Clears the tile's samples on first use; called by the one task that owns the tile.
+    void touchTile(int tile);
+
+    // Debug buffers, linear over the image (overdraw) and over 8x8 blocks (classes).
+    uint32_t* overdraw() { return overdraw_.empty() ? nullptr : overdraw_.data(); }
+    const std::vector<uint32_t>& overdrawCounts() const { return overdraw_; }
+    uint32_t* blockPartialCounts() { return blockPartial_.empty() ? nullptr : blockPartial_.data(); }
+    uint32_t* blockFullCounts() { return blockFull_.empty() ? nullptr : blockFull_.data(); }
+    const std::vector<uint32_t>& blockPartial() const { return blockPartial_; }
+    const std::vector<uint32_t>& blockFull() const { return blockFull_; }
+    int blocksX() const { return (desc_.widthPixels + kBlockSizePixels - 1) / kBlockSizePixels; }
+    int blocksY() const { return (desc_.heightPixels + kBlockSizePixels - 1) / kBlockSizePixels; }
+
+    size_t samplesPerTile() const { return size_t(kPixelsPerTile) * desc_.samples; }
+    size_t memoryBytes() const;
+
+private:
+    FramebufferDesc desc_;
+    int tilesX_ = 0, tilesY_ = 0;
+    std::vector<glm::vec4> color_;
+    std::vector<float> depth_;
+    std::vector<uint8_t> tileTouched_;
+    std::vector<uint32_t> overdraw_, blockPartial_, blockFull_;
+};
+
+}  // namespace cuberille::raster

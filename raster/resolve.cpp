@@ -1,0 +1,111 @@
+#include "raster/resolve.h"
+
+#include <algorithm>
+
+#include "raster/parallel.h"
+
+namespace cuberille::raster {
+namespace {
+
+void prepare(const Framebuffer& fb, Image& out) {
+    out.width = fb.width();
+    out.height = fb.height();
+    out.rgba.resize(size_t(out.width) * out.height * 4);
+}
+
+void store(Image& out, int x, int y, const glm::vec4& v) {
+    float* p = out.pixel(x, y);
+    p[0] = v.r, p[1] = v.g, p[2] = v.b, p[3] = v.a;
+}
+
+// Calls f(x, y, firstSampleIndex, tileIndex) for every pixel, one task per tile row.
+template <class F>
+void forEachPixelByTile(const Framebuffer& fb, F&& f) {
+    parallelFor(size_t(fb.tilesY()), [&](size_t ty) {
+        for (int tx = 0; tx < fb.tilesX(); ++tx) {
+            const int tile = int(ty) * fb.tilesX() + tx;
+            const int x0 = tx * kTileSizePixels, y0 = int(ty) * kTileSizePixels;
+            const int x1 = std::min(fb.width(), x0 + kTileSizePixels);
+            const int y1 = std::min(fb.height(), y0 + kTileSizePixels);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x)
+                    f(x, y, (size_t(y - y0) * kTileSizePixels + size_t(x - x0)) * fb.samples(), tile);
+        }
+    });
+}
+
+// Perceptually ordered ramp for heat maps (black → blue → red → yellow → white).
+glm::vec4 heat(float t) {
+    static const glm::vec3 stops[] = {{0, 0, 0}, {0.0f, 0.05f, 0.6f}, {0.8f, 0.05f, 0.05f},
+                                      {1.0f, 0.85f, 0.0f}, {1, 1, 1}};
+    t = std::clamp(t, 0.0f, 1.0f) * 4.0f;
+    const int i = std::min(3, int(t));
+    return glm::vec4(glm::mix(stops[i], stops[i + 1], t - float(i)), 1.0f);
+}
+
+}  // namespace
+
+void resolveColor(const Framebuffer& fb, Image& out) {
+    prepare(fb, out);
+    const int n = fb.samples();
+    const double invN = 1.0 / n;
+    const glm::vec4 clear = fb.desc().clearColor;
+    forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
+        if (!fb.tileTouched(tile)) return store(out, x, y, clear);
+        const glm::vec4* s = fb.tileColor(tile) + first;
+        double sum[4] = {0, 0, 0, 0};
+        for (int i = 0; i < n; ++i)
+            for (int c = 0; c < 4; ++c) sum[c] += s[i][c];
+        store(out, x, y, glm::vec4(float(sum[0] * invN), float(sum[1] * invN),
+                                   float(sum[2] * invN), float(sum[3] * invN)));
+    });
+}
+
+void resolveDepth(const Framebuffer& fb, Image& out) {
+    prepare(fb, out);
+    const int n = fb.samples();
+    forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
+        float d = fb.desc().clearDepth;
+        if (fb.tileTouched(tile)) {
+            double sum = 0;
+            for (int i = 0; i < n; ++i) sum += fb.tileDepth(tile)[first + i];
+            d = float(sum / n);
+        }
+        store(out, x, y, glm::vec4(d, d, d, 1.0f));
+    });
+}
+
+void visualizeOverdraw(const Framebuffer& fb, Image& out) {
+    prepare(fb, out);
+    const auto& counts = fb.overdrawCounts();
+    // Scale: 8 full layers of depth-passing samples saturate the ramp.
+    const float scale = 1.0f / (8.0f * fb.samples());
+    for (int y = 0; y < fb.height(); ++y)
+        for (int x = 0; x < fb.width(); ++x) {
+            const uint32_t c = counts.empty() ? 0 : counts[size_t(y) * fb.width() + x];
+            store(out, x, y, c ? heat(0.1f + 0.9f * c * scale) : glm::vec4(0, 0, 0, 1));
+        }
+}
+
+void visualizeBlockClasses(const Framebuffer& fb, const Image& color, Image& out) {
+    prepare(fb, out);
+    static const glm::vec3 kEmpty(0.02f), kPartial(0.9f, 0.35f, 0.02f), kFull(0.05f, 0.6f, 0.1f),
+        kBoth(0.85f, 0.8f, 0.1f);
+    const auto& partial = fb.blockPartial();
+    const auto& full = fb.blockFull();
+    for (int y = 0; y < fb.height(); ++y)
+        for (int x = 0; x < fb.width(); ++x) {
+            const size_t b = size_t(y / kBlockSizePixels) * fb.blocksX() + x / kBlockSizePixels;
+            const bool p = !partial.empty() && partial[b], f = !full.empty() && full[b];
+            glm::vec3 c = p && f ? kBoth : p ? kPartial : f ? kFull : kEmpty;
+            const float* src = color.pixel(x, y);
+            c = glm::mix(c, glm::vec3(src[0], src[1], src[2]), 0.25f);
+            const bool edge = x % kBlockSizePixels == 0 || y % kBlockSizePixels == 0;
+            const bool tileEdge = x % kTileSizePixels == 0 || y % kTileSizePixels == 0;
+            if (tileEdge) c = glm::vec3(1.0f);
+            else if (edge) c *= 0.5f;
+            store(out, x, y, glm::vec4(c, 1.0f));
+        }
+}
+
+}  // namespace cuberille::raster

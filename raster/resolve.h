@@ -1,0 +1,33 @@
+#pragma once
+// Resolve: from per-sample storage to one linear RGBA value per pixel (box filter), plus the
+// teaching views that read the same framebuffer: depth, overdraw and coarse block classes.
+//
+// The box average sums a pixel's samples in double (exact for any samples of comparable
+// magnitude) and divides by the sample count, a power of two: the one rounding is the final
+// conversion to float. So k of N samples at value v resolve to float(k·v/N) (DESIGN.md, .tri).
+
+#include <vector>
+
+#include "raster/framebuffer.h"
+
+namespace cuberille::raster {
+
+/// Linear RGBA float image, row-major, top row first.
+struct Image {
+    int width = 0, height = 0;
+    std::vector<float> rgba;
+
+    float* pixel(int x, int y) { return rgba.data() + (size_t(y) * width + x) * 4; }
+    const float* pixel(int x, int y) const { return rgba.data() + (size_t(y) * width + x) * 4; }
+};
+
+void resolveColor(const Framebuffer& fb, Image& out);
+/// Grey level = average sample depth (clear depth where nothing was drawn).
+void resolveDepth(const Framebuffer& fb, Image& out);
+/// Heat map of depth-passing samples per pixel, normalised by the sample count.
+void visualizeOverdraw(const Framebuffer& fb, Image& out);
+/// Each 8x8 block coloured by what the coarse stage decided for it: never touched, only
+/// partial, only full, or both; the pixel grid of the colour image is dimmed underneath.
+void visualizeBlockClasses(const Framebuffer& fb, const Image& color, Image& out);
+
+}  // namespace cuberille::raster

@@ -1,0 +1,139 @@
+#include "raster/setup.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cuberille::raster {
+namespace {
+
+struct WindowVertex {
+    int32_t x, y;  // subpixels
+    float z;       // [0, 1]
+    float invW;
+    const float* varyings;
+};
+
+int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+bool toWindow(const ClipVertex& v, const SetupContext& c, WindowVertex& out) {
+    const glm::vec4& p = v.position;
+    const float invW = 1.0f / p.w;
+    const float x = p.x * invW * c.viewportScale.x + c.viewportOffset.x;
+    const float y = p.y * invW * c.viewportScale.y + c.viewportOffset.y;
+    const float z = p.z * invW;
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || !std::isfinite(invW))
+        return false;
+    out.x = snapToSubpixels(x);
+    out.y = snapToSubpixels(y);
+    out.z = std::clamp(z, 0.0f, 1.0f);  // clipping leaves rounding-sized excursions only
+    out.invW = invW;
+    out.varyings = v.varyings.data();
+    return true;
+}
+
+// Top-left rule (DESIGN.md): with the inside at E >= 0 and y down, a left edge has A > 0 and a
+// top edge is horizontal (A = 0) with B > 0. Samples exactly on any other edge are outside.
+int8_t fillBias(int32_t a, int32_t b) { return (a > 0 || (a == 0 && b > 0)) ? 0 : -1; }
+
+void setEdge(TriangleSetup& t, int k, const WindowVertex& from, const WindowVertex& to) {
+    const int32_t a = from.y - to.y;
+    const int32_t b = to.x - from.x;
+    t.edgeA[k] = a;
+    t.edgeB[k] = b;
+    t.fillBias[k] = fillBias(a, b);
+    t.edgeC[k] = -(int64_t{a} * from.x + int64_t{b} * from.y) + t.fillBias[k];
+}
+
+// Pixels whose sample span [p*256 + 128 + min*16, p*256 + 128 + max*16] meets [lo, hi].
+void samplePixelRange(int32_t lo, int32_t hi, int minOffset, int maxOffset, int32_t& first,
+                      int32_t& last) {
+    const int64_t centre = kPixelCentreSubpixels;
+    first = static_cast<int32_t>(
+        -floorDiv(-(lo - centre - int64_t{maxOffset} * kSampleOffsetUnitSubpixels),
+                  kSubpixelsPerPixel));
+    last = static_cast<int32_t>(
+        floorDiv(hi - centre - int64_t{minOffset} * kSampleOffsetUnitSubpixels, kSubpixelsPerPixel));
+}
+
+void setDepthPlane(TriangleSetup& t, const WindowVertex& v0, const WindowVertex& v1,
+                   const WindowVertex& v2, int64_t doubleArea) {
+    const double dx1 = v1.x - v0.x, dy1 = v1.y - v0.y;
+    const double dx2 = v2.x - v0.x, dy2 = v2.y - v0.y;
+    const double dz1 = double(v1.z) - v0.z, dz2 = double(v2.z) - v0.z;
+    const double area = static_cast<double>(doubleArea);
+    t.originXSubpixels = v0.x;
+    t.originYSubpixels = v0.y;
+    t.depthAtOrigin = v0.z;
+    t.depthPerSubpixelX = static_cast<float>((dz1 * dy2 - dz2 * dy1) / area);
+    t.depthPerSubpixelY = static_cast<float>((dz2 * dx1 - dz1 * dx2) / area);
+}
+
+}  // namespace
+
+SetupContext SetupContext::forDraw(PositionSpace space, int widthPixels, int heightPixels,
+                                   const SamplePattern& samples, CullMode cull,
+                                   int varyingCount) {
+    SetupContext c;
+    if (space == PositionSpace::Clip) {
+        // Direct3D viewport: x = (ndc + 1) W/2, y = (1 - ndc) H/2.
+        c.viewportScale = {widthPixels * 0.5f, -heightPixels * 0.5f};
+        c.viewportOffset = {widthPixels * 0.5f, heightPixels * 0.5f};
+    }
+    c.scissorWidth = widthPixels;
+    c.scissorHeight = heightPixels;
+    c.samples = &samples;
+    c.cull = cull;
+    c.varyingCount = varyingCount;
+    return c;
+}
+
+int32_t snapToSubpixels(float windowCoordinate) {
+    // In double, v * 256 is exact and adding 0.5 cannot round for |v| < 2^44.
+    return static_cast<int32_t>(std::floor(double(windowCoordinate) * kSubpixelsPerPixel + 0.5));
+}
+
+SetupResult setupTriangle(const ClipVertex& c0, const ClipVertex& c1, const ClipVertex& c2,
+                          const SetupContext& context, TriangleSetup& t, float* varyingsOut) {
+    WindowVertex v[3];
+    if (!toWindow(c0, context, v[0]) || !toWindow(c1, context, v[1]) ||
+        !toWindow(c2, context, v[2]))
+        return SetupResult::Invalid;
+
+    int64_t doubleArea = int64_t{v[1].x - v[0].x} * (v[2].y - v[0].y) -
+                         int64_t{v[2].x - v[0].x} * (v[1].y - v[0].y);
+    if (doubleArea == 0) return SetupResult::Degenerate;
+
+    // doubleArea > 0 is clockwise on screen (y down), i.e. back-facing for CCW-front.
+    const bool frontFacing = doubleArea < 0;
+    if ((context.cull == CullMode::Back && !frontFacing) ||
+        (context.cull == CullMode::Front && frontFacing))
+        return SetupResult::Culled;
+    if (doubleArea < 0) {
+        std::swap(v[1], v[2]);
+        doubleArea = -doubleArea;
+    }
+
+    const SamplePattern& sp = *context.samples;
+    int32_t minX = std::min({v[0].x, v[1].x, v[2].x}), maxX = std::max({v[0].x, v[1].x, v[2].x});
+    int32_t minY = std::min({v[0].y, v[1].y, v[2].y}), maxY = std::max({v[0].y, v[1].y, v[2].y});
+    samplePixelRange(minX, maxX, sp.minDx, sp.maxDx, t.pixelMinX, t.pixelMaxX);
+    samplePixelRange(minY, maxY, sp.minDy, sp.maxDy, t.pixelMinY, t.pixelMaxY);
+    t.pixelMinX = std::max(t.pixelMinX, 0);
+    t.pixelMinY = std::max(t.pixelMinY, 0);
+    t.pixelMaxX = std::min(t.pixelMaxX, context.scissorWidth - 1);
+    t.pixelMaxY = std::min(t.pixelMaxY, context.scissorHeight - 1);
+    if (t.pixelMinX > t.pixelMaxX || t.pixelMinY > t.pixelMaxY) return SetupResult::NoSamples;
+
+    setEdge(t, 0, v[1], v[2]);
+    setEdge(t, 1, v[2], v[0]);
+    setEdge(t, 2, v[0], v[1]);
+    setDepthPlane(t, v[0], v[1], v[2], doubleArea);
+    t.invDoubleArea = 1.0 / static_cast<double>(doubleArea);
+    for (int k = 0; k < 3; ++k) {
+        t.invW[k] = v[k].invW;
+        std::copy_n(v[k].varyings, context.varyingCount, varyingsOut + k * context.varyingCount);
+    }
+    return SetupResult::Accepted;
+}
+
+}  // namespace cuberille::raster

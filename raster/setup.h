@@ -1,0 +1,80 @@
+#pragma once
+// Triangle set-up: from three clipped vertices to the exact integer description the back end
+// rasterizes.
+//
+// 1. Perspective divide and viewport transform to window space (pixels, y down).
+// 2. Snap x and y to 1/256 pixel, rounding to nearest (ties up), in exact double arithmetic.
+// 3. The doubled signed area from the snapped vertices, in int64: zero-area triangles cover
+//    nothing and stop here; its sign gives the facing for culling. Clockwise-on-screen order
+//    is then enforced (swapping v1 and v2) so that the inside of every edge is E >= 0.
+// 4. Three edge functions E_k = A_k X + B_k Y + C_k over sample positions in subpixels, edge k
+//    opposite vertex k, with the top-left fill rule folded into C_k as a bias of 0 or -1: a
+//    sample is covered iff all three biased values are >= 0 (DESIGN.md, fill rule).
+// 5. The depth plane over the snapped vertices, and 1/w per vertex for perspective-correct
+//    interpolation at shading time.
+//
+// Thread-safety: a pure function of its inputs.
+
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+#include "raster/clip.h"
+#include "raster/draw.h"
+#include "raster/sample_pattern.h"
+
+namespace cuberille::raster {
+
+struct TriangleSetup {
+    int32_t edgeA[3];  // subpixels
+    int32_t edgeB[3];
+    int64_t edgeC[3];  // subpixels², fill-rule bias included
+    int8_t fillBias[3];
+
+    // Inclusive pixel range whose samples can be covered, already clamped to the scissor.
+    int32_t pixelMinX, pixelMinY, pixelMaxX, pixelMaxY;
+
+    // Depth plane: z = depthAtOrigin + depthPerSubpixelX * (X - originX) + ... (Y - originY).
+    int32_t originXSubpixels, originYSubpixels;
+    float depthAtOrigin, depthPerSubpixelX, depthPerSubpixelY;
+
+    float invW[3];         // 1 / clip w per vertex, for perspective-correct barycentrics
+    double invDoubleArea;  // 1 / (A·X + B·Y + C of edge k at vertex k), in 1/subpixels²
+    uint32_t varyingOffset;  // into the batch's varyings: 3 vertices x varyingCount floats
+    glm::vec4 flatColor;     // ConstantColor shading
+
+    /// Unbiased edge value at a sample position (subpixels).
+    int64_t edgeAt(int k, int64_t x, int64_t y) const {
+        return int64_t{edgeA[k]} * x + int64_t{edgeB[k]} * y + edgeC[k] - fillBias[k];
+    }
+};
+
+enum class SetupResult : uint8_t {
+    Accepted,
+    Degenerate,  // zero area after snapping
+    Culled,      // facing culled
+    NoSamples,   // bounds contain no sample position inside the scissor
+    Invalid,     // non-finite coordinates
+};
+
+struct SetupContext {
+    // Window = ndc * scale + offset (x), with the y flip folded into scale.y.
+    glm::vec2 viewportScale{1.0f}, viewportOffset{0.0f};
+    int scissorWidth = 0, scissorHeight = 0;
+    const SamplePattern* samples = nullptr;
+    CullMode cull = CullMode::None;
+    int varyingCount = 0;
+
+    static SetupContext forDraw(PositionSpace space, int widthPixels, int heightPixels,
+                                const SamplePattern& samples, CullMode cull, int varyingCount);
+};
+
+/// Snaps a window coordinate to subpixels: round to nearest, ties up, exactly.
+int32_t snapToSubpixels(float windowCoordinate);
+
+/// On Accepted, fills `out` and writes the three vertices' varyings (in set-up vertex order)
+/// to varyingsOut[0 .. 3 * varyingCount).
+SetupResult setupTriangle(const ClipVertex& v0, const ClipVertex& v1, const ClipVertex& v2,
+                          const SetupContext& context, TriangleSetup& out, float* varyingsOut);
+
+}  // namespace cuberille::raster

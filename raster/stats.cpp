@@ -1,0 +1,27 @@
+#include "raster/stats.h"
+
+namespace cuberille::raster {
+
+StageCounters& StageCounters::operator+=(const StageCounters& o) {
+    verticesShaded += o.verticesShaded;
+    trianglesIn += o.trianglesIn;
+    trianglesInvalid += o.trianglesInvalid;
+    trianglesClipRejected += o.trianglesClipRejected;
+    trianglesClipped += o.trianglesClipped;
+    clippedTrianglesOut += o.clippedTrianglesOut;
+    trianglesDegenerate += o.trianglesDegenerate;
+    trianglesCulled += o.trianglesCulled;
+    trianglesNoSamples += o.trianglesNoSamples;
+    trianglesSetUp += o.trianglesSetUp;
+    binEntries += o.binEntries;
+    smallTriangleEntries += o.smallTriangleEntries;
+    blocksEmpty += o.blocksEmpty;
+    blocksPartial += o.blocksPartial;
+    blocksFull += o.blocksFull;
+    samplesTested += o.samplesTested;
+    samplesPassed += o.samplesPassed;
+    pixelsShaded += o.pixelsShaded;
+    return *this;
+}
+
+}  // namespace cuberille::raster

@@ -1,0 +1,54 @@
+#pragma once
+// Named counters and timings of every stage. Counters are integers summed from per-batch and
+// per-tile partial counts, so they are the same for every thread count.
+
+#include <cstdint>
+#include <vector>
+
+namespace cuberille::raster {
+
+struct StageCounters {
+    // vertex
+    uint64_t verticesShaded = 0;
+    // clip
+    uint64_t trianglesIn = 0;
+    uint64_t trianglesInvalid = 0;       // NaN/Inf coordinates: dropped
+    uint64_t trianglesClipRejected = 0;  // wholly outside near, far or the guard band
+    uint64_t trianglesClipped = 0;       // cut against a plane
+    uint64_t clippedTrianglesOut = 0;    // fan triangles produced by clipping
+    // setup
+    uint64_t trianglesDegenerate = 0;
+    uint64_t trianglesCulled = 0;
+    uint64_t trianglesNoSamples = 0;
+    uint64_t trianglesSetUp = 0;
+    // bin
+    uint64_t binEntries = 0;  // (triangle, tile) pairs
+    // coarse
+    uint64_t smallTriangleEntries = 0;  // entries that skipped the coarse stage
+    uint64_t blocksEmpty = 0;
+    uint64_t blocksPartial = 0;
+    uint64_t blocksFull = 0;
+    // fine, depth, shade, output merge
+    uint64_t samplesTested = 0;  // covered samples that met the depth test
+    uint64_t samplesPassed = 0;
+    uint64_t pixelsShaded = 0;
+
+    StageCounters& operator+=(const StageCounters& o);
+};
+
+struct StageTimes {
+    double vertexMs = 0;    // wall time
+    double frontEndMs = 0;  // clip + setup + bin, wall time
+    double backEndMs = 0;   // coarse + fine + depth + shade + output merge, wall time
+    double resolveMs = 0;
+    double frameMs = 0;
+};
+
+struct PipelineStats {
+    StageCounters counters;
+    StageTimes times;
+    std::vector<uint64_t> occlusionSamplesPassed;  // per occlusion slot
+    uint64_t flushes = 0;
+};
+
+}  // namespace cuberille::raster

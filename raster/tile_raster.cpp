@@ -1,0 +1,199 @@
+#include "raster/tile_raster.h"
+
+#include <algorithm>
+#include <bit>
+
+#include "raster/coarse.h"
+#include "raster/depth.h"
+#include "raster/fine.h"
+#include "raster/output_merge.h"
+#include "raster/shade.h"
+
+namespace cuberille::raster {
+namespace {
+
+/// Triangles whose clamped pixel bounds hold at most this many pixels skip the coarse stage:
+/// sub-pixel geometry (voxel faces, dense scans) is the common case, not the exception.
+constexpr int kSmallTrianglePixels = 2;
+
+/// Everything the per-pixel path needs for one (tile, draw) pair.
+struct TileTarget {
+    int originX, originY;  // first pixel of the tile
+    glm::vec4* color;
+    float* depth;
+    uint32_t* overdraw;  // image-linear, or null
+    uint32_t* blockPartial;
+    uint32_t* blockFull;
+    int imageWidth, blocksX;
+    const DrawState* state;
+    uint64_t* occlusion;  // null when the draw has no slot
+    StageCounters* counters;
+};
+
+template <int S, class Shader>
+class TriangleRaster {
+public:
+    TriangleRaster(const TriangleSetup& t, const float* varyings, const Shader& shader,
+                   const SamplePattern& sp, const TileTarget& target)
+        : t_(t), varyings_(varyings), shader_(shader), target_(target) {
+        computeSampleEdgeOffsets<S>(t, sp, edgeOffsets_);
+        computeSampleSubpixelOffsets<S>(sp, sampleOffsets_);
+    }
+
+    void run(const SamplePattern& sp) {
+        const PixelRect bounds{std::max(t_.pixelMinX, target_.originX),
+                               std::max(t_.pixelMinY, target_.originY),
+                               std::min(t_.pixelMaxX, target_.originX + kTileSizePixels - 1),
+                               std::min(t_.pixelMaxY, target_.originY + kTileSizePixels - 1)};
+        if (bounds.minX > bounds.maxX || bounds.minY > bounds.maxY) return;
+        const int pixels = (bounds.maxX - bounds.minX + 1) * (bounds.maxY - bounds.minY + 1);
+        if (pixels <= kSmallTrianglePixels) {
+            ++target_.counters->smallTriangleEntries;
+            rasterizePartial(bounds);
+            return;
+        }
+        coarse(bounds, sp);
+    }
+
+private:
+    // Coarse stage over the 8x8 blocks (aligned to the tile) that meet the bounds.
+    void coarse(const PixelRect& bounds, const SamplePattern& sp) {
+        const int bx0 = bounds.minX / kBlockSizePixels, bx1 = bounds.maxX / kBlockSizePixels;
+        const int by0 = bounds.minY / kBlockSizePixels, by1 = bounds.maxY / kBlockSizePixels;
+        for (int by = by0; by <= by1; ++by) {
+            for (int bx = bx0; bx <= bx1; ++bx) {
+                const PixelRect block{std::max(bounds.minX, bx * kBlockSizePixels),
+                                      std::max(bounds.minY, by * kBlockSizePixels),
+                                      std::min(bounds.maxX, bx * kBlockSizePixels + kBlockSizePixels - 1),
+                                      std::min(bounds.maxY, by * kBlockSizePixels + kBlockSizePixels - 1)};
+                switch (classifyPixelRect(t_, block, sp)) {
+                    case BlockClass::Empty:
+                        ++target_.counters->blocksEmpty;
+                        break;
+                    case BlockClass::Partial:
+                        ++target_.counters->blocksPartial;
+                        if (target_.blockPartial) ++target_.blockPartial[by * target_.blocksX + bx];
+                        rasterizePartial(block);
+                        break;
+                    case BlockClass::Full:
+                        ++target_.counters->blocksFull;
+                        if (target_.blockFull) ++target_.blockFull[by * target_.blocksX + bx];
+                        rasterizeFull(block);
+                        break;
+                }
+            }
+        }
+    }
+
+    // Full block: every sample is covered, no edge test at all.
+    void rasterizeFull(const PixelRect& r) {
+        const uint32_t all = S == 32 ? ~0u : (1u << S) - 1u;
+        for (int y = r.minY; y <= r.maxY; ++y)
+            for (int x = r.minX; x <= r.maxX; ++x) processPixel(x, y, all);
+    }
+
+    // Fine stage: per-sample masks, stepping the edge values along each row.
+    void rasterizePartial(const PixelRect& r) {
+        for (int y = r.minY; y <= r.maxY; ++y) {
+            int64_t e[3];
+            edgesAtPixelCentre(t_, r.minX, y, e);
+            for (int x = r.minX; x <= r.maxX; ++x) {
+                const uint32_t mask = coverageMask<S>(e, edgeOffsets_);
+                if (mask) processPixel(x, y, mask);
+                for (int k = 0; k < 3; ++k) e[k] += int64_t{t_.edgeA[k]} * kSubpixelsPerPixel;
+            }
+        }
+    }
+
+    // Depth (early, before shading), shade once, output merge.
+    void processPixel(int32_t x, int32_t y, uint32_t covered) {
+        const DrawState& state = *target_.state;
+        const size_t first =
+            (size_t(y - target_.originY) * kTileSizePixels + size_t(x - target_.originX)) * S;
+        float depth[S] = {};  // read only when computed; zeroed to keep -Wall quiet
+        if (state.depthTest || state.depthWrite) sampleDepths<S>(t_, x, y, sampleOffsets_, depth);
+        const uint32_t pass =
+            state.depthTest ? depthTestLess<S>(covered, depth, target_.depth + first) : covered;
+        StageCounters& c = *target_.counters;
+        c.samplesTested += std::popcount(covered);
+        if (!pass) return;
+        const int passed = std::popcount(pass);
+        c.samplesPassed += passed;
+        if (target_.occlusion) *target_.occlusion += passed;
+        if (target_.overdraw) target_.overdraw[size_t(y) * target_.imageWidth + x] += passed;
+        if (state.colorWriteMask) {
+            ++c.pixelsShaded;
+            mergeColor<S>(target_.color + first, pass, shader_.shade(t_, varyings_, x, y),
+                          state.colorWriteMask);
+        }
+        if (state.depthWrite) mergeDepth<S>(target_.depth + first, pass, depth);
+    }
+
+    const TriangleSetup& t_;
+    const float* varyings_;
+    const Shader& shader_;
+    const TileTarget& target_;
+    SampleEdgeOffsets<S> edgeOffsets_;
+    SampleSubpixelOffsets<S> sampleOffsets_;
+};
+
+template <int S, class Shader>
+void rasterizeBinned(const TriangleBatch& batch, int tile, const Shader& shader,
+                     const SamplePattern& sp, const TileTarget& target) {
+    const uint32_t begin = batch.tileOffsets[tile], end = batch.tileOffsets[tile + 1];
+    const int stride = 3 * batch.varyingCount;
+    for (uint32_t i = begin; i < end; ++i) {
+        const uint32_t index = batch.tileTriangles[i];
+        const TriangleSetup& t = batch.triangles[index];
+        TriangleRaster<S, Shader>(t, batch.varyings.data() + size_t(index) * stride, shader, sp,
+                                  target)
+            .run(sp);
+    }
+}
+
+template <int S>
+void dispatchShader(const TriangleBatch& batch, int tile, const SamplePattern& sp,
+                    const TileTarget& target) {
+    switch (target.state->shading) {
+        case ShadingModel::ConstantColor:
+            rasterizeBinned<S>(batch, tile, ConstantColorShader{}, sp, target);
+            break;
+        case ShadingModel::Lambert:
+            rasterizeBinned<S>(batch, tile, LambertShader{target.state->light}, sp, target);
+            break;
+    }
+}
+
+}  // namespace
+
+void rasterizeBatchInTile(const TriangleBatch& batch, const DrawState& state, int tile,
+                          Framebuffer& fb, TileCounters& out) {
+    if (batch.tileOffsets[tile] == batch.tileOffsets[tile + 1]) return;
+    fb.touchTile(tile);
+    if (state.occlusionSlot >= 0 && out.occlusionSamplesPassed.size() <= size_t(state.occlusionSlot))
+        out.occlusionSamplesPassed.resize(state.occlusionSlot + 1, 0);
+    const TileTarget target{
+        (tile % fb.tilesX()) * kTileSizePixels,
+        (tile / fb.tilesX()) * kTileSizePixels,
+        fb.tileColor(tile),
+        fb.tileDepth(tile),
+        fb.overdraw(),
+        fb.blockPartialCounts(),
+        fb.blockFullCounts(),
+        fb.width(),
+        fb.blocksX(),
+        &state,
+        state.occlusionSlot >= 0 ? &out.occlusionSamplesPassed[state.occlusionSlot] : nullptr,
+        &out.counters,
+    };
+    const SamplePattern& sp = standardSamplePattern(fb.samples());
+    switch (fb.samples()) {
+        case 1: dispatchShader<1>(batch, tile, sp, target); break;
+        case 2: dispatchShader<2>(batch, tile, sp, target); break;
+        case 4: dispatchShader<4>(batch, tile, sp, target); break;
+        case 8: dispatchShader<8>(batch, tile, sp, target); break;
+        case 16: dispatchShader<16>(batch, tile, sp, target); break;
+    }
+}
+
+}  // namespace cuberille::raster

@@ -1,0 +1,15 @@
+#pragma once
+// Bad input (a file, a value on the command line): the message names the file, the place in it
+// and the problem. The tool maps it to exit code 2 (DESIGN.md, command line).
+
+#include <stdexcept>
+#include <string>
+
+namespace cuberille::scene {
+
+class InputError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+}  // namespace cuberille::scene
