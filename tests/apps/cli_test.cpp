@@ -1,0 +1,96 @@
+// The tool as a user meets it: exit codes, messages naming file and line, nothing written on
+// failure, an earlier good output left untouched.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandRun {
+    int exitCode;
+    std::string output;
+};
+
+CommandRun run(const std::string& args) {
+    const std::string command = std::string(CUBERILLE_BINARY) + " " + args + " 2>&1";
+    CommandRun r{-1, ""};
+    FILE* pipe = popen(command.c_str(), "r");
+    char buffer[512];
+    while (pipe && fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
+    const int status = pipe ? pclose(pipe) : -1;
+    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+class Cli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("cuberille-cli-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+                "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    fs::path write(const std::string& name, const std::string& text) {
+        std::ofstream(dir_ / name) << text;
+        return dir_ / name;
+    }
+    fs::path dir_;
+};
+
+TEST_F(Cli, RendersTriSceneToExrAndPng) {
+    const fs::path scene = write("ok.tri", "1 1 30 2 5 20 1\n");
+    for (const char* ext : {".exr", ".png"}) {
+        const fs::path out = dir_ / (std::string("ok") + ext);
+        const CommandRun r = run("render " + scene.string() + " --width 32 --height 24 --msaa 4 --out " +
+                          out.string() + " --stats " + (dir_ / "s.json").string());
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_TRUE(fs::exists(out));
+        EXPECT_TRUE(fs::exists(dir_ / "s.json"));
+    }
+}
+
+TEST_F(Cli, MalformedTriGivesExitTwoWithFileAndLineAndWritesNothing) {
+    const fs::path scene = write("bad.tri", "1 1 30 2 5 20 1\n1 2 3\n");
+    const fs::path out = dir_ / "bad.exr";
+    const CommandRun r = run("render " + scene.string() + " --width 32 --height 24 --out " + out.string());
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find(scene.string() + ":2:"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+    for (const auto& e : fs::directory_iterator(dir_))
+        EXPECT_EQ(e.path().extension(), ".tri") << "stray file " << e.path();
+}
+
+TEST_F(Cli, FailedRunLeavesEarlierOutputUntouched) {
+    const fs::path out = dir_ / "keep.png";
+    write("keep.png", "earlier good output");
+    const fs::path scene = write("bad.tri", "oops\n");
+    EXPECT_EQ(run("render " + scene.string() + " --out " + out.string()).exitCode, 2);
+    std::ifstream in(out);
+    std::string content((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_EQ(content, "earlier good output");
+}
+
+TEST_F(Cli, BadUsageGivesExitTwo) {
+    EXPECT_EQ(run("render demo --msaa 3 --out " + (dir_ / "x.png").string()).exitCode, 2);
+    EXPECT_EQ(run("render demo --out " + (dir_ / "x.tga").string()).exitCode, 2);
+    EXPECT_EQ(run("render demo").exitCode, 2);
+    EXPECT_EQ(run("render " + (dir_ / "missing.tri").string() + " --out " + (dir_ / "x.png").string()).exitCode, 2);
+    EXPECT_EQ(run("frobnicate").exitCode, 2);
+}
+
+TEST_F(Cli, HelpOnEveryLevel) {
+    EXPECT_EQ(run("--help").exitCode, 0);
+    const CommandRun r = run("render --help");
+    EXPECT_EQ(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--msaa"), std::string::npos);
+}
+
+}  // namespace

@@ -1,0 +1,39 @@
+#pragma once
+// Small helpers shared by the raster tests: render a scene through the real pipeline and read
+// individual samples back.
+
+#include <glm/glm.hpp>
+
+#include "raster/framebuffer.h"
+#include "raster/limits.h"
+#include "raster/pipeline.h"
+#include "scene/tri_scene.h"
+
+namespace cuberille::testing {
+
+inline glm::vec4 sampleColor(const raster::Framebuffer& fb, int x, int y, int s) {
+    const int tile = (y / raster::kTileSizePixels) * fb.tilesX() + x / raster::kTileSizePixels;
+    if (!fb.tileTouched(tile)) return fb.desc().clearColor;
+    const size_t i = (size_t(y % raster::kTileSizePixels) * raster::kTileSizePixels +
+                      size_t(x % raster::kTileSizePixels)) * fb.samples() + s;
+    return fb.tileColor(tile)[i];
+}
+
+inline raster::FramebufferDesc frame(int width, int height, int samples) {
+    raster::FramebufferDesc d;
+    d.widthPixels = width;
+    d.heightPixels = height;
+    d.samples = samples;
+    return d;
+}
+
+inline void renderTri(raster::Pipeline& p, const scene::TriScene& s, int width, int height,
+                      int samples, bool recordOverdraw = false) {
+    raster::FramebufferDesc d = frame(width, height, samples);
+    d.recordOverdraw = recordOverdraw;
+    p.beginFrame(d);
+    p.draw(s.drawCall());
+    p.endFrame();
+}
+
+}  // namespace cuberille::testing
