@@ -26,6 +26,7 @@ test: build
 	@ctest --preset $(PRESET) -j $(JOBS)
 
 bench: build
+	@$(BUILD_DIR)/bench/raster_bench --threads 1
 	@$(BUILD_DIR)/bench/raster_bench
 
 # Regenerate reference_images/ from the current renderer (review the diff before committing).

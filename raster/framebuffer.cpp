@@ -13,9 +13,13 @@ void Framebuffer::reset(const FramebufferDesc& desc) {
     desc_ = desc;
     tilesX_ = (desc.widthPixels + kTileSizePixels - 1) / kTileSizePixels;
     tilesY_ = (desc.heightPixels + kTileSizePixels - 1) / kTileSizePixels;
-    // resize() keeps capacity across frames of the same size: no per-frame allocation.
-    color_.resize(size_t(tileCount()) * samplesPerTile());
-    depth_.resize(size_t(tileCount()) * samplesPerTile());
+    // Storage is kept across frames that fit in it: no per-frame allocation or fill.
+    const size_t samples = size_t(tileCount()) * samplesPerTile();
+    if (samples > sampleCapacity_) {
+        color_ = std::make_unique_for_overwrite<glm::vec4[]>(samples);
+        depth_ = std::make_unique_for_overwrite<float[]>(samples);
+        sampleCapacity_ = samples;
+    }
     tileTouched_.assign(tileCount(), 0);
     const size_t pixels = size_t(desc.widthPixels) * desc.heightPixels;
     const size_t blocks = size_t(blocksX()) * blocksY();
@@ -37,7 +41,7 @@ void Framebuffer::touchTile(int tile) {
 }
 
 size_t Framebuffer::memoryBytes() const {
-    return color_.size() * sizeof(glm::vec4) + depth_.size() * sizeof(float) +
+    return sampleCapacity_ * (sizeof(glm::vec4) + sizeof(float)) +
            (overdraw_.size() + blockPartial_.size() + blockFull_.size()) * sizeof(uint32_t);
 }
 

@@ -10,6 +10,7 @@
 // Debug buffers (overdraw counts, coarse classes per block) exist only when a view asks.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -41,10 +42,10 @@ public:
     int tileCount() const { return tilesX_ * tilesY_; }
 
     /// Sample storage of one tile, index (pixelY * 64 + pixelX) * samples + sample.
-    glm::vec4* tileColor(int tile) { return color_.data() + size_t(tile) * samplesPerTile(); }
-    float* tileDepth(int tile) { return depth_.data() + size_t(tile) * samplesPerTile(); }
-    const glm::vec4* tileColor(int tile) const { return color_.data() + size_t(tile) * samplesPerTile(); }
-    const float* tileDepth(int tile) const { return depth_.data() + size_t(tile) * samplesPerTile(); }
+    glm::vec4* tileColor(int tile) { return color_.get() + size_t(tile) * samplesPerTile(); }
+    float* tileDepth(int tile) { return depth_.get() + size_t(tile) * samplesPerTile(); }
+    const glm::vec4* tileColor(int tile) const { return color_.get() + size_t(tile) * samplesPerTile(); }
+    const float* tileDepth(int tile) const { return depth_.get() + size_t(tile) * samplesPerTile(); }
 
     bool tileTouched(int tile) const { return tileTouched_[tile] != 0; }
     /// Clears the tile's samples on first use; called by the one task that owns the tile.
@@ -66,8 +67,10 @@ public:
 private:
     FramebufferDesc desc_;
     int tilesX_ = 0, tilesY_ = 0;
-    std::vector<glm::vec4> color_;
-    std::vector<float> depth_;
+    // Not value-initialised: every tile is cleared by touchTile() before it is read.
+    std::unique_ptr<glm::vec4[]> color_;
+    std::unique_ptr<float[]> depth_;
+    size_t sampleCapacity_ = 0;
     std::vector<uint8_t> tileTouched_;
     std::vector<uint32_t> overdraw_, blockPartial_, blockFull_;
 };

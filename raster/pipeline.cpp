@@ -1,5 +1,6 @@
 #include "raster/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -22,37 +23,47 @@ struct TriangleInput {
     SetupContext setup;
 };
 
-bool fetchVertex(const TriangleInput& in, size_t index, ClipVertex& out) {
+bool fetchVertex(const TriangleInput& in, size_t index, SetupVertex& out) {
     if (index >= in.vertices.clipPositions.size()) return false;
     out.position = in.vertices.clipPositions[index];
-    const int n = in.vertices.varyingCount;
-    const float* v = in.vertices.varyings.data() + index * n;
-    for (int i = 0; i < n; ++i) out.varyings[i] = v[i];
+    out.varyings = in.vertices.varyings.data() + index * in.vertices.varyingCount;
     return std::isfinite(out.position.x) && std::isfinite(out.position.y) &&
            std::isfinite(out.position.z) && std::isfinite(out.position.w);
 }
 
-// Set-up of one (possibly clipped) triangle into the batch, counting the outcome.
-void setupInto(const TriangleInput& in, const ClipVertex& a, const ClipVertex& b,
-               const ClipVertex& c, const glm::vec4& color, TriangleBatch& batch) {
-    const size_t stride = 3 * size_t(batch.varyingCount);
-    const size_t offset = batch.triangles.size() * stride;
-    batch.varyings.resize(offset + stride);
+ClipVertex toClipVertex(const SetupVertex& v, int varyingCount) {
+    ClipVertex c;
+    c.position = v.position;
+    std::copy_n(v.varyings, varyingCount, c.varyings.data());
+    return c;
+}
+
+SetupVertex fromClipVertex(const ClipVertex& c) { return {c.position, c.varyings.data()}; }
+
+// Set-up of one (possibly clipped) triangle into the batch, counting the outcome. Varyings
+// are copied only for triangles that survive set-up.
+void setupInto(const TriangleInput& in, const SetupVertex& a, const SetupVertex& b,
+               const SetupVertex& c, const glm::vec4& color, TriangleBatch& batch) {
     TriangleSetup t;
+    int order[3];
     StageCounters& k = batch.counters;
-    switch (setupTriangle(a, b, c, in.setup, t, batch.varyings.data() + offset)) {
-        case SetupResult::Accepted:
-            t.varyingOffset = uint32_t(offset);
+    switch (setupTriangle(a, b, c, in.setup, t, order)) {
+        case SetupResult::Accepted: {
+            const SetupVertex* input[3] = {&a, &b, &c};
+            t.varyingOffset = uint32_t(batch.varyings.size());
+            for (int v = 0; v < 3; ++v)
+                batch.varyings.insert(batch.varyings.end(), input[order[v]]->varyings,
+                                      input[order[v]]->varyings + batch.varyingCount);
             t.flatColor = color;
             batch.triangles.push_back(t);
             ++k.trianglesSetUp;
             return;
+        }
         case SetupResult::Degenerate: ++k.trianglesDegenerate; break;
         case SetupResult::Culled: ++k.trianglesCulled; break;
         case SetupResult::NoSamples: ++k.trianglesNoSamples; break;
         case SetupResult::Invalid: ++k.trianglesInvalid; break;
     }
-    batch.varyings.resize(offset);
 }
 
 }  // namespace
@@ -120,7 +131,7 @@ void Pipeline::frontEnd(const DrawCall& call, int drawIndex, size_t firstTriangl
 
     const size_t end = std::min(call.triangleCount(), firstTriangle + kTrianglesPerBatch);
     StageCounters& k = batch.counters;
-    ClipVertex v[3];
+    SetupVertex v[3];
     ClippedPolygon polygon;
     for (size_t tri = firstTriangle; tri < end; ++tri) {
         ++k.trianglesIn;
@@ -143,11 +154,14 @@ void Pipeline::frontEnd(const DrawCall& call, int drawIndex, size_t firstTriangl
             case ClipOutcome::Inside: setupInto(in, v[0], v[1], v[2], color, batch); break;
             case ClipOutcome::Clipped:
                 ++k.trianglesClipped;
-                clipTriangle(in.volume, c0 | c1 | c2, v[0], v[1], v[2], batch.varyingCount, polygon);
+                clipTriangle(in.volume, c0 | c1 | c2, toClipVertex(v[0], batch.varyingCount),
+                             toClipVertex(v[1], batch.varyingCount),
+                             toClipVertex(v[2], batch.varyingCount), batch.varyingCount, polygon);
                 for (int i = 2; i < polygon.count; ++i) {
                     ++k.clippedTrianglesOut;
-                    setupInto(in, polygon.vertices[0], polygon.vertices[i - 1], polygon.vertices[i],
-                              color, batch);
+                    setupInto(in, fromClipVertex(polygon.vertices[0]),
+                              fromClipVertex(polygon.vertices[i - 1]),
+                              fromClipVertex(polygon.vertices[i]), color, batch);
                 }
                 break;
         }

@@ -10,13 +10,12 @@ struct WindowVertex {
     int32_t x, y;  // subpixels
     float z;       // [0, 1]
     float invW;
-    const float* varyings;
+    int input;  // which input vertex this is
 };
 
 int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-bool toWindow(const ClipVertex& v, const SetupContext& c, WindowVertex& out) {
-    const glm::vec4& p = v.position;
+bool toWindow(const glm::vec4& p, int input, const SetupContext& c, WindowVertex& out) {
     const float invW = 1.0f / p.w;
     const float x = p.x * invW * c.viewportScale.x + c.viewportOffset.x;
     const float y = p.y * invW * c.viewportScale.y + c.viewportOffset.y;
@@ -27,7 +26,7 @@ bool toWindow(const ClipVertex& v, const SetupContext& c, WindowVertex& out) {
     out.y = snapToSubpixels(y);
     out.z = std::clamp(z, 0.0f, 1.0f);  // clipping leaves rounding-sized excursions only
     out.invW = invW;
-    out.varyings = v.varyings.data();
+    out.input = input;
     return true;
 }
 
@@ -92,11 +91,11 @@ int32_t snapToSubpixels(float windowCoordinate) {
     return static_cast<int32_t>(std::floor(double(windowCoordinate) * kSubpixelsPerPixel + 0.5));
 }
 
-SetupResult setupTriangle(const ClipVertex& c0, const ClipVertex& c1, const ClipVertex& c2,
-                          const SetupContext& context, TriangleSetup& t, float* varyingsOut) {
+SetupResult setupTriangle(const SetupVertex& c0, const SetupVertex& c1, const SetupVertex& c2,
+                          const SetupContext& context, TriangleSetup& t, int order[3]) {
     WindowVertex v[3];
-    if (!toWindow(c0, context, v[0]) || !toWindow(c1, context, v[1]) ||
-        !toWindow(c2, context, v[2]))
+    if (!toWindow(c0.position, 0, context, v[0]) || !toWindow(c1.position, 1, context, v[1]) ||
+        !toWindow(c2.position, 2, context, v[2]))
         return SetupResult::Invalid;
 
     int64_t doubleArea = int64_t{v[1].x - v[0].x} * (v[2].y - v[0].y) -
@@ -131,7 +130,7 @@ SetupResult setupTriangle(const ClipVertex& c0, const ClipVertex& c1, const Clip
     t.invDoubleArea = 1.0 / static_cast<double>(doubleArea);
     for (int k = 0; k < 3; ++k) {
         t.invW[k] = v[k].invW;
-        std::copy_n(v[k].varyings, context.varyingCount, varyingsOut + k * context.varyingCount);
+        order[k] = v[k].input;
     }
     return SetupResult::Accepted;
 }

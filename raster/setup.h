@@ -72,9 +72,16 @@ struct SetupContext {
 /// Snaps a window coordinate to subpixels: round to nearest, ties up, exactly.
 int32_t snapToSubpixels(float windowCoordinate);
 
-/// On Accepted, fills `out` and writes the three vertices' varyings (in set-up vertex order)
-/// to varyingsOut[0 .. 3 * varyingCount).
-SetupResult setupTriangle(const ClipVertex& v0, const ClipVertex& v1, const ClipVertex& v2,
-                          const SetupContext& context, TriangleSetup& out, float* varyingsOut);
+/// One vertex as set-up reads it: its clip-space position and where its varyings are.
+struct SetupVertex {
+    glm::vec4 position;
+    const float* varyings;
+};
+
+/// On Accepted, fills `out` and sets order[0..2] to the input vertex each set-up vertex came
+/// from (v1 and v2 swap for counter-clockwise input), so the caller copies varyings only for
+/// triangles that survive.
+SetupResult setupTriangle(const SetupVertex& v0, const SetupVertex& v1, const SetupVertex& v2,
+                          const SetupContext& context, TriangleSetup& out, int order[3]);
 
 }  // namespace cuberille::raster

@@ -24,18 +24,14 @@ namespace cuberille::raster {
 inline glm::vec3 perspectiveBarycentrics(const TriangleSetup& t, int32_t x, int32_t y) {
     const int64_t cx = int64_t{x} * kSubpixelsPerPixel + kPixelCentreSubpixels;
     const int64_t cy = int64_t{y} * kSubpixelsPerPixel + kPixelCentreSubpixels;
-    double l[3];
-    double sum = 0.0;
-    for (int k = 0; k < 3; ++k) {
-        l[k] = std::max(0.0, double(t.edgeAt(k, cx, cy)) * t.invDoubleArea);
-        sum += l[k];
-    }
-    double q[3], qSum = 0.0;
-    for (int k = 0; k < 3; ++k) {
-        q[k] = (l[k] / sum) * double(t.invW[k]);
-        qSum += q[k];
-    }
-    return glm::vec3(float(q[0] / qSum), float(q[1] / qSum), float(q[2] / qSum));
+    // Screen-space weights sum to exactly 1 in exact arithmetic; a centre outside the triangle
+    // has a negative one, clamped to 0 (the renormalisation below absorbs the change).
+    const float invArea = float(t.invDoubleArea);
+    const float q0 = std::max(0.0f, float(t.edgeAt(0, cx, cy)) * invArea) * t.invW[0];
+    const float q1 = std::max(0.0f, float(t.edgeAt(1, cx, cy)) * invArea) * t.invW[1];
+    const float q2 = std::max(0.0f, float(t.edgeAt(2, cx, cy)) * invArea) * t.invW[2];
+    const float norm = 1.0f / (q0 + q1 + q2);
+    return glm::vec3(q0 * norm, q1 * norm, q2 * norm);
 }
 
 struct ConstantColorShader {

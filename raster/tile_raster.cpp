@@ -141,11 +141,10 @@ template <int S, class Shader>
 void rasterizeBinned(const TriangleBatch& batch, int tile, const Shader& shader,
                      const SamplePattern& sp, const TileTarget& target) {
     const uint32_t begin = batch.tileOffsets[tile], end = batch.tileOffsets[tile + 1];
-    const int stride = 3 * batch.varyingCount;
     for (uint32_t i = begin; i < end; ++i) {
         const uint32_t index = batch.tileTriangles[i];
         const TriangleSetup& t = batch.triangles[index];
-        TriangleRaster<S, Shader>(t, batch.varyings.data() + size_t(index) * stride, shader, sp,
+        TriangleRaster<S, Shader>(t, batch.varyings.data() + t.varyingOffset, shader, sp,
                                   target)
             .run(sp);
     }

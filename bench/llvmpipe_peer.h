@@ -1,0 +1,30 @@
+#pragma once
+// Mesa's llvmpipe through OSMesa, drawing the same triangles with the same per-pixel Lambert
+// shading (GLSL), for side-by-side timing. Thread count: LP_NUM_THREADS, read once per process.
+
+#include <memory>
+#include <vector>
+
+#include "scene/procedural.h"
+
+namespace cuberille::bench {
+
+class LlvmpipePeer {
+public:
+    /// Creates the context; msaa 1 draws to the OSMesa buffer, more to a multisampled FBO that
+    /// is resolved with glBlitFramebuffer each frame.
+    LlvmpipePeer(int width, int height, int msaa);
+    ~LlvmpipePeer();
+
+    /// Uploads the scene's meshes into buffer objects (not timed).
+    void upload(const scene::ProceduralScene& scene);
+    /// Renders one frame and waits for it (glFinish); returns milliseconds.
+    double renderFrame(const scene::ProceduralScene& scene);
+    static bool available();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cuberille::bench
