@@ -96,25 +96,22 @@ TEST(Golden, TriSceneAt4Samples) { compareWithGolden("tri_msaa4", renderTri(gold
 TEST(Golden, TriSceneAt16Samples) { compareWithGolden("tri_msaa16", renderTri(goldenTriScene(), 16, false)); }
 TEST(Golden, TriSceneTilesView) { compareWithGolden("tri_tiles", renderTri(goldenTriScene(), 4, true)); }
 
-TEST(Golden, FieldSceneLambertAt4Samples) {
+raster::Image renderField(int msaa, apps::View view) {
     apps::RenderOptions o;
     o.scene = "field";
     o.width = 160;
     o.height = 100;
-    o.msaa = 4;
+    o.msaa = msaa;
     o.detail = 0.1f;
-    compareWithGolden("field_msaa4", apps::renderScene(o).image);
+    o.view = view;
+    return apps::renderScene(o).image;
 }
 
+TEST(Golden, FieldSceneLambertAt4Samples) {
+    compareWithGolden("field_msaa4", renderField(4, apps::View::Color));
+}
 TEST(Golden, FieldSceneDepthView) {
-    apps::RenderOptions o;
-    o.scene = "field";
-    o.width = 160;
-    o.height = 100;
-    o.msaa = 1;
-    o.detail = 0.1f;
-    o.view = apps::View::Depth;
-    compareWithGolden("field_depth", apps::renderScene(o).image);
+    compareWithGolden("field_depth", renderField(1, apps::View::Depth));
 }
 
 }  // namespace
