@@ -130,7 +130,8 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
          {{"smallTriangleEntries", c.smallTriangleEntries},
           {"blocksEmpty", c.blocksEmpty},
           {"blocksPartial", c.blocksPartial},
-          {"blocksFull", c.blocksFull}}},
+          {"blocksFull", c.blocksFull},
+          {"blocksDepthCulled", c.blocksDepthCulled}}},
         {"depth", {{"samplesTested", c.samplesTested}, {"samplesPassed", c.samplesPassed}}},
         {"shade", {{"pixelsShaded", c.pixelsShaded}}},
     };

@@ -22,25 +22,35 @@ struct PixelRect {
     int32_t minX, minY, maxX, maxY;
 };
 
-inline BlockClass classifyPixelRect(const TriangleSetup& t, const PixelRect& r,
-                                    const SamplePattern& sp) {
-    const int64_t loX = int64_t{r.minX} * kSubpixelsPerPixel + kPixelCentreSubpixels +
-                        sp.minDx * kSampleOffsetUnitSubpixels;
-    const int64_t hiX = int64_t{r.maxX} * kSubpixelsPerPixel + kPixelCentreSubpixels +
-                        sp.maxDx * kSampleOffsetUnitSubpixels;
-    const int64_t loY = int64_t{r.minY} * kSubpixelsPerPixel + kPixelCentreSubpixels +
-                        sp.minDy * kSampleOffsetUnitSubpixels;
-    const int64_t hiY = int64_t{r.maxY} * kSubpixelsPerPixel + kPixelCentreSubpixels +
-                        sp.maxDy * kSampleOffsetUnitSubpixels;
+/// Bounds, in subpixels, of every sample position of a rectangle's pixels.
+struct SampleBox {
+    int64_t loX, hiX, loY, hiY;
+};
+
+inline SampleBox sampleBoxOf(const PixelRect& r, const SamplePattern& sp) {
+    auto position = [&](int32_t pixel, int offset) {
+        return int64_t{pixel} * kSubpixelsPerPixel + kPixelCentreSubpixels +
+               offset * kSampleOffsetUnitSubpixels;
+    };
+    return {position(r.minX, sp.minDx), position(r.maxX, sp.maxDx), position(r.minY, sp.minDy),
+            position(r.maxY, sp.maxDy)};
+}
+
+inline BlockClass classifySampleBox(const TriangleSetup& t, const SampleBox& b) {
     bool full = true;
     for (int k = 0; k < 3; ++k) {
-        const int64_t a = t.edgeA[k], b = t.edgeB[k];
-        const int64_t minE = a * (a >= 0 ? loX : hiX) + b * (b >= 0 ? loY : hiY) + t.edgeC[k];
-        const int64_t maxE = a * (a >= 0 ? hiX : loX) + b * (b >= 0 ? hiY : loY) + t.edgeC[k];
+        const int64_t a = t.edgeA[k], c = t.edgeB[k];
+        const int64_t minE = a * (a >= 0 ? b.loX : b.hiX) + c * (c >= 0 ? b.loY : b.hiY) + t.edgeC[k];
+        const int64_t maxE = a * (a >= 0 ? b.hiX : b.loX) + c * (c >= 0 ? b.hiY : b.loY) + t.edgeC[k];
         if (maxE < 0) return BlockClass::Empty;
         full = full && minE >= 0;
     }
     return full ? BlockClass::Full : BlockClass::Partial;
+}
+
+inline BlockClass classifyPixelRect(const TriangleSetup& t, const PixelRect& r,
+                                    const SamplePattern& sp) {
+    return classifySampleBox(t, sampleBoxOf(r, sp));
 }
 
 }  // namespace cuberille::raster

@@ -7,6 +7,7 @@
 // clamped to [0, 1] (the viewport's depth range).
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "raster/sample_pattern.h"
@@ -37,6 +38,20 @@ inline void sampleDepths(const TriangleSetup& t, int32_t pixelX, int32_t pixelY,
                         t.depthPerSubpixelY * float(cy + o.y[s]);
         out[s] = std::clamp(z, 0.0f, 1.0f);
     }
+}
+
+/// A lower bound on the depth sampleDepths() computes for any sample whose position lies in
+/// [loX, hiX] x [loY, hiY] (subpixels). The plane's minimum over the box sits at the corner
+/// picked by the gradient's signs; the margin covers the float rounding of sampleDepths()
+/// (three roundings of terms no larger than `magnitude`, far below 1e-6 of it).
+inline float minSampleDepthOverBox(const TriangleSetup& t, int64_t loX, int64_t hiX, int64_t loY,
+                                   int64_t hiY) {
+    const double dx = double((t.depthPerSubpixelX >= 0 ? loX : hiX) - t.originXSubpixels);
+    const double dy = double((t.depthPerSubpixelY >= 0 ? loY : hiY) - t.originYSubpixels);
+    const double z = t.depthAtOrigin + t.depthPerSubpixelX * dx + t.depthPerSubpixelY * dy;
+    const double magnitude = std::abs(double(t.depthAtOrigin)) +
+                             std::abs(t.depthPerSubpixelX * dx) + std::abs(t.depthPerSubpixelY * dy);
+    return float(std::clamp(z - magnitude * 1e-6, 0.0, 1.0));
 }
 
 /// Samples of `covered` whose depth is less than the stored depth.

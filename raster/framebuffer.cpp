@@ -20,6 +20,10 @@ void Framebuffer::reset(const FramebufferDesc& desc) {
         depth_ = std::make_unique_for_overwrite<float[]>(samples);
         sampleCapacity_ = samples;
     }
+    if (size_t(tileCount()) * kBlocksPerTile > blockCapacity_) {
+        blockCapacity_ = size_t(tileCount()) * kBlocksPerTile;
+        blockMaxDepth_ = std::make_unique_for_overwrite<float[]>(blockCapacity_);
+    }
     tileTouched_.assign(tileCount(), 0);
     const size_t pixels = size_t(desc.widthPixels) * desc.heightPixels;
     const size_t blocks = size_t(blocksX()) * blocksY();
@@ -38,6 +42,7 @@ void Framebuffer::touchTile(int tile) {
     tileTouched_[tile] = 1;
     std::fill_n(tileColor(tile), samplesPerTile(), desc_.clearColor);
     std::fill_n(tileDepth(tile), samplesPerTile(), desc_.clearDepth);
+    std::fill_n(tileBlockMaxDepth(tile), kBlocksPerTile, desc_.clearDepth);
 }
 
 size_t Framebuffer::memoryBytes() const {

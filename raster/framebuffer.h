@@ -27,6 +27,7 @@ struct FramebufferDesc {
     float clearDepth = 1.0f;
     bool recordOverdraw = false;     // depth-passing samples per pixel
     bool recordBlockClasses = false; // coarse classifications per 8x8 block
+    bool hierarchicalDepth = true;   // reject hidden 8x8 blocks before per-sample depth tests
 };
 
 class Framebuffer {
@@ -46,6 +47,11 @@ public:
     float* tileDepth(int tile) { return depth_.get() + size_t(tile) * samplesPerTile(); }
     const glm::vec4* tileColor(int tile) const { return color_.get() + size_t(tile) * samplesPerTile(); }
     const float* tileDepth(int tile) const { return depth_.get() + size_t(tile) * samplesPerTile(); }
+
+    /// Hierarchical Z: per 8x8 block of the tile (row-major, 64 entries), an upper bound on
+    /// every stored sample depth in the block. Never below the true maximum, so a triangle whose
+    /// depth over a block is not less than it cannot pass a LESS test anywhere in the block.
+    float* tileBlockMaxDepth(int tile) { return blockMaxDepth_.get() + size_t(tile) * kBlocksPerTile; }
 
     bool tileTouched(int tile) const { return tileTouched_[tile] != 0; }
     /// Clears the tile's samples on first use; called by the one task that owns the tile.
@@ -71,6 +77,8 @@ private:
     std::unique_ptr<glm::vec4[]> color_;
     std::unique_ptr<float[]> depth_;
     size_t sampleCapacity_ = 0;
+    std::unique_ptr<float[]> blockMaxDepth_;
+    size_t blockCapacity_ = 0;
     std::vector<uint8_t> tileTouched_;
     std::vector<uint32_t> overdraw_, blockPartial_, blockFull_;
 };

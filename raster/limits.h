@@ -27,6 +27,7 @@ inline constexpr int kTileSizePixels = 64;   // binning granularity
 inline constexpr int kBlockSizePixels = 8;   // coarse-stage granularity
 inline constexpr int kBlocksPerTileSide = kTileSizePixels / kBlockSizePixels;
 inline constexpr int kPixelsPerTile = kTileSizePixels * kTileSizePixels;
+inline constexpr int kBlocksPerTile = kBlocksPerTileSide * kBlocksPerTileSide;
 
 inline constexpr int kMaxFramebufferPixels = 16384;  // per side
 inline constexpr int kGuardBandPixels = 32768;       // beyond each side of the viewport

@@ -18,6 +18,7 @@ StageCounters& StageCounters::operator+=(const StageCounters& o) {
     blocksEmpty += o.blocksEmpty;
     blocksPartial += o.blocksPartial;
     blocksFull += o.blocksFull;
+    blocksDepthCulled += o.blocksDepthCulled;
     samplesTested += o.samplesTested;
     samplesPassed += o.samplesPassed;
     pixelsShaded += o.pixelsShaded;

@@ -28,6 +28,7 @@ struct StageCounters {
     uint64_t blocksEmpty = 0;
     uint64_t blocksPartial = 0;
     uint64_t blocksFull = 0;
+    uint64_t blocksDepthCulled = 0;  // non-empty blocks rejected by hierarchical Z
     // fine, depth, shade, output merge
     uint64_t samplesTested = 0;  // covered samples that met the depth test
     uint64_t samplesPassed = 0;

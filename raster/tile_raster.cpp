@@ -24,7 +24,9 @@ struct TileTarget {
     uint32_t* overdraw;  // image-linear, or null
     uint32_t* blockPartial;
     uint32_t* blockFull;
-    int imageWidth, blocksX;
+    float* blockMaxDepth;  // this tile's hierarchical Z, 8x8 blocks row-major
+    int imageWidth, imageHeight, blocksX;
+    bool hierarchicalDepth;
     const DrawState* state;
     uint64_t* occlusion;  // null when the draw has no slot
     StageCounters* counters;
@@ -56,40 +58,70 @@ public:
     }
 
 private:
-    // Coarse stage over the 8x8 blocks (aligned to the tile) that meet the bounds.
+    // Coarse stage over the 8x8 blocks (aligned to the tile) that meet the bounds: classify by
+    // coverage, then reject blocks hierarchical Z proves hidden before any sample is touched.
     void coarse(const PixelRect& bounds, const SamplePattern& sp) {
+        const DrawState& state = *target_.state;
         const int bx0 = bounds.minX / kBlockSizePixels, bx1 = bounds.maxX / kBlockSizePixels;
         const int by0 = bounds.minY / kBlockSizePixels, by1 = bounds.maxY / kBlockSizePixels;
         for (int by = by0; by <= by1; ++by) {
             for (int bx = bx0; bx <= bx1; ++bx) {
-                const PixelRect block{std::max(bounds.minX, bx * kBlockSizePixels),
-                                      std::max(bounds.minY, by * kBlockSizePixels),
-                                      std::min(bounds.maxX, bx * kBlockSizePixels + kBlockSizePixels - 1),
-                                      std::min(bounds.maxY, by * kBlockSizePixels + kBlockSizePixels - 1)};
-                switch (classifyPixelRect(t_, block, sp)) {
-                    case BlockClass::Empty:
-                        ++target_.counters->blocksEmpty;
-                        break;
-                    case BlockClass::Partial:
-                        ++target_.counters->blocksPartial;
-                        if (target_.blockPartial) ++target_.blockPartial[by * target_.blocksX + bx];
-                        rasterizePartial(block);
-                        break;
-                    case BlockClass::Full:
-                        ++target_.counters->blocksFull;
-                        if (target_.blockFull) ++target_.blockFull[by * target_.blocksX + bx];
-                        rasterizeFull(block);
-                        break;
+                const PixelRect whole{bx * kBlockSizePixels, by * kBlockSizePixels,
+                                      std::min(bx * kBlockSizePixels + kBlockSizePixels, target_.imageWidth) - 1,
+                                      std::min(by * kBlockSizePixels + kBlockSizePixels, target_.imageHeight) - 1};
+                const PixelRect block{std::max(bounds.minX, whole.minX), std::max(bounds.minY, whole.minY),
+                                      std::min(bounds.maxX, whole.maxX), std::min(bounds.maxY, whole.maxY)};
+                const SampleBox box = sampleBoxOf(block, sp);
+                const BlockClass cls = classifySampleBox(t_, box);
+                if (cls == BlockClass::Empty) {
+                    ++target_.counters->blocksEmpty;
+                    continue;
                 }
+                float& blockMaxDepth =
+                    target_.blockMaxDepth[((by * kBlockSizePixels - target_.originY) / kBlockSizePixels) *
+                                              kBlocksPerTileSide +
+                                          (bx * kBlockSizePixels - target_.originX) / kBlockSizePixels];
+                if (state.depthTest && target_.hierarchicalDepth &&
+                    minSampleDepthOverBox(t_, box.loX, box.hiX, box.loY, box.hiY) >= blockMaxDepth) {
+                    ++target_.counters->blocksDepthCulled;
+                    continue;
+                }
+                if (cls == BlockClass::Partial) {
+                    ++target_.counters->blocksPartial;
+                    if (target_.blockPartial) ++target_.blockPartial[by * target_.blocksX + bx];
+                    rasterizePartial(block);
+                    continue;
+                }
+                ++target_.counters->blocksFull;
+                if (target_.blockFull) ++target_.blockFull[by * target_.blocksX + bx];
+                const FullBlockResult r = rasterizeFull(block);
+                // LESS only lowers stored depths, so the bound stays valid on its own; it can be
+                // tightened when this triangle replaced every sample of the block.
+                const bool coversWholeBlock = block.minX == whole.minX && block.minY == whole.minY &&
+                                              block.maxX == whole.maxX && block.maxY == whole.maxY;
+                if (state.depthTest && state.depthWrite && coversWholeBlock && r.everySamplePassed)
+                    blockMaxDepth = r.maxDepthWritten;
             }
         }
     }
 
+    struct FullBlockResult {
+        bool everySamplePassed = true;
+        float maxDepthWritten = 0.0f;
+    };
+
     // Full block: every sample is covered, no edge test at all.
-    void rasterizeFull(const PixelRect& r) {
+    FullBlockResult rasterizeFull(const PixelRect& r) {
         const uint32_t all = S == 32 ? ~0u : (1u << S) - 1u;
+        FullBlockResult result;
         for (int y = r.minY; y <= r.maxY; ++y)
-            for (int x = r.minX; x <= r.maxX; ++x) processPixel(x, y, all);
+            for (int x = r.minX; x <= r.maxX; ++x) {
+                float maxDepth = 0.0f;
+                const uint32_t pass = processPixel(x, y, all, &maxDepth);
+                result.everySamplePassed = result.everySamplePassed && pass == all;
+                result.maxDepthWritten = std::max(result.maxDepthWritten, maxDepth);
+            }
+        return result;
     }
 
     // Fine stage: per-sample masks, stepping the edge values along each row.
@@ -105,8 +137,9 @@ private:
         }
     }
 
-    // Depth (early, before shading), shade once, output merge.
-    void processPixel(int32_t x, int32_t y, uint32_t covered) {
+    // Depth (early, before shading), shade once, output merge. Returns the samples that passed;
+    // with maxDepthPassed, also the largest depth among them.
+    uint32_t processPixel(int32_t x, int32_t y, uint32_t covered, float* maxDepthPassed = nullptr) {
         const DrawState& state = *target_.state;
         const size_t first =
             (size_t(y - target_.originY) * kTileSizePixels + size_t(x - target_.originX)) * S;
@@ -116,7 +149,7 @@ private:
             state.depthTest ? depthTestLess<S>(covered, depth, target_.depth + first) : covered;
         StageCounters& c = *target_.counters;
         c.samplesTested += std::popcount(covered);
-        if (!pass) return;
+        if (!pass) return 0;
         const int passed = std::popcount(pass);
         c.samplesPassed += passed;
         if (target_.occlusion) *target_.occlusion += passed;
@@ -126,7 +159,21 @@ private:
             mergeColor<S>(target_.color + first, pass, shader_.shade(t_, varyings_, x, y),
                           state.colorWriteMask);
         }
-        if (state.depthWrite) mergeDepth<S>(target_.depth + first, pass, depth);
+        if (state.depthWrite) {
+            mergeDepth<S>(target_.depth + first, pass, depth);
+            float written = 0.0f;
+            for (int s = 0; s < S; ++s)
+                if (pass & (1u << s)) written = std::max(written, depth[s]);
+            if (maxDepthPassed) *maxDepthPassed = written;
+            // Without a depth test a write can raise a depth: keep the block's bound above it.
+            if (!state.depthTest) {
+                float& bound = target_.blockMaxDepth[((y - target_.originY) / kBlockSizePixels) *
+                                                         kBlocksPerTileSide +
+                                                     (x - target_.originX) / kBlockSizePixels];
+                bound = std::max(bound, written);
+            }
+        }
+        return pass;
     }
 
     const TriangleSetup& t_;
@@ -179,8 +226,11 @@ void rasterizeBatchInTile(const TriangleBatch& batch, const DrawState& state, in
         fb.overdraw(),
         fb.blockPartialCounts(),
         fb.blockFullCounts(),
+        fb.tileBlockMaxDepth(tile),
         fb.width(),
+        fb.height(),
         fb.blocksX(),
+        fb.desc().hierarchicalDepth,
         &state,
         state.occlusionSlot >= 0 ? &out.occlusionSamplesPassed[state.occlusionSlot] : nullptr,
         &out.counters,

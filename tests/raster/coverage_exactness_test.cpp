@@ -116,9 +116,11 @@ TEST_P(CoverageExactness, MatchesBruteForceOnRandomScenes) {
     const int samples = GetParam();
     SceneGenerator gen(1234u + samples);
     raster::Pipeline pipeline;
+    raster::StageCounters paths;
     for (int n = 0; n < kScenesPerSampleCount; ++n) {
         const scene::TriScene s = gen.make();
         renderTri(pipeline, s, kWidth, kHeight, samples);
+        paths += pipeline.stats().counters;
         const ReferenceImage ref = referenceRasterize(s, kWidth, kHeight, samples);
         int mismatches = 0;
         for (int y = 0; y < kHeight; ++y)
@@ -130,6 +132,11 @@ TEST_P(CoverageExactness, MatchesBruteForceOnRandomScenes) {
                     }
         ASSERT_EQ(mismatches, 0) << "scene " << n << " of seed " << 1234u + samples;
     }
+    // Every path of the coarse stage was exercised, and clipping by the guard band too.
+    EXPECT_GT(paths.blocksFull, 0u);
+    EXPECT_GT(paths.blocksPartial, 0u);
+    EXPECT_GT(paths.smallTriangleEntries, 0u);
+    EXPECT_GT(paths.trianglesDegenerate, 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(SampleCounts, CoverageExactness, ::testing::Values(1, 2, 4, 8, 16),

@@ -1,0 +1,113 @@
+// Output merge and its counters: colour write masks (visibility-only draws), per-draw occlusion
+// counters, facing culling, and the overdraw record behind `--view overdraw`.
+
+#include <gtest/gtest.h>
+
+#include "raster/pipeline.h"
+#include "tests/raster/reference_raster.h"
+#include "tests/raster/test_support.h"
+
+namespace cuberille::testing {
+namespace {
+
+// Window-space quad as two triangles, at depth z, counter-clockwise on screen (front-facing).
+void addQuad(std::vector<glm::vec3>& p, float x0, float y0, float x1, float y1, float z) {
+    p.insert(p.end(), {{x0, y0, z}, {x0, y1, z}, {x1, y1, z}, {x0, y0, z}, {x1, y1, z}, {x1, y0, z}});
+}
+
+raster::DrawCall windowDraw(const std::vector<glm::vec3>& positions, glm::vec4 color) {
+    raster::DrawCall d;
+    d.space = raster::PositionSpace::Window;
+    d.positions = positions;
+    d.state.constantColor = color;
+    return d;
+}
+
+TEST(ColorWriteMask, VisibilityOnlyDrawWritesDepthButNoColor) {
+    std::vector<glm::vec3> front, back;
+    addQuad(front, 4, 4, 20, 20, 0.2f);
+    addQuad(back, 0, 0, 32, 32, 0.5f);
+    raster::Pipeline p;
+    p.beginFrame(frame(32, 32, 4));
+    raster::DrawCall occluder = windowDraw(front, glm::vec4(1, 0, 0, 1));
+    occluder.state.colorWriteMask = 0;  // depth only
+    p.draw(occluder);
+    p.draw(windowDraw(back, glm::vec4(0, 1, 0, 1)));
+    p.endFrame();
+    EXPECT_EQ(sampleColor(p.framebuffer(), 10, 10, 0), glm::vec4(0, 0, 0, 0)) << "hidden, no colour";
+    EXPECT_EQ(sampleColor(p.framebuffer(), 25, 25, 0), glm::vec4(0, 1, 0, 1));
+}
+
+TEST(ColorWriteMask, WritesOnlyTheMaskedChannels) {
+    std::vector<glm::vec3> quad;
+    addQuad(quad, 0, 0, 8, 8, 0.5f);
+    raster::Pipeline p;
+    raster::FramebufferDesc d = frame(8, 8, 1);
+    d.clearColor = {0.25f, 0.25f, 0.25f, 0.25f};
+    p.beginFrame(d);
+    raster::DrawCall draw = windowDraw(quad, glm::vec4(1.0f));
+    draw.state.colorWriteMask = raster::kWriteGreen | raster::kWriteAlpha;
+    p.draw(draw);
+    p.endFrame();
+    EXPECT_EQ(sampleColor(p.framebuffer(), 3, 3, 0), glm::vec4(0.25f, 1.0f, 0.25f, 1.0f));
+}
+
+TEST(OcclusionQuery, CountsSamplesThatPassedDepthPerSlot) {
+    std::vector<glm::vec3> occluder, hidden, partly;
+    addQuad(occluder, 0, 0, 16, 32, 0.1f);
+    addQuad(hidden, 2, 2, 10, 10, 0.5f);    // entirely behind the occluder
+    addQuad(partly, 8, 0, 24, 32, 0.5f);    // half behind it
+    raster::Pipeline p;
+    p.beginFrame(frame(32, 32, 4));
+    p.draw(windowDraw(occluder, glm::vec4(1)));
+    raster::DrawCall a = windowDraw(hidden, glm::vec4(1));
+    a.state.occlusionSlot = 0;
+    a.state.colorWriteMask = 0;
+    p.draw(a);
+    raster::DrawCall b = windowDraw(partly, glm::vec4(1));
+    b.state.occlusionSlot = 2;
+    p.draw(b);
+    p.endFrame();
+    const auto& q = p.stats().occlusionSamplesPassed;
+    ASSERT_EQ(q.size(), 3u);
+    EXPECT_EQ(q[0], 0u);
+    EXPECT_EQ(q[1], 0u);
+    EXPECT_EQ(q[2], 8u * 32u * 4u);  // columns 16..23 of 32 rows, 4 samples each
+}
+
+TEST(Culling, BackAndFrontFacesFollowScreenWinding) {
+    std::vector<glm::vec3> ccw = {{2, 2, 0.5f}, {2, 14, 0.5f}, {14, 14, 0.5f}};  // CCW on screen
+    std::vector<glm::vec3> cw = {ccw[0], ccw[2], ccw[1]};
+    for (auto [cull, positions, drawn] :
+         {std::tuple{raster::CullMode::Back, ccw, true}, std::tuple{raster::CullMode::Back, cw, false},
+          std::tuple{raster::CullMode::Front, ccw, false}, std::tuple{raster::CullMode::Front, cw, true},
+          std::tuple{raster::CullMode::None, cw, true}}) {
+        raster::Pipeline p;
+        p.beginFrame(frame(16, 16, 1));
+        raster::DrawCall d = windowDraw(positions, glm::vec4(1));
+        d.state.cull = cull;
+        p.draw(d);
+        p.endFrame();
+        EXPECT_EQ(p.stats().counters.trianglesCulled, drawn ? 0u : 1u);
+        EXPECT_EQ(p.stats().counters.samplesPassed > 0, drawn);
+    }
+}
+
+TEST(Overdraw, RecordsDepthPassingSamplesPerPixel) {
+    std::vector<glm::vec3> quads;
+    addQuad(quads, 0, 0, 8, 8, 0.9f);
+    addQuad(quads, 0, 0, 4, 8, 0.5f);  // in front: passes again on the left half
+    addQuad(quads, 4, 0, 8, 8, 0.95f); // behind: fails on the right half
+    raster::Pipeline p;
+    raster::FramebufferDesc d = frame(8, 8, 2);
+    d.recordOverdraw = true;
+    p.beginFrame(d);
+    p.draw(windowDraw(quads, glm::vec4(1)));
+    p.endFrame();
+    const auto& counts = p.framebuffer().overdrawCounts();
+    EXPECT_EQ(counts[2 * 8 + 1], 4u);  // left: two layers x 2 samples
+    EXPECT_EQ(counts[2 * 8 + 6], 2u);  // right: one layer
+}
+
+}  // namespace
+}  // namespace cuberille::testing
