@@ -88,14 +88,15 @@ RenderResult renderScene(const RenderOptions& o) {
         result.sceneTriangles = s.triangleCount();
         pipeline.beginFrame(frameDesc(o, s.background));
         s.draw(pipeline, float(o.width) / float(o.height));
+        pipeline.endFrame();  // while the scene's arrays are alive (Pipeline::draw's contract)
     } else {
         const scene::TriScene s = scene::loadTriScene(o.scene);
         result.loadMs = nowMs() - t0;
         result.sceneTriangles = s.triangleCount();
         pipeline.beginFrame(frameDesc(o, glm::vec4(0.0f)));
         pipeline.draw(s.drawCall());
+        pipeline.endFrame();
     }
-    pipeline.endFrame();
     result.stats = pipeline.stats();
     finishView(pipeline, o.view, result.image, result.stats.times.resolveMs);
     return result;

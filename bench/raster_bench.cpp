@@ -6,13 +6,14 @@
 //
 //   raster_bench [--threads N] [--frames N] [--width W] [--height H] [--scenes a,b] [--msaa 1,4]
 //
-// Both renderers are timed warm (a first frame is drawn and discarded), as the median of
+// Both renderers are timed warm (--warmup frames are drawn and discarded), as the median of
 // --frames frames, from clear to a resolved image in memory (no file I/O, no readback).
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <malloc.h>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -66,10 +67,13 @@ std::vector<std::string> split(const std::string& s) {
 
 int main(int argc, char** argv) {
     CLI::App app{"Frame time against llvmpipe, side by side"};
-    int threads = 0, frames = 5, width = 1920, height = 1080;
+    int threads = 0, frames = 7, warmup = 3, width = 1920, height = 1080;
+    bool verbose = false;
     std::string scenes = "field,subpixel,fill", msaaList = "1,4";
     app.add_option("--threads", threads, "Threads for both renderers (0 = all cores)");
     app.add_option("--frames", frames, "Timed frames per measurement (median reported)");
+    app.add_option("--warmup", warmup, "Untimed frames first, for each renderer");
+    app.add_flag("--verbose", verbose, "Print every frame time");
     app.add_option("--width", width);
     app.add_option("--height", height);
     app.add_option("--scenes", scenes, "Comma-separated built-in scenes");
@@ -80,6 +84,13 @@ int main(int argc, char** argv) {
     // llvmpipe reads its thread count once, when the first context is created.
     setenv("LP_NUM_THREADS", std::to_string(effectiveThreads).c_str(), 1);
     raster::ThreadLimit limit(threads);
+    // llvmpipe allocates its per-frame bins afresh every frame. Until a large block has been
+    // freed in the process, glibc serves such allocations with new mmaps, and every frame then
+    // pays its page faults (up to 3x slower frames on Mesa 22.3.6 here, depending only on what
+    // the process did before). A fixed, high threshold gives the peer its best case in every
+    // order; Cuberille reuses its buffers across frames and is unaffected.
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
 
     std::printf("# %dx%d, %d thread%s, median of %d warm frames\n", width, height,
                 effectiveThreads, effectiveThreads > 1 ? "s" : "", frames);
@@ -91,7 +102,7 @@ int main(int argc, char** argv) {
             const int msaa = std::stoi(m);
             raster::Pipeline pipeline;
             raster::Image image;
-            renderOurs(pipeline, s, width, height, msaa, image);  // warm-up
+            for (int i = 0; i < warmup; ++i) renderOurs(pipeline, s, width, height, msaa, image);
             std::vector<double> ours;
             std::vector<OurFrame> frameLog;
             for (int i = 0; i < frames; ++i) {
@@ -105,10 +116,17 @@ int main(int argc, char** argv) {
 
             bench::LlvmpipePeer peer(width, height, msaa);
             peer.upload(s);
-            peer.renderFrame(s);  // warm-up (includes shader JIT)
+            for (int i = 0; i < warmup; ++i) peer.renderFrame(s);  // includes shader JIT
             std::vector<double> theirs;
             for (int i = 0; i < frames; ++i) theirs.push_back(peer.renderFrame(s));
             const double theirMedian = median(theirs);
+            if (verbose) {
+                std::printf("# frames (ms), cuberille:");
+                for (double t : ours) std::printf(" %.1f", t);
+                std::printf("; llvmpipe:");
+                for (double t : theirs) std::printf(" %.1f", t);
+                std::printf("\n");
+            }
 
             std::printf("%-9s %4d %10zu | %8.1f %8.1f %8.1f %8.1f %10.1f | %10.1f | %6.2fx\n",
                         name.c_str(), msaa, s.triangleCount(), typical.stages.vertexMs,

@@ -6,7 +6,8 @@
 //   points up and the viewport flips it, so window y points down.
 // - Window space: pixels, origin top-left, pixel (x, y) covers [x, x+1) x [y, y+1).
 // - Front faces are counter-clockwise as seen on screen (glTF's convention).
-// The spans are read during Pipeline::draw() only; nothing is kept after it returns.
+// The spans must stay valid until Pipeline::endFrame() returns (draws are recorded, like a
+// GPU command buffer, and executed in flushes).
 
 #include <cstdint>
 #include <span>

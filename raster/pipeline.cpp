@@ -23,46 +23,70 @@ struct TriangleInput {
     SetupContext setup;
 };
 
-bool fetchVertex(const TriangleInput& in, size_t index, SetupVertex& out) {
-    if (index >= in.vertices.clipPositions.size()) return false;
-    out.position = in.vertices.clipPositions[index];
-    out.varyings = in.vertices.varyings.data() + index * in.vertices.varyingCount;
-    return std::isfinite(out.position.x) && std::isfinite(out.position.y) &&
-           std::isfinite(out.position.z) && std::isfinite(out.position.w);
+ClipVolume clipVolumeFor(const DrawCall& draw, const Framebuffer& fb) {
+    return draw.space == PositionSpace::Window ? ClipVolume::forWindowSpace(fb.width(), fb.height())
+                                               : ClipVolume::forViewport(fb.width(), fb.height());
 }
 
-ClipVertex toClipVertex(const SetupVertex& v, int varyingCount) {
+SetupContext setupContextFor(const DrawCall& draw, const Framebuffer& fb) {
+    return SetupContext::forDraw(draw.space, fb.width(), fb.height(),
+                                 standardSamplePattern(fb.samples()), draw.state.cull,
+                                 varyingCountFor(draw.state.shading));
+}
+
+ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {
     ClipVertex c;
-    c.position = v.position;
-    std::copy_n(v.varyings, varyingCount, c.varyings.data());
+    c.position = v.clipPositions[index];
+    std::copy_n(v.varyings.data() + index * v.varyingCount, v.varyingCount, c.varyings.data());
     return c;
 }
 
-SetupVertex fromClipVertex(const ClipVertex& c) { return {c.position, c.varyings.data()}; }
-
 // Set-up of one (possibly clipped) triangle into the batch, counting the outcome. Varyings
-// are copied only for triangles that survive set-up.
-void setupInto(const TriangleInput& in, const SetupVertex& a, const SetupVertex& b,
-               const SetupVertex& c, const glm::vec4& color, TriangleBatch& batch) {
+// are copied only for triangles that survive.
+void setupInto(const TriangleInput& in, const WindowVertex (&w)[3], const float* const (&varyings)[3],
+               const glm::vec4& color, TriangleBatch& batch) {
     TriangleSetup t;
     int order[3];
     StageCounters& k = batch.counters;
-    switch (setupTriangle(a, b, c, in.setup, t, order)) {
-        case SetupResult::Accepted: {
-            const SetupVertex* input[3] = {&a, &b, &c};
+    switch (setupTriangle(w[0], w[1], w[2], in.setup, t, order)) {
+        case SetupResult::Accepted:
             t.varyingOffset = uint32_t(batch.varyings.size());
             for (int v = 0; v < 3; ++v)
-                batch.varyings.insert(batch.varyings.end(), input[order[v]]->varyings,
-                                      input[order[v]]->varyings + batch.varyingCount);
+                batch.varyings.insert(batch.varyings.end(), varyings[order[v]],
+                                      varyings[order[v]] + batch.varyingCount);
             t.flatColor = color;
             batch.triangles.push_back(t);
             ++k.trianglesSetUp;
             return;
+        case SetupResult::Degenerate: ++k.trianglesDegenerate; return;
+        case SetupResult::Culled: ++k.trianglesCulled; return;
+        case SetupResult::NoSamples: ++k.trianglesNoSamples; return;
+    }
+}
+
+// A triangle that crosses a clip plane: clip in homogeneous space, then set up the fan.
+void clipAndSetup(const TriangleInput& in, const size_t (&index)[3], uint32_t planes,
+                  const glm::vec4& color, TriangleBatch& batch) {
+    StageCounters& k = batch.counters;
+    ++k.trianglesClipped;
+    ClippedPolygon polygon;
+    clipTriangle(in.volume, planes, clipVertexOf(in.vertices, index[0]),
+                 clipVertexOf(in.vertices, index[1]), clipVertexOf(in.vertices, index[2]),
+                 batch.varyingCount, polygon);
+    WindowVertex window[kMaxClippedVertices];
+    for (int i = 0; i < polygon.count; ++i) {
+        if (!projectToWindow(polygon.vertices[i].position, in.setup, window[i])) {
+            ++k.trianglesInvalid;
+            return;
         }
-        case SetupResult::Degenerate: ++k.trianglesDegenerate; break;
-        case SetupResult::Culled: ++k.trianglesCulled; break;
-        case SetupResult::NoSamples: ++k.trianglesNoSamples; break;
-        case SetupResult::Invalid: ++k.trianglesInvalid; break;
+    }
+    for (int i = 2; i < polygon.count; ++i) {
+        ++k.clippedTrianglesOut;
+        const WindowVertex w[3] = {window[0], window[i - 1], window[i]};
+        const float* const v[3] = {polygon.vertices[0].varyings.data(),
+                                   polygon.vertices[i - 1].varyings.data(),
+                                   polygon.vertices[i].varyings.data()};
+        setupInto(in, w, v, color, batch);
     }
 }
 
@@ -73,33 +97,18 @@ void Pipeline::beginFrame(const FramebufferDesc& desc) {
     framebuffer_.reset(desc);
     stats_ = {};
     draws_.clear();
-    pendingBatches_ = 0;
+    drawsShaded_ = 0;
+    queued_.clear();
     tileCounters_.assign(framebuffer_.tileCount(), {});
 }
 
 void Pipeline::draw(const DrawCall& call) {
-    const double t0 = nowMs();
-    runVertexStage(call, vertexOutput_);
-    stats_.counters.verticesShaded += call.positions.size();
-    const double t1 = nowMs();
-    stats_.times.vertexMs += t1 - t0;
-
-    const int drawIndex = int(draws_.size());
-    draws_.push_back(call.state);
+    const uint32_t drawIndex = uint32_t(draws_.size());
+    draws_.push_back(call);
     const size_t triangles = call.triangleCount();
-    const size_t batchCount = (triangles + kTrianglesPerBatch - 1) / kTrianglesPerBatch;
-    for (size_t first = 0; first < batchCount;) {
-        const size_t chunk = std::min(batchCount - first, kBatchesPerFlush - pendingBatches_);
-        if (batches_.size() < pendingBatches_ + chunk) batches_.resize(pendingBatches_ + chunk);
-        const double f0 = nowMs();
-        parallelFor(chunk, [&](size_t i) {
-            frontEnd(call, drawIndex, (first + i) * kTrianglesPerBatch,
-                     batches_[pendingBatches_ + i]);
-        });
-        stats_.times.frontEndMs += nowMs() - f0;
-        pendingBatches_ += chunk;
-        first += chunk;
-        if (pendingBatches_ == kBatchesPerFlush) flush();
+    for (size_t first = 0; first < triangles; first += kTrianglesPerBatch) {
+        queued_.push_back({drawIndex, first});
+        if (queued_.size() == kBatchesPerFlush) flush();
     }
 }
 
@@ -115,74 +124,98 @@ void Pipeline::endFrame() {
     stats_.times.frameMs = nowMs() - frameStartMs_;
 }
 
-void Pipeline::frontEnd(const DrawCall& call, int drawIndex, size_t firstTriangle,
-                        TriangleBatch& batch) {
-    batch.clear();
-    batch.drawIndex = drawIndex;
-    batch.varyingCount = vertexOutput_.varyingCount;
-    const Framebuffer& fb = framebuffer_;
-    const SamplePattern& sp = standardSamplePattern(fb.samples());
-    const TriangleInput in{
-        call, vertexOutput_,
-        call.space == PositionSpace::Window ? ClipVolume::forWindowSpace(fb.width(), fb.height())
-                                            : ClipVolume::forViewport(fb.width(), fb.height()),
-        SetupContext::forDraw(call.space, fb.width(), fb.height(), sp, call.state.cull,
-                              vertexOutput_.varyingCount)};
+// Vertex stage for every draw recorded since the last flush, in one parallel pass over
+// fixed vertex ranges of all of them.
+void Pipeline::shadeVertices() {
+    if (vertexOutputs_.size() < draws_.size()) vertexOutputs_.resize(draws_.size());
+    std::vector<std::pair<uint32_t, size_t>> tasks;  // (draw, first vertex)
+    for (size_t d = drawsShaded_; d < draws_.size(); ++d) {
+        const DrawCall& call = draws_[d];
+        vertexOutputs_[d].resize(call.positions.size(), varyingCountFor(call.state.shading));
+        stats_.counters.verticesShaded += call.positions.size();
+        for (size_t v = 0; v < call.positions.size(); v += kVerticesPerTask)
+            tasks.emplace_back(uint32_t(d), v);
+    }
+    parallelFor(tasks.size(), [&](size_t i) {
+        const auto [d, first] = tasks[i];
+        const DrawCall& call = draws_[d];
+        runVertexStage(call, clipVolumeFor(call, framebuffer_), setupContextFor(call, framebuffer_),
+                       first, std::min(call.positions.size(), first + kVerticesPerTask),
+                       vertexOutputs_[d]);
+    });
+    drawsShaded_ = draws_.size();
+}
 
-    const size_t end = std::min(call.triangleCount(), firstTriangle + kTrianglesPerBatch);
+void Pipeline::frontEnd(const BatchRef& ref, TriangleBatch& batch) const {
+    const DrawCall& call = draws_[ref.draw];
+    const VertexStageOutput& vertices = vertexOutputs_[ref.draw];
+    batch.clear();
+    batch.drawIndex = int(ref.draw);
+    batch.varyingCount = vertices.varyingCount;
+    const TriangleInput in{call, vertices, clipVolumeFor(call, framebuffer_),
+                           setupContextFor(call, framebuffer_)};
+    const size_t vertexCount = vertices.clipPositions.size();
+    const size_t end = std::min(call.triangleCount(), ref.firstTriangle + kTrianglesPerBatch);
     StageCounters& k = batch.counters;
-    SetupVertex v[3];
-    ClippedPolygon polygon;
-    for (size_t tri = firstTriangle; tri < end; ++tri) {
+    for (size_t tri = ref.firstTriangle; tri < end; ++tri) {
         ++k.trianglesIn;
+        size_t index[3];
+        uint8_t code[3];
         bool valid = true;
         for (int i = 0; i < 3; ++i) {
-            const size_t index = call.indices.empty() ? tri * 3 + i : call.indices[tri * 3 + i];
-            valid = fetchVertex(in, index, v[i]) && valid;
+            index[i] = call.indices.empty() ? tri * 3 + i : call.indices[tri * 3 + i];
+            valid = valid && index[i] < vertexCount;
+            code[i] = valid ? vertices.outcodes[index[i]] : kInvalidVertex;
         }
-        if (!valid) {
+        if (!valid || ((code[0] | code[1] | code[2]) & kInvalidVertex)) {
             ++k.trianglesInvalid;
             continue;
         }
         const glm::vec4 color =
-            call.triangleColors.empty() ? call.state.constantColor : call.triangleColors[tri];
-        const uint32_t c0 = outcode(in.volume, v[0].position);
-        const uint32_t c1 = outcode(in.volume, v[1].position);
-        const uint32_t c2 = outcode(in.volume, v[2].position);
-        switch (classifyTriangle(c0, c1, c2)) {
+            call.triangleColors.size() > tri ? call.triangleColors[tri] : call.state.constantColor;
+        switch (classifyTriangle(code[0], code[1], code[2])) {
             case ClipOutcome::Rejected: ++k.trianglesClipRejected; break;
-            case ClipOutcome::Inside: setupInto(in, v[0], v[1], v[2], color, batch); break;
+            case ClipOutcome::Inside: {
+                const WindowVertex w[3] = {vertices.window[index[0]], vertices.window[index[1]],
+                                           vertices.window[index[2]]};
+                const float* base = vertices.varyings.data();
+                const float* const v[3] = {base + index[0] * batch.varyingCount,
+                                           base + index[1] * batch.varyingCount,
+                                           base + index[2] * batch.varyingCount};
+                setupInto(in, w, v, color, batch);
+                break;
+            }
             case ClipOutcome::Clipped:
-                ++k.trianglesClipped;
-                clipTriangle(in.volume, c0 | c1 | c2, toClipVertex(v[0], batch.varyingCount),
-                             toClipVertex(v[1], batch.varyingCount),
-                             toClipVertex(v[2], batch.varyingCount), batch.varyingCount, polygon);
-                for (int i = 2; i < polygon.count; ++i) {
-                    ++k.clippedTrianglesOut;
-                    setupInto(in, fromClipVertex(polygon.vertices[0]),
-                              fromClipVertex(polygon.vertices[i - 1]),
-                              fromClipVertex(polygon.vertices[i]), color, batch);
-                }
+                clipAndSetup(in, index, code[0] | code[1] | code[2], color, batch);
                 break;
         }
     }
-    binTriangles(batch, TileGrid{fb.tilesX(), fb.tilesY()}, sp);
+    binTriangles(batch, TileGrid{framebuffer_.tilesX(), framebuffer_.tilesY()},
+                 standardSamplePattern(framebuffer_.samples()));
 }
 
 void Pipeline::flush() {
-    if (pendingBatches_ == 0) return;
+    if (queued_.empty()) return;
     ++stats_.flushes;
     const double t0 = nowMs();
+    shadeVertices();
+    const double t1 = nowMs();
+    if (batches_.size() < queued_.size()) batches_.resize(queued_.size());
+    parallelFor(queued_.size(), [&](size_t i) { frontEnd(queued_[i], batches_[i]); });
+    const double t2 = nowMs();
     parallelFor(size_t(framebuffer_.tileCount()), [&](size_t tile) {
-        for (size_t b = 0; b < pendingBatches_; ++b) {
+        for (size_t b = 0; b < queued_.size(); ++b) {
             const TriangleBatch& batch = batches_[b];
-            rasterizeBatchInTile(batch, draws_[batch.drawIndex], int(tile), framebuffer_,
+            rasterizeBatchInTile(batch, draws_[batch.drawIndex].state, int(tile), framebuffer_,
                                  tileCounters_[tile]);
         }
     });
-    stats_.times.backEndMs += nowMs() - t0;
-    for (size_t b = 0; b < pendingBatches_; ++b) stats_.counters += batches_[b].counters;
-    pendingBatches_ = 0;
+    const double t3 = nowMs();
+    stats_.times.vertexMs += t1 - t0;
+    stats_.times.frontEndMs += t2 - t1;
+    stats_.times.backEndMs += t3 - t2;
+    for (size_t b = 0; b < queued_.size(); ++b) stats_.counters += batches_[b].counters;
+    queued_.clear();
 }
 
 }  // namespace cuberille::raster

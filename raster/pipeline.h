@@ -6,9 +6,12 @@
 //   resolve  (parallel over tile rows)
 //
 // Usage: beginFrame(desc); draw(...) any number of times; endFrame(); then read the
-// framebuffer through resolve.h. Draws are executed in submission order per tile; the front end
-// works ahead by at most kBatchesPerFlush batches, then the back end drains them (a "flush"),
-// so memory for binned triangles stays bounded whatever the scene size.
+// framebuffer through resolve.h. Like a GPU command buffer, draw() records: the arrays a
+// DrawCall points to must stay valid until endFrame() returns. Work runs in flushes: once
+// kBatchesPerFlush batches are queued (and at endFrame), the vertex stage shades every draw not
+// yet shaded, the front end sets up and bins all queued batches of all draws in one parallel
+// pass, and the back end drains them tile by tile. So many small draws still keep every core
+// busy, and memory for binned triangles stays bounded whatever the scene size.
 //
 // Determinism: batch boundaries depend on triangle counts only; every tile consumes batches
 // in order; counters are integer sums. The image is the same for every thread count.
@@ -35,15 +38,23 @@ public:
     const PipelineStats& stats() const { return stats_; }
 
 private:
-    void frontEnd(const DrawCall& draw, int drawIndex, size_t firstTriangle, TriangleBatch& batch);
+    /// A queued batch: kTrianglesPerBatch triangles of one draw from firstTriangle on.
+    struct BatchRef {
+        uint32_t draw;
+        size_t firstTriangle;
+    };
+
+    void shadeVertices();
+    void frontEnd(const BatchRef& ref, TriangleBatch& batch) const;
     void flush();
 
     Framebuffer framebuffer_;
     PipelineStats stats_;
-    std::vector<DrawState> draws_;
-    VertexStageOutput vertexOutput_;
+    std::vector<DrawCall> draws_;
+    std::vector<VertexStageOutput> vertexOutputs_;  // per draw; capacity reused across frames
+    size_t drawsShaded_ = 0;
+    std::vector<BatchRef> queued_;
     std::vector<TriangleBatch> batches_;  // reused across flushes and frames
-    size_t pendingBatches_ = 0;
     std::vector<TileCounters> tileCounters_;
     double frameStartMs_ = 0;
 };

@@ -6,29 +6,7 @@
 namespace cuberille::raster {
 namespace {
 
-struct WindowVertex {
-    int32_t x, y;  // subpixels
-    float z;       // [0, 1]
-    float invW;
-    int input;  // which input vertex this is
-};
-
 int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-
-bool toWindow(const glm::vec4& p, int input, const SetupContext& c, WindowVertex& out) {
-    const float invW = 1.0f / p.w;
-    const float x = p.x * invW * c.viewportScale.x + c.viewportOffset.x;
-    const float y = p.y * invW * c.viewportScale.y + c.viewportOffset.y;
-    const float z = p.z * invW;
-    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || !std::isfinite(invW))
-        return false;
-    out.x = snapToSubpixels(x);
-    out.y = snapToSubpixels(y);
-    out.z = std::clamp(z, 0.0f, 1.0f);  // clipping leaves rounding-sized excursions only
-    out.invW = invW;
-    out.input = input;
-    return true;
-}
 
 // Top-left rule (DESIGN.md): with the inside at E >= 0 and y down, a left edge has A > 0 and a
 // top edge is horizontal (A = 0) with B > 0. Samples exactly on any other edge are outside.
@@ -86,17 +64,29 @@ SetupContext SetupContext::forDraw(PositionSpace space, int widthPixels, int hei
     return c;
 }
 
+bool projectToWindow(const glm::vec4& p, const SetupContext& c, WindowVertex& out) {
+    const float invW = 1.0f / p.w;
+    const float x = p.x * invW * c.viewportScale.x + c.viewportOffset.x;
+    const float y = p.y * invW * c.viewportScale.y + c.viewportOffset.y;
+    const float z = p.z * invW;
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || !std::isfinite(invW))
+        return false;
+    out.x = snapToSubpixels(x);
+    out.y = snapToSubpixels(y);
+    out.z = std::clamp(z, 0.0f, 1.0f);  // clipping leaves rounding-sized excursions only
+    out.invW = invW;
+    return true;
+}
+
 int32_t snapToSubpixels(float windowCoordinate) {
     // In double, v * 256 is exact and adding 0.5 cannot round for |v| < 2^44.
     return static_cast<int32_t>(std::floor(double(windowCoordinate) * kSubpixelsPerPixel + 0.5));
 }
 
-SetupResult setupTriangle(const SetupVertex& c0, const SetupVertex& c1, const SetupVertex& c2,
+SetupResult setupTriangle(const WindowVertex& w0, const WindowVertex& w1, const WindowVertex& w2,
                           const SetupContext& context, TriangleSetup& t, int order[3]) {
-    WindowVertex v[3];
-    if (!toWindow(c0.position, 0, context, v[0]) || !toWindow(c1.position, 1, context, v[1]) ||
-        !toWindow(c2.position, 2, context, v[2]))
-        return SetupResult::Invalid;
+    WindowVertex v[3] = {w0, w1, w2};
+    int input[3] = {0, 1, 2};
 
     int64_t doubleArea = int64_t{v[1].x - v[0].x} * (v[2].y - v[0].y) -
                          int64_t{v[2].x - v[0].x} * (v[1].y - v[0].y);
@@ -109,6 +99,7 @@ SetupResult setupTriangle(const SetupVertex& c0, const SetupVertex& c1, const Se
         return SetupResult::Culled;
     if (doubleArea < 0) {
         std::swap(v[1], v[2]);
+        std::swap(input[1], input[2]);
         doubleArea = -doubleArea;
     }
 
@@ -130,7 +121,7 @@ SetupResult setupTriangle(const SetupVertex& c0, const SetupVertex& c1, const Se
     t.invDoubleArea = 1.0 / static_cast<double>(doubleArea);
     for (int k = 0; k < 3; ++k) {
         t.invW[k] = v[k].invW;
-        order[k] = v[k].input;
+        order[k] = input[k];
     }
     return SetupResult::Accepted;
 }

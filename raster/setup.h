@@ -54,7 +54,6 @@ enum class SetupResult : uint8_t {
     Degenerate,  // zero area after snapping
     Culled,      // facing culled
     NoSamples,   // bounds contain no sample position inside the scissor
-    Invalid,     // non-finite coordinates
 };
 
 struct SetupContext {
@@ -72,16 +71,21 @@ struct SetupContext {
 /// Snaps a window coordinate to subpixels: round to nearest, ties up, exactly.
 int32_t snapToSubpixels(float windowCoordinate);
 
-/// One vertex as set-up reads it: its clip-space position and where its varyings are.
-struct SetupVertex {
-    glm::vec4 position;
-    const float* varyings;
+/// A vertex after the perspective divide and the viewport transform, x and y snapped.
+struct WindowVertex {
+    int32_t x, y;  // subpixels
+    float z;       // [0, 1]
+    float invW;    // 1 / clip w
 };
+
+/// Projects a clip-space position that lies inside the clip volume; false when the result is
+/// not finite.
+bool projectToWindow(const glm::vec4& clipPosition, const SetupContext& context, WindowVertex& out);
 
 /// On Accepted, fills `out` and sets order[0..2] to the input vertex each set-up vertex came
 /// from (v1 and v2 swap for counter-clockwise input), so the caller copies varyings only for
 /// triangles that survive.
-SetupResult setupTriangle(const SetupVertex& v0, const SetupVertex& v1, const SetupVertex& v2,
+SetupResult setupTriangle(const WindowVertex& v0, const WindowVertex& v1, const WindowVertex& v2,
                           const SetupContext& context, TriangleSetup& out, int order[3]);
 
 }  // namespace cuberille::raster

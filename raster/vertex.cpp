@@ -1,11 +1,9 @@
 #include "raster/vertex.h"
 
-#include "raster/parallel.h"
+#include <cmath>
 
 namespace cuberille::raster {
 namespace {
-
-constexpr size_t kVerticesPerTask = 16384;
 
 void transformPositions(const DrawCall& draw, size_t begin, size_t end, glm::vec4* out) {
     if (draw.space == PositionSpace::Window) {
@@ -20,16 +18,39 @@ void transformPositions(const DrawCall& draw, size_t begin, size_t end, glm::vec
 void lambertVaryings(const DrawCall& draw, size_t begin, size_t end, float* out) {
     const glm::vec3 base(draw.state.constantColor);
     for (size_t i = begin; i < end; ++i) {
-        glm::vec3 n = draw.normals.empty() ? glm::vec3(0.0f, 0.0f, 1.0f)
-                                           : draw.worldFromObjectNormals * draw.normals[i];
-        glm::vec3 c = draw.vertexColors.empty() ? base : base * draw.vertexColors[i];
+        glm::vec3 n = draw.normals.size() <= i ? glm::vec3(0.0f, 0.0f, 1.0f)
+                                               : draw.worldFromObjectNormals * draw.normals[i];
+        glm::vec3 c = draw.vertexColors.size() <= i ? base : base * draw.vertexColors[i];
         float* v = out + i * 6;
         v[0] = n.x, v[1] = n.y, v[2] = n.z;
         v[3] = c.x, v[4] = c.y, v[5] = c.z;
     }
 }
 
+void postTransform(const ClipVolume& volume, const SetupContext& viewport, size_t begin,
+                   size_t end, VertexStageOutput& out) {
+    for (size_t i = begin; i < end; ++i) {
+        const glm::vec4& p = out.clipPositions[i];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(p.w)) {
+            out.outcodes[i] = kInvalidVertex;
+            continue;
+        }
+        const uint32_t code = outcode(volume, p);
+        out.outcodes[i] = uint8_t(code);
+        if (code == 0 && !projectToWindow(p, viewport, out.window[i]))
+            out.outcodes[i] = kInvalidVertex;
+    }
+}
+
 }  // namespace
+
+void VertexStageOutput::resize(size_t vertices, int varyingsPerVertex) {
+    varyingCount = varyingsPerVertex;
+    clipPositions.resize(vertices);
+    outcodes.resize(vertices);
+    window.resize(vertices);
+    varyings.resize(vertices * varyingsPerVertex);
+}
 
 int varyingCountFor(ShadingModel model) {
     switch (model) {
@@ -39,19 +60,12 @@ int varyingCountFor(ShadingModel model) {
     return 0;
 }
 
-void runVertexStage(const DrawCall& draw, VertexStageOutput& out) {
-    const size_t count = draw.positions.size();
-    out.varyingCount = varyingCountFor(draw.state.shading);
-    out.clipPositions.resize(count);
-    out.varyings.resize(count * out.varyingCount);
-    const size_t tasks = (count + kVerticesPerTask - 1) / kVerticesPerTask;
-    parallelFor(tasks, [&](size_t t) {
-        const size_t begin = t * kVerticesPerTask;
-        const size_t end = std::min(count, begin + kVerticesPerTask);
-        transformPositions(draw, begin, end, out.clipPositions.data());
-        if (draw.state.shading == ShadingModel::Lambert)
-            lambertVaryings(draw, begin, end, out.varyings.data());
-    });
+void runVertexStage(const DrawCall& draw, const ClipVolume& volume, const SetupContext& viewport,
+                    size_t begin, size_t end, VertexStageOutput& out) {
+    transformPositions(draw, begin, end, out.clipPositions.data());
+    if (draw.state.shading == ShadingModel::Lambert)
+        lambertVaryings(draw, begin, end, out.varyings.data());
+    postTransform(volume, viewport, begin, end, out);
 }
 
 }  // namespace cuberille::raster

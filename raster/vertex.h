@@ -1,7 +1,10 @@
 #pragma once
-// Vertex stage: object-space vertices in, clip-space positions and varyings out.
-// Varyings are what the shading model reads (none for ConstantColor; world normal and colour
-// for Lambert), so nothing is computed that no later stage consumes.
+// Vertex stage: object-space vertices in; per vertex out:
+// - the clip-space position and the varyings the shading model reads (none for
+//   ConstantColor; world normal and colour for Lambert), so nothing is computed that no later
+//   stage consumes;
+// - the post-transform data every triangle sharing the vertex would otherwise recompute: its
+//   clip outcode and, when it lies inside the clip volume, its snapped window position.
 // Thread-safety: runs in parallel over fixed vertex ranges; output depends on input alone.
 
 #include <cstdint>
@@ -9,19 +12,35 @@
 
 #include <glm/glm.hpp>
 
+#include "raster/clip.h"
 #include "raster/draw.h"
+#include "raster/setup.h"
 
 namespace cuberille::raster {
 
+/// Outcode bit of a vertex whose position is not finite (or projects to a non-finite point):
+/// every triangle using it is dropped and counted.
+inline constexpr uint8_t kInvalidVertex = 0x80;
+static_assert(ClipVolume::kPlaneCount < 8);
+
 struct VertexStageOutput {
     std::vector<glm::vec4> clipPositions;
-    std::vector<float> varyings;  // vertex-major, varyingCount floats per vertex
+    std::vector<uint8_t> outcodes;       // planes the vertex is outside of, or kInvalidVertex
+    std::vector<WindowVertex> window;    // valid where the outcode is 0
+    std::vector<float> varyings;         // vertex-major, varyingCount floats per vertex
     int varyingCount = 0;
+
+    void resize(size_t vertices, int varyingsPerVertex);
 };
 
 /// Floats a shading model interpolates per vertex.
 int varyingCountFor(ShadingModel model);
 
-void runVertexStage(const DrawCall& draw, VertexStageOutput& out);
+/// Vertices are processed in tasks of this many.
+inline constexpr size_t kVerticesPerTask = 16384;
+
+/// Shades vertices [begin, end) of the draw into `out` (already sized by out.resize()).
+void runVertexStage(const DrawCall& draw, const ClipVolume& volume, const SetupContext& viewport,
+                    size_t begin, size_t end, VertexStageOutput& out);
 
 }  // namespace cuberille::raster
