@@ -68,12 +68,13 @@ std::vector<std::string> split(const std::string& s) {
 int main(int argc, char** argv) {
     CLI::App app{"Frame time against llvmpipe, side by side"};
     int threads = 0, frames = 7, warmup = 3, width = 1920, height = 1080;
-    bool verbose = false;
+    bool verbose = false, noPeer = false;
     std::string scenes = "field,subpixel,fill", msaaList = "1,4";
     app.add_option("--threads", threads, "Threads for both renderers (0 = all cores)");
     app.add_option("--frames", frames, "Timed frames per measurement (median reported)");
     app.add_option("--warmup", warmup, "Untimed frames first, for each renderer");
     app.add_flag("--verbose", verbose, "Print every frame time");
+    app.add_flag("--no-peer", noPeer, "Time Cuberille alone (for profiling); no ratio");
     app.add_option("--width", width);
     app.add_option("--height", height);
     app.add_option("--scenes", scenes, "Comma-separated built-in scenes");
@@ -114,11 +115,15 @@ int main(int argc, char** argv) {
                 return std::abs(a.totalMs - ourMedian) < std::abs(b.totalMs - ourMedian);
             });
 
-            bench::LlvmpipePeer peer(width, height, msaa);
-            peer.upload(s);
-            for (int i = 0; i < warmup; ++i) peer.renderFrame(s);  // includes shader JIT
             std::vector<double> theirs;
-            for (int i = 0; i < frames; ++i) theirs.push_back(peer.renderFrame(s));
+            if (noPeer) {
+                theirs.push_back(0.0);
+            } else {
+                bench::LlvmpipePeer peer(width, height, msaa);
+                peer.upload(s);
+                for (int i = 0; i < warmup; ++i) peer.renderFrame(s);  // includes shader JIT
+                for (int i = 0; i < frames; ++i) theirs.push_back(peer.renderFrame(s));
+            }
             const double theirMedian = median(theirs);
             if (verbose) {
                 std::printf("# frames (ms), cuberille:");

@@ -53,6 +53,7 @@ void resolveColor(const Framebuffer& fb, Image& out) {
     forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
         if (!fb.tileTouched(tile)) return store(out, x, y, clear);
         const glm::vec4* s = fb.tileColor(tile) + first;
+        if (n == 1) return store(out, x, y, s[0]);
         double sum[4] = {0, 0, 0, 0};
         for (int i = 0; i < n; ++i)
             for (int c = 0; c < 4; ++c) sum[c] += s[i][c];

@@ -6,7 +6,9 @@
 namespace cuberille::raster {
 namespace {
 
-int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+// floor(a / 256) and ceil(a / 256): C++20 defines >> on negative values as arithmetic.
+int64_t floorPixels(int64_t subpixels) { return subpixels >> kSubpixelBits; }
+int64_t ceilPixels(int64_t subpixels) { return -((-subpixels) >> kSubpixelBits); }
 
 // Top-left rule (DESIGN.md): with the inside at E >= 0 and y down, a left edge has A > 0 and a
 // top edge is horizontal (A = 0) with B > 0. Samples exactly on any other edge are outside.
@@ -25,24 +27,20 @@ void setEdge(TriangleSetup& t, int k, const WindowVertex& from, const WindowVert
 void samplePixelRange(int32_t lo, int32_t hi, int minOffset, int maxOffset, int32_t& first,
                       int32_t& last) {
     const int64_t centre = kPixelCentreSubpixels;
-    first = static_cast<int32_t>(
-        -floorDiv(-(lo - centre - int64_t{maxOffset} * kSampleOffsetUnitSubpixels),
-                  kSubpixelsPerPixel));
-    last = static_cast<int32_t>(
-        floorDiv(hi - centre - int64_t{minOffset} * kSampleOffsetUnitSubpixels, kSubpixelsPerPixel));
+    first = static_cast<int32_t>(ceilPixels(lo - centre - int64_t{maxOffset} * kSampleOffsetUnitSubpixels));
+    last = static_cast<int32_t>(floorPixels(hi - centre - int64_t{minOffset} * kSampleOffsetUnitSubpixels));
 }
 
 void setDepthPlane(TriangleSetup& t, const WindowVertex& v0, const WindowVertex& v1,
-                   const WindowVertex& v2, int64_t doubleArea) {
+                   const WindowVertex& v2, double invDoubleArea) {
     const double dx1 = v1.x - v0.x, dy1 = v1.y - v0.y;
     const double dx2 = v2.x - v0.x, dy2 = v2.y - v0.y;
     const double dz1 = double(v1.z) - v0.z, dz2 = double(v2.z) - v0.z;
-    const double area = static_cast<double>(doubleArea);
     t.originXSubpixels = v0.x;
     t.originYSubpixels = v0.y;
     t.depthAtOrigin = v0.z;
-    t.depthPerSubpixelX = static_cast<float>((dz1 * dy2 - dz2 * dy1) / area);
-    t.depthPerSubpixelY = static_cast<float>((dz2 * dx1 - dz1 * dx2) / area);
+    t.depthPerSubpixelX = static_cast<float>((dz1 * dy2 - dz2 * dy1) * invDoubleArea);
+    t.depthPerSubpixelY = static_cast<float>((dz2 * dx1 - dz1 * dx2) * invDoubleArea);
 }
 
 }  // namespace
@@ -117,8 +115,8 @@ SetupResult setupTriangle(const WindowVertex& w0, const WindowVertex& w1, const 
     setEdge(t, 0, v[1], v[2]);
     setEdge(t, 1, v[2], v[0]);
     setEdge(t, 2, v[0], v[1]);
-    setDepthPlane(t, v[0], v[1], v[2], doubleArea);
     t.invDoubleArea = 1.0 / static_cast<double>(doubleArea);
+    setDepthPlane(t, v[0], v[1], v[2], t.invDoubleArea);
     for (int k = 0; k < 3; ++k) {
         t.invW[k] = v[k].invW;
         order[k] = input[k];

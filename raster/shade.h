@@ -20,22 +20,21 @@
 
 namespace cuberille::raster {
 
-/// Perspective-correct weights of the three set-up vertices at the centre of pixel (x, y).
-inline glm::vec3 perspectiveBarycentrics(const TriangleSetup& t, int32_t x, int32_t y) {
-    const int64_t cx = int64_t{x} * kSubpixelsPerPixel + kPixelCentreSubpixels;
-    const int64_t cy = int64_t{y} * kSubpixelsPerPixel + kPixelCentreSubpixels;
+/// Perspective-correct weights of the three set-up vertices at a pixel centre, from the fine
+/// stage's biased edge values there (each edge opposite its vertex, so E_k / 2A is weight k).
+inline glm::vec3 perspectiveBarycentrics(const TriangleSetup& t, const int64_t centreEdges[3]) {
     // Screen-space weights sum to exactly 1 in exact arithmetic; a centre outside the triangle
     // has a negative one, clamped to 0 (the renormalisation below absorbs the change).
     const float invArea = float(t.invDoubleArea);
-    const float q0 = std::max(0.0f, float(t.edgeAt(0, cx, cy)) * invArea) * t.invW[0];
-    const float q1 = std::max(0.0f, float(t.edgeAt(1, cx, cy)) * invArea) * t.invW[1];
-    const float q2 = std::max(0.0f, float(t.edgeAt(2, cx, cy)) * invArea) * t.invW[2];
+    const float q0 = std::max(0.0f, float(centreEdges[0] - t.fillBias[0]) * invArea) * t.invW[0];
+    const float q1 = std::max(0.0f, float(centreEdges[1] - t.fillBias[1]) * invArea) * t.invW[1];
+    const float q2 = std::max(0.0f, float(centreEdges[2] - t.fillBias[2]) * invArea) * t.invW[2];
     const float norm = 1.0f / (q0 + q1 + q2);
     return glm::vec3(q0 * norm, q1 * norm, q2 * norm);
 }
 
 struct ConstantColorShader {
-    glm::vec4 shade(const TriangleSetup& t, const float*, int32_t, int32_t) const {
+    glm::vec4 shade(const TriangleSetup& t, const float*, const int64_t*) const {
         return t.flatColor;
     }
 };
@@ -44,8 +43,8 @@ struct ConstantColorShader {
 struct LambertShader {
     DirectionalLight light;
 
-    glm::vec4 shade(const TriangleSetup& t, const float* varyings, int32_t x, int32_t y) const {
-        const glm::vec3 w = perspectiveBarycentrics(t, x, y);
+    glm::vec4 shade(const TriangleSetup& t, const float* varyings, const int64_t* centreEdges) const {
+        const glm::vec3 w = perspectiveBarycentrics(t, centreEdges);
         const float* v0 = varyings;
         const float* v1 = varyings + 6;
         const float* v2 = varyings + 12;

@@ -114,13 +114,17 @@ private:
     FullBlockResult rasterizeFull(const PixelRect& r) {
         const uint32_t all = S == 32 ? ~0u : (1u << S) - 1u;
         FullBlockResult result;
-        for (int y = r.minY; y <= r.maxY; ++y)
+        for (int y = r.minY; y <= r.maxY; ++y) {
+            int64_t e[3];  // stepped for the shader's barycentrics only
+            edgesAtPixelCentre(t_, r.minX, y, e);
             for (int x = r.minX; x <= r.maxX; ++x) {
                 float maxDepth = 0.0f;
-                const uint32_t pass = processPixel(x, y, all, &maxDepth);
+                const uint32_t pass = processPixel(x, y, all, e, &maxDepth);
                 result.everySamplePassed = result.everySamplePassed && pass == all;
                 result.maxDepthWritten = std::max(result.maxDepthWritten, maxDepth);
+                for (int k = 0; k < 3; ++k) e[k] += int64_t{t_.edgeA[k]} * kSubpixelsPerPixel;
             }
+        }
         return result;
     }
 
@@ -131,15 +135,17 @@ private:
             edgesAtPixelCentre(t_, r.minX, y, e);
             for (int x = r.minX; x <= r.maxX; ++x) {
                 const uint32_t mask = coverageMask<S>(e, edgeOffsets_);
-                if (mask) processPixel(x, y, mask);
+                if (mask) processPixel(x, y, mask, e);
                 for (int k = 0; k < 3; ++k) e[k] += int64_t{t_.edgeA[k]} * kSubpixelsPerPixel;
             }
         }
     }
 
-    // Depth (early, before shading), shade once, output merge. Returns the samples that passed;
-    // with maxDepthPassed, also the largest depth among them.
-    uint32_t processPixel(int32_t x, int32_t y, uint32_t covered, float* maxDepthPassed = nullptr) {
+    // Depth (early, before shading), shade once, output merge. centreEdges are the biased edge
+    // values at the pixel centre. Returns the samples that passed; with maxDepthPassed, also the
+    // largest depth among them.
+    uint32_t processPixel(int32_t x, int32_t y, uint32_t covered, const int64_t centreEdges[3],
+                          float* maxDepthPassed = nullptr) {
         const DrawState& state = *target_.state;
         const size_t first =
             (size_t(y - target_.originY) * kTileSizePixels + size_t(x - target_.originX)) * S;
@@ -156,7 +162,7 @@ private:
         if (target_.overdraw) target_.overdraw[size_t(y) * target_.imageWidth + x] += passed;
         if (state.colorWriteMask) {
             ++c.pixelsShaded;
-            mergeColor<S>(target_.color + first, pass, shader_.shade(t_, varyings_, x, y),
+            mergeColor<S>(target_.color + first, pass, shader_.shade(t_, varyings_, centreEdges),
                           state.colorWriteMask);
         }
         if (state.depthWrite) {
