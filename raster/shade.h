@@ -16,48 +16,66 @@
 #include <glm/glm.hpp>
 
 #include "raster/draw.h"
+#include "raster/limits.h"
 #include "raster/setup.h"
 
 namespace cuberille::raster {
 
-/// Perspective-correct weights of the three set-up vertices at a pixel centre, from the fine
-/// stage's biased edge values there (each edge opposite its vertex, so E_k / 2A is weight k).
-inline glm::vec3 perspectiveBarycentrics(const TriangleSetup& t, const int64_t centreEdges[3]) {
-    // Screen-space weights sum to exactly 1 in exact arithmetic; a centre outside the triangle
-    // has a negative one, clamped to 0 (the renormalisation below absorbs the change).
-    const float invArea = float(t.invDoubleArea);
-    const float q0 = std::max(0.0f, float(centreEdges[0] - t.fillBias[0]) * invArea) * t.invW[0];
-    const float q1 = std::max(0.0f, float(centreEdges[1] - t.fillBias[1]) * invArea) * t.invW[1];
-    const float q2 = std::max(0.0f, float(centreEdges[2] - t.fillBias[2]) * invArea) * t.invW[2];
-    const float norm = 1.0f / (q0 + q1 + q2);
-    return glm::vec3(q0 * norm, q1 * norm, q2 * norm);
-}
+/// Pixels of one block waiting to be shaded, as structure-of-arrays, so a shading model's loop
+/// runs across pixels and the compiler vectorises it (the software counterpart of a GPU
+/// shading a warp of pixels). Filled by the depth stage, read by output merge.
+struct ShadeQueue {
+    static constexpr int kCapacity = kBlockSizePixels * kBlockSizePixels;
+    int count = 0;
+    // Biased edge values at the pixel centre (each edge opposite its vertex).
+    int64_t edge0[kCapacity], edge1[kCapacity], edge2[kCapacity];
+    uint32_t firstSample[kCapacity];  // index of the pixel's first sample in the tile
+    uint32_t passMask[kCapacity];     // samples that passed the depth test
+    float red[kCapacity], green[kCapacity], blue[kCapacity], alpha[kCapacity];
+};
 
 struct ConstantColorShader {
-    glm::vec4 shade(const TriangleSetup& t, const float*, const int64_t*) const {
-        return t.flatColor;
+    void shade(const TriangleSetup& t, const float*, ShadeQueue& q) const {
+        for (int i = 0; i < q.count; ++i) {
+            q.red[i] = t.flatColor.r;
+            q.green[i] = t.flatColor.g;
+            q.blue[i] = t.flatColor.b;
+            q.alpha[i] = t.flatColor.a;
+        }
     }
 };
 
 /// Lambert: varyings are world normal (3) and linear colour (3); one directional light.
+/// Per pixel: perspective-correct weights (screen weights clamped to the triangle, times 1/w,
+/// renormalised), interpolated normal and albedo, albedo * (ambient + radiance * max(0, n.l)).
 struct LambertShader {
     DirectionalLight light;
 
-    glm::vec4 shade(const TriangleSetup& t, const float* varyings, const int64_t* centreEdges) const {
-        const glm::vec3 w = perspectiveBarycentrics(t, centreEdges);
-        const float* v0 = varyings;
-        const float* v1 = varyings + 6;
-        const float* v2 = varyings + 12;
-        glm::vec3 n(w.x * v0[0] + w.y * v1[0] + w.z * v2[0], w.x * v0[1] + w.y * v1[1] + w.z * v2[1],
-                    w.x * v0[2] + w.y * v1[2] + w.z * v2[2]);
-        const glm::vec3 albedo(w.x * v0[3] + w.y * v1[3] + w.z * v2[3],
-                               w.x * v0[4] + w.y * v1[4] + w.z * v2[4],
-                               w.x * v0[5] + w.y * v1[5] + w.z * v2[5]);
-        const float len2 = glm::dot(n, n);
-        const float cosine = len2 > 0.0f ? std::max(0.0f, glm::dot(n, light.directionToLight)) /
-                                               std::sqrt(len2)
-                                         : 0.0f;
-        return glm::vec4(albedo * (light.ambient + light.radiance * cosine), 1.0f);
+    void shade(const TriangleSetup& t, const float* v, ShadeQueue& q) const {
+        const float invArea = float(t.invDoubleArea);
+        const float bias0 = t.fillBias[0], bias1 = t.fillBias[1], bias2 = t.fillBias[2];
+        const float invW0 = t.invW[0], invW1 = t.invW[1], invW2 = t.invW[2];
+        const glm::vec3 l = light.directionToLight, rad = light.radiance, amb = light.ambient;
+        for (int i = 0; i < q.count; ++i) {
+            const float q0 = std::max(0.0f, float(q.edge0[i] - int64_t(bias0)) * invArea) * invW0;
+            const float q1 = std::max(0.0f, float(q.edge1[i] - int64_t(bias1)) * invArea) * invW1;
+            const float q2 = std::max(0.0f, float(q.edge2[i] - int64_t(bias2)) * invArea) * invW2;
+            const float norm = 1.0f / (q0 + q1 + q2);
+            const float w0 = q0 * norm, w1 = q1 * norm, w2 = q2 * norm;
+            const float nx = w0 * v[0] + w1 * v[6] + w2 * v[12];
+            const float ny = w0 * v[1] + w1 * v[7] + w2 * v[13];
+            const float nz = w0 * v[2] + w1 * v[8] + w2 * v[14];
+            const float ax = w0 * v[3] + w1 * v[9] + w2 * v[15];
+            const float ay = w0 * v[4] + w1 * v[10] + w2 * v[16];
+            const float az = w0 * v[5] + w1 * v[11] + w2 * v[17];
+            const float len2 = nx * nx + ny * ny + nz * nz;
+            const float nDotL = nx * l.x + ny * l.y + nz * l.z;
+            const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
+            q.red[i] = ax * (amb.x + rad.x * cosine);
+            q.green[i] = ay * (amb.y + rad.y * cosine);
+            q.blue[i] = az * (amb.z + rad.z * cosine);
+            q.alpha[i] = 1.0f;
+        }
     }
 };
 

@@ -15,6 +15,9 @@ namespace {
 /// Triangles whose clamped pixel bounds hold at most this many pixels skip the coarse stage:
 /// sub-pixel geometry (voxel faces, dense scans) is the common case, not the exception.
 constexpr int kSmallTrianglePixels = 2;
+/// Below this many pixels of bounds in the tile, a triangle's pixels are shaded one at a time
+/// as they pass the depth test: a batch of one or two pixels does not pay for the batch loop.
+constexpr int kMinPixelsToBatchShading = 16;
 
 /// Everything the per-pixel path needs for one (tile, draw) pair.
 struct TileTarget {
@@ -49,6 +52,7 @@ public:
                                std::min(t_.pixelMaxY, target_.originY + kTileSizePixels - 1)};
         if (bounds.minX > bounds.maxX || bounds.minY > bounds.maxY) return;
         const int pixels = (bounds.maxX - bounds.minX + 1) * (bounds.maxY - bounds.minY + 1);
+        shadeImmediately_ = pixels < kMinPixelsToBatchShading;
         if (pixels <= kSmallTrianglePixels) {
             ++target_.counters->smallTriangleEntries;
             rasterizePartial(bounds);
@@ -119,33 +123,37 @@ private:
             edgesAtPixelCentre(t_, r.minX, y, e);
             for (int x = r.minX; x <= r.maxX; ++x) {
                 float maxDepth = 0.0f;
-                const uint32_t pass = processPixel(x, y, all, e, &maxDepth);
+                const uint32_t pass = depthAndQueue(x, y, all, e, &maxDepth);
                 result.everySamplePassed = result.everySamplePassed && pass == all;
                 result.maxDepthWritten = std::max(result.maxDepthWritten, maxDepth);
                 for (int k = 0; k < 3; ++k) e[k] += int64_t{t_.edgeA[k]} * kSubpixelsPerPixel;
             }
         }
+        shadeAndMerge();
         return result;
     }
 
-    // Fine stage: per-sample masks, stepping the edge values along each row.
+    // Fine stage: per-sample masks, stepping the edge values along each row. At most one block
+    // (or a small triangle's two pixels) at a time, so the shade queue never overflows.
     void rasterizePartial(const PixelRect& r) {
         for (int y = r.minY; y <= r.maxY; ++y) {
             int64_t e[3];
             edgesAtPixelCentre(t_, r.minX, y, e);
             for (int x = r.minX; x <= r.maxX; ++x) {
                 const uint32_t mask = coverageMask<S>(e, edgeOffsets_);
-                if (mask) processPixel(x, y, mask, e);
+                if (mask) depthAndQueue(x, y, mask, e);
                 for (int k = 0; k < 3; ++k) e[k] += int64_t{t_.edgeA[k]} * kSubpixelsPerPixel;
             }
         }
+        shadeAndMerge();
     }
 
-    // Depth (early, before shading), shade once, output merge. centreEdges are the biased edge
-    // values at the pixel centre. Returns the samples that passed; with maxDepthPassed, also the
-    // largest depth among them.
-    uint32_t processPixel(int32_t x, int32_t y, uint32_t covered, const int64_t centreEdges[3],
-                          float* maxDepthPassed = nullptr) {
+    // Depth stage (early, before shading): test and write the samples' depths, count, and queue
+    // the pixel for shading. centreEdges are the biased edge values at the pixel centre. Returns
+    // the samples that passed; with maxDepthPassed, also the largest depth among them.
+    [[gnu::always_inline]] uint32_t depthAndQueue(int32_t x, int32_t y, uint32_t covered,
+                                                 const int64_t centreEdges[3],
+                           float* maxDepthPassed = nullptr) {
         const DrawState& state = *target_.state;
         const size_t first =
             (size_t(y - target_.originY) * kTileSizePixels + size_t(x - target_.originX)) * S;
@@ -161,9 +169,13 @@ private:
         if (target_.occlusion) *target_.occlusion += passed;
         if (target_.overdraw) target_.overdraw[size_t(y) * target_.imageWidth + x] += passed;
         if (state.colorWriteMask) {
-            ++c.pixelsShaded;
-            mergeColor<S>(target_.color + first, pass, shader_.shade(t_, varyings_, centreEdges),
-                          state.colorWriteMask);
+            const int i = queue_.count++;
+            queue_.edge0[i] = centreEdges[0];
+            queue_.edge1[i] = centreEdges[1];
+            queue_.edge2[i] = centreEdges[2];
+            queue_.firstSample[i] = uint32_t(first);
+            queue_.passMask[i] = pass;
+            if (shadeImmediately_) shadeAndMerge();
         }
         if (state.depthWrite) {
             mergeDepth<S>(target_.depth + first, pass, depth);
@@ -182,12 +194,28 @@ private:
         return pass;
     }
 
+    // Shade stage over the queued pixels in one loop, then output merge. The pixels of one
+    // triangle never overlap, so deferring colour writes to here changes nothing.
+    void shadeAndMerge() {
+        if (queue_.count == 0) return;
+        shader_.shade(t_, varyings_, queue_);
+        target_.counters->pixelsShaded += queue_.count;
+        const uint8_t writeMask = target_.state->colorWriteMask;
+        for (int i = 0; i < queue_.count; ++i)
+            mergeColor<S>(target_.color + queue_.firstSample[i], queue_.passMask[i],
+                          glm::vec4(queue_.red[i], queue_.green[i], queue_.blue[i], queue_.alpha[i]),
+                          writeMask);
+        queue_.count = 0;
+    }
+
     const TriangleSetup& t_;
     const float* varyings_;
     const Shader& shader_;
     const TileTarget& target_;
     SampleEdgeOffsets<S> edgeOffsets_;
     SampleSubpixelOffsets<S> sampleOffsets_;
+    bool shadeImmediately_ = false;
+    ShadeQueue queue_;  // a member, so the compiler sees it alias nothing (the loop vectorises)
 };
 
 template <int S, class Shader>
