@@ -20,7 +20,9 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
         "render", "Render one frame of a scene to an image (PNG: sRGB 8-bit; EXR: linear float)");
     std::string scenes;
     for (const auto& n : cuberille::scene::proceduralSceneNames()) scenes += " " + n;
-    render->add_option("scene", o.scene, "A .tri file, or a built-in scene:" + scenes)->required();
+    render->add_option("scene", o.scene,
+                       "A .tri, .ply, .ply.gz or .obj file, or a built-in scene:" + scenes)
+        ->required();
     render->add_option("--width", o.width, "Image width in pixels")->capture_default_str();
     render->add_option("--height", o.height, "Image height in pixels")->capture_default_str();
     render->add_option("--msaa", o.msaa, "Samples per pixel: 1, 2, 4, 8 or 16")->capture_default_str();
@@ -31,6 +33,10 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
                                        "classes) or overdraw (depth-passing samples)")
         ->capture_default_str();
     render->add_option("--detail", o.detail, "Tessellation scale of built-in scenes")
+        ->capture_default_str();
+    render->add_option("--azimuth", o.azimuth, "Camera azimuth for mesh files, degrees about +y")
+        ->capture_default_str();
+    render->add_option("--elevation", o.elevation, "Camera elevation for mesh files, degrees")
         ->capture_default_str();
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
 }

@@ -9,6 +9,7 @@
 #include "raster/pipeline.h"
 #include "raster/sample_pattern.h"
 #include "scene/input_error.h"
+#include "scene/model_scene.h"
 #include "scene/procedural.h"
 #include "scene/tri_scene.h"
 
@@ -83,13 +84,25 @@ RenderResult renderScene(const RenderOptions& o) {
     raster::Pipeline pipeline;
     const double t0 = nowMs();
     if (scene::isProceduralScene(o.scene)) {
-        const scene::ProceduralScene s = scene::makeProceduralScene(o.scene, o.detail);
+        const scene::Scene s = scene::makeProceduralScene(o.scene, o.detail);
         result.loadMs = nowMs() - t0;
         result.sceneTriangles = s.triangleCount();
         pipeline.beginFrame(frameDesc(o, s.background));
         s.draw(pipeline, float(o.width) / float(o.height));
         pipeline.endFrame();  // while the scene's arrays are alive (Pipeline::draw's contract)
+    } else if (scene::isModelFile(o.scene)) {
+        const scene::Scene s = scene::loadModelScene(
+            o.scene, {o.azimuth, o.elevation},
+            [&](const std::string& w) { if (!o.quiet) std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str()); });
+        result.loadMs = nowMs() - t0;
+        result.sceneTriangles = s.triangleCount();
+        pipeline.beginFrame(frameDesc(o, s.background));
+        s.draw(pipeline, float(o.width) / float(o.height));
+        pipeline.endFrame();
     } else {
+        if (!o.scene.ends_with(".tri"))
+            throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz or .obj "
+                                    "file, or a built-in scene name");
         const scene::TriScene s = scene::loadTriScene(o.scene);
         result.loadMs = nowMs() - t0;
         result.sceneTriangles = s.triangleCount();

@@ -15,13 +15,15 @@ namespace cuberille::apps {
 enum class View { Color, Depth, Tiles, Overdraw };
 
 struct RenderOptions {
-    std::string scene;  // a .tri path or a built-in scene name
+    std::string scene;  // a .tri, .ply, .ply.gz or .obj path, or a built-in scene name
     int width = 1280;
     int height = 720;
     int msaa = 1;
     int threads = 0;  // 0 = all cores
     View view = View::Color;
     float detail = 1.0f;  // tessellation scale of built-in scenes
+    float azimuth = 30.0f;    // degrees, for mesh files (which carry no camera)
+    float elevation = 20.0f;  // degrees
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;

@@ -144,7 +144,7 @@ LlvmpipePeer::~LlvmpipePeer() {
     if (impl_->context) OSMesaDestroyContext(impl_->context);
 }
 
-void LlvmpipePeer::upload(const scene::ProceduralScene& scene) {
+void LlvmpipePeer::upload(const scene::Scene& scene) {
     for (const scene::Mesh& mesh : scene.meshes) {
         MeshBuffers b;
         p_glGenBuffers(1, &b.positions);
@@ -162,7 +162,7 @@ void LlvmpipePeer::upload(const scene::ProceduralScene& scene) {
     glFinish();
 }
 
-double LlvmpipePeer::renderFrame(const scene::ProceduralScene& scene) {
+double LlvmpipePeer::renderFrame(const scene::Scene& scene) {
     Impl& m = *impl_;
     const auto t0 = std::chrono::steady_clock::now();
     // The same view as the clip-space draws, with OpenGL's [-1, 1] depth.

@@ -17,9 +17,9 @@ public:
     ~LlvmpipePeer();
 
     /// Uploads the scene's meshes into buffer objects (not timed).
-    void upload(const scene::ProceduralScene& scene);
+    void upload(const scene::Scene& scene);
     /// Renders one frame and waits for it (glFinish); returns milliseconds.
-    double renderFrame(const scene::ProceduralScene& scene);
+    double renderFrame(const scene::Scene& scene);
     static bool available();
 
 private:

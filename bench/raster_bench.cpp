@@ -40,7 +40,7 @@ struct OurFrame {
     raster::StageTimes stages;
 };
 
-OurFrame renderOurs(raster::Pipeline& p, const scene::ProceduralScene& s, int w, int h, int msaa,
+OurFrame renderOurs(raster::Pipeline& p, const scene::Scene& s, int w, int h, int msaa,
                     raster::Image& image) {
     const auto t0 = std::chrono::steady_clock::now();
     raster::FramebufferDesc d;
@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
     std::printf("%-9s %4s %10s | %8s %8s %8s %8s %10s | %10s | %7s\n", "scene", "msaa", "triangles",
                 "vertex", "front", "back", "resolve", "cuberille", "llvmpipe", "ratio");
     for (const std::string& name : split(scenes)) {
-        const scene::ProceduralScene s = scene::makeProceduralScene(name);
+        const scene::Scene s = scene::makeProceduralScene(name);
         for (const std::string& m : split(msaaList)) {
             const int msaa = std::stoi(m);
             raster::Pipeline pipeline;

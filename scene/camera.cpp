@@ -1,5 +1,8 @@
 #include "scene/camera.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace cuberille::scene {
@@ -8,6 +11,23 @@ glm::mat4 Camera::viewFromWorld() const { return glm::lookAtRH(position, target,
 
 glm::mat4 Camera::clipFromView(float aspect) const {
     return glm::perspectiveRH_ZO(glm::radians(verticalFovDegrees), aspect, nearPlane, farPlane);
+}
+
+Camera frameBounds(const glm::vec3& boundsMin, const glm::vec3& boundsMax, float azimuthDegrees,
+                   float elevationDegrees, float verticalFovDegrees) {
+    Camera c;
+    c.verticalFovDegrees = verticalFovDegrees;
+    c.target = 0.5f * (boundsMin + boundsMax);
+    const float radius = std::max(0.5f * glm::length(boundsMax - boundsMin), 1e-6f);
+    const float distance = radius / std::sin(glm::radians(verticalFovDegrees) * 0.5f) * 1.05f;
+    const float az = glm::radians(azimuthDegrees), el = glm::radians(elevationDegrees);
+    const glm::vec3 direction(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
+    c.position = c.target + distance * direction;
+    // Looking straight down or up: pick an up vector that is not parallel to the view.
+    c.up = std::abs(direction.y) > 0.999f ? glm::vec3(0.0f, 0.0f, -1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+    c.nearPlane = std::max(distance - 1.5f * radius, distance * 1e-3f);
+    c.farPlane = distance + 1.5f * radius;
+    return c;
 }
 
 }  // namespace cuberille::scene

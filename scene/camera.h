@@ -19,4 +19,10 @@ struct Camera {
     glm::mat4 clipFromWorld(float aspect) const { return clipFromView(aspect) * viewFromWorld(); }
 };
 
+/// A camera that frames a bounding box (its bounding sphere fills the vertical field of view),
+/// looking at its centre from the given azimuth (degrees about +y, 0 = from +z) and elevation
+/// (degrees above the horizon), with near and far planes hugging the sphere.
+Camera frameBounds(const glm::vec3& boundsMin, const glm::vec3& boundsMax, float azimuthDegrees,
+                   float elevationDegrees, float verticalFovDegrees = 40.0f);
+
 }  // namespace cuberille::scene

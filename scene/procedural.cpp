@@ -21,8 +21,8 @@ void gridIndices(int rows, int columns, bool wrapColumns, std::vector<uint32_t>&
         }
 }
 
-ProceduralScene makeField(float detail) {
-    ProceduralScene s;
+Scene makeField(float detail) {
+    Scene s;
     s.name = "field";
     const int rings = std::max(4, int(48 * std::sqrt(detail)));
     const int segments = std::max(6, int(72 * std::sqrt(detail)));
@@ -52,8 +52,8 @@ ProceduralScene makeField(float detail) {
 }
 
 // A rolling terrain of about 10M triangles: a (n x n) height field seen from above at an angle.
-ProceduralScene makeSubpixel(float detail) {
-    ProceduralScene s;
+Scene makeSubpixel(float detail) {
+    Scene s;
     s.name = "subpixel";
     const int n = std::max(8, int(2237 * std::sqrt(detail)));  // 2 (n-1)^2 ≈ 10M triangles
     Mesh m;
@@ -86,8 +86,8 @@ ProceduralScene makeSubpixel(float detail) {
 }
 
 // A few hundred large, overlapping, depth-tested triangles: a fill-rate test.
-ProceduralScene makeFill(float detail) {
-    ProceduralScene s;
+Scene makeFill(float detail) {
+    Scene s;
     s.name = "fill";
     const int count = std::max(4, int(300 * detail));
     uint32_t state = 12345u;  // LCG: deterministic everywhere, no library dependency
@@ -164,29 +164,6 @@ Mesh makeGround(float halfExtent, float height) {
     return m;
 }
 
-size_t ProceduralScene::triangleCount() const {
-    size_t n = 0;
-    for (const Mesh& m : meshes) n += m.triangleCount();
-    return n;
-}
-
-void ProceduralScene::draw(raster::Pipeline& pipeline, float aspect) const {
-    const glm::mat4 clipFromWorld = camera.clipFromWorld(aspect);
-    for (const Mesh& m : meshes) {
-        raster::DrawCall d;
-        d.space = raster::PositionSpace::Clip;
-        d.clipFromObject = clipFromWorld;
-        d.positions = m.positions;
-        d.normals = m.normals;
-        d.indices = m.indices;
-        d.state.shading = raster::ShadingModel::Lambert;
-        d.state.cull = raster::CullMode::Back;
-        d.state.constantColor = glm::vec4(m.color, 1.0f);
-        d.state.light = light;
-        pipeline.draw(d);
-    }
-}
-
 const std::vector<std::string>& proceduralSceneNames() {
     static const std::vector<std::string> names = {"demo", "field", "subpixel", "fill"};
     return names;
@@ -197,9 +174,9 @@ bool isProceduralScene(const std::string& name) {
     return std::find(n.begin(), n.end(), name) != n.end();
 }
 
-ProceduralScene makeProceduralScene(const std::string& name, float detail) {
+Scene makeProceduralScene(const std::string& name, float detail) {
     if (name == "demo" || name == "field") {
-        ProceduralScene s = makeField(detail);
+        Scene s = makeField(detail);
         s.name = name;
         return s;
     }

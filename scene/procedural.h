@@ -13,37 +13,15 @@
 
 #include <glm/glm.hpp>
 
-#include "raster/draw.h"
-#include "raster/pipeline.h"
-#include "scene/camera.h"
+#include "scene/mesh.h"
+#include "scene/scene.h"
 
 namespace cuberille::scene {
-
-struct Mesh {
-    std::vector<glm::vec3> positions;  // world space
-    std::vector<glm::vec3> normals;
-    std::vector<uint32_t> indices;
-    glm::vec3 color{0.8f};  // linear albedo
-
-    size_t triangleCount() const { return indices.size() / 3; }
-};
-
-struct ProceduralScene {
-    std::string name;
-    std::vector<Mesh> meshes;
-    Camera camera;
-    raster::DirectionalLight light;
-    glm::vec4 background{0.0f, 0.0f, 0.0f, 1.0f};
-
-    size_t triangleCount() const;
-    /// Submits every mesh as one Lambert draw, depth-tested, back faces culled.
-    void draw(raster::Pipeline& pipeline, float aspect) const;
-};
 
 const std::vector<std::string>& proceduralSceneNames();
 bool isProceduralScene(const std::string& name);
 /// `detail` scales tessellation (1 = the documented triangle counts).
-ProceduralScene makeProceduralScene(const std::string& name, float detail = 1.0f);
+Scene makeProceduralScene(const std::string& name, float detail = 1.0f);
 
 // Building blocks, also used by tests.
 Mesh makeSphere(glm::vec3 centre, float radius, int rings, int segments);

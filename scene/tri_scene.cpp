@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "scene/input_error.h"
+#include "scene/text_parsing.h"
 
 namespace cuberille::scene {
 namespace {
@@ -24,23 +25,15 @@ std::string quoted(std::string_view token, std::string_view problem) {
 
 std::vector<float> parseNumbers(std::string_view text, const std::string& file, size_t line) {
     std::vector<float> numbers;
-    size_t i = 0;
-    while (i < text.size()) {
-        while (i < text.size() && (text[i] == ' ' || text[i] == '\t' || text[i] == '\r')) ++i;
-        if (i >= text.size()) break;
-        size_t j = i;
-        while (j < text.size() && text[j] != ' ' && text[j] != '\t' && text[j] != '\r') ++j;
-        const std::string_view token = text.substr(i, j - i);
+    for (std::string_view token : splitWords(text)) {
         float value = 0;
         const char* first = token.data();
-        if (!token.empty() && token[0] == '+') ++first;  // from_chars rejects a leading '+'
+        if (token[0] == '+') ++first;  // from_chars rejects a leading '+'
         auto [end, ec] = std::from_chars(first, token.data() + token.size(), value);
         if (ec != std::errc() || end != token.data() + token.size())
             fail(file, line, quoted(token, "is not a number"));
-        if (!std::isfinite(value))
-            fail(file, line, quoted(token, "is not a finite number"));
+        if (!std::isfinite(value)) fail(file, line, quoted(token, "is not a finite number"));
         numbers.push_back(value);
-        i = j;
     }
     return numbers;
 }

@@ -86,6 +86,26 @@ TEST_F(Cli, BadUsageGivesExitTwo) {
     EXPECT_EQ(run("frobnicate").exitCode, 2);
 }
 
+TEST_F(Cli, RendersMeshFilesAndRejectsBrokenOnes) {
+    const fs::path ply = write("tri.ply",
+                               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                               "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    const fs::path obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    for (const fs::path& scene : {ply, obj}) {
+        const CommandRun r = run("render " + scene.string() + " --width 32 --height 24 --azimuth 0 --elevation 0 --out " +
+                                 (dir_ / "m.png").string());
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+    }
+    const fs::path cut = write("cut.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                                          "property float y\nproperty float z\nend_header\n\x01\x02");
+    const CommandRun r = run("render " + cut.string() + " --out " + (dir_ / "cut.png").string());
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find(cut.string() + ": "), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir_ / "cut.png"));
+    EXPECT_EQ(run("render " + write("x.stl", "solid").string() + " --out " + (dir_ / "x.png").string()).exitCode, 2);
+}
+
 TEST_F(Cli, HelpOnEveryLevel) {
     EXPECT_EQ(run("--help").exitCode, 0);
     const CommandRun r = run("render --help");

@@ -1,0 +1,46 @@
+#include "scene/model_scene.h"
+
+#include <algorithm>
+
+#include "scene/input_error.h"
+#include "scene/ply_loader.h"
+
+namespace cuberille::scene {
+namespace {
+
+std::string lowerName(const std::filesystem::path& path) {
+    std::string n = path.filename().string();
+    std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return std::tolower(c); });
+    return n;
+}
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+bool isModelFile(const std::filesystem::path& path) {
+    const std::string n = lowerName(path);
+    return endsWith(n, ".ply") || endsWith(n, ".ply.gz") || endsWith(n, ".obj");
+}
+
+Scene loadModelScene(const std::filesystem::path& path, const ViewAngles& view, const WarningSink& warn) {
+    Scene s;
+    s.name = path.filename().string();
+    const std::string n = lowerName(path);
+    if (endsWith(n, ".obj")) s.meshes = loadObj(path, warn);
+    else s.meshes.push_back(loadPly(path));
+    const Bounds b = boundsOf(s.meshes);
+    if (b.empty()) throw InputError(path.string() + ": no vertices");
+    s.camera = frameBounds(b.min, b.max, view.azimuthDegrees, view.elevationDegrees);
+    const glm::vec3 toCamera = glm::normalize(s.camera.position - s.camera.target);
+    s.light.directionToLight = glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f));
+    s.light.radiance = glm::vec3(0.85f);
+    s.light.ambient = glm::vec3(0.12f);
+    s.background = {0.05f, 0.06f, 0.08f, 1.0f};
+    s.cull = raster::CullMode::None;
+    return s;
+}
+
+}  // namespace cuberille::scene

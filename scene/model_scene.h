@@ -1,0 +1,23 @@
+#pragma once
+// Mesh files as scenes: PLY (`.ply`, `.ply.gz`) and OBJ (`.obj`), framed by a camera from the
+// given angles, lit by one directional light from above the camera. No culling: scans do not
+// promise a consistent winding.
+
+#include <filesystem>
+
+#include "scene/obj_loader.h"
+#include "scene/scene.h"
+
+namespace cuberille::scene {
+
+struct ViewAngles {
+    float azimuthDegrees = 30.0f;
+    float elevationDegrees = 20.0f;
+};
+
+bool isModelFile(const std::filesystem::path& path);
+
+/// Throws InputError for unreadable or malformed files.
+Scene loadModelScene(const std::filesystem::path& path, const ViewAngles& view, const WarningSink& warn);
+
+}  // namespace cuberille::scene

@@ -1,0 +1,321 @@
+#include "scene/ply_loader.h"
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include <zlib.h>
+
+#include "scene/input_error.h"
+#include "scene/text_parsing.h"
+
+namespace cuberille::scene {
+namespace {
+
+enum class Encoding { Ascii, BinaryLittleEndian, BinaryBigEndian };
+enum class Type { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+
+struct Property {
+    std::string name;
+    Type type = Type::Float32;
+    bool isList = false;
+    Type countType = Type::UInt8;
+};
+
+struct Element {
+    std::string name;
+    size_t count = 0;
+    std::vector<Property> properties;
+};
+
+struct Header {
+    Encoding encoding = Encoding::Ascii;
+    std::vector<Element> elements;
+    size_t bodyOffset = 0;  // first byte after end_header's line
+};
+
+[[noreturn]] void fail(const std::string& file, const std::string& where, const std::string& problem) {
+    throw InputError(file + ": " + where + ": " + problem);
+}
+
+// A value from the file as a person would write it: integers without decimals.
+std::string formatValue(double v) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.17g", v);
+    return buffer;
+}
+
+int sizeOf(Type t) {
+    switch (t) {
+        case Type::Int8: case Type::UInt8: return 1;
+        case Type::Int16: case Type::UInt16: return 2;
+        case Type::Int32: case Type::UInt32: case Type::Float32: return 4;
+        case Type::Float64: return 8;
+    }
+    return 0;
+}
+
+bool parseType(std::string_view name, Type& out) {
+    static const std::pair<std::string_view, Type> kTypes[] = {
+        {"char", Type::Int8},     {"int8", Type::Int8},       {"uchar", Type::UInt8},
+        {"uint8", Type::UInt8},   {"short", Type::Int16},     {"int16", Type::Int16},
+        {"ushort", Type::UInt16}, {"uint16", Type::UInt16},   {"int", Type::Int32},
+        {"int32", Type::Int32},   {"uint", Type::UInt32},     {"uint32", Type::UInt32},
+        {"float", Type::Float32}, {"float32", Type::Float32}, {"double", Type::Float64},
+        {"float64", Type::Float64}};
+    for (auto [n, t] : kTypes)
+        if (n == name) {
+            out = t;
+            return true;
+        }
+    return false;
+}
+
+Header parseHeader(std::string_view bytes, const std::string& file) {
+    Header h;
+    size_t pos = 0, lineNumber = 0;
+    bool sawFormat = false;
+    while (true) {
+        const size_t end = bytes.find('\n', pos);
+        if (end == std::string_view::npos) fail(file, "header", "no end_header line");
+        ++lineNumber;
+        const std::string_view line = bytes.substr(pos, end - pos);
+        pos = end + 1;
+        const auto w = splitWords(line);
+        const std::string where = "header line " + std::to_string(lineNumber);
+        if (lineNumber == 1) {
+            if (w.size() != 1 || w[0] != "ply") fail(file, where, "not a PLY file (no 'ply' magic)");
+            continue;
+        }
+        if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+        if (w[0] == "format") {
+            if (w.size() != 3) fail(file, where, "malformed format line");
+            if (w[1] == "ascii") h.encoding = Encoding::Ascii;
+            else if (w[1] == "binary_little_endian") h.encoding = Encoding::BinaryLittleEndian;
+            else if (w[1] == "binary_big_endian") h.encoding = Encoding::BinaryBigEndian;
+            else fail(file, where, "unknown format '" + std::string(w[1]) + "'");
+            sawFormat = true;
+        } else if (w[0] == "element") {
+            size_t count = 0;
+            if (w.size() != 3 || std::from_chars(w[2].data(), w[2].data() + w[2].size(), count).ec != std::errc())
+                fail(file, where, "malformed element line");
+            h.elements.push_back({std::string(w[1]), count, {}});
+        } else if (w[0] == "property") {
+            if (h.elements.empty()) fail(file, where, "property before any element");
+            Property p;
+            if (w.size() == 5 && w[1] == "list") {
+                p.isList = true;
+                if (!parseType(w[2], p.countType) || !parseType(w[3], p.type))
+                    fail(file, where, "unknown list types");
+                if (p.countType == Type::Float32 || p.countType == Type::Float64)
+                    fail(file, where, "list count must be an integer type");
+                p.name = w[4];
+            } else if (w.size() == 3) {
+                if (!parseType(w[1], p.type)) fail(file, where, "unknown type '" + std::string(w[1]) + "'");
+                p.name = w[2];
+            } else {
+                fail(file, where, "malformed property line");
+            }
+            h.elements.back().properties.push_back(p);
+        } else if (w[0] == "end_header") {
+            break;
+        } else {
+            fail(file, where, "unexpected '" + std::string(w[0]) + "'");
+        }
+    }
+    if (!sawFormat) fail(file, "header", "no format line");
+    h.bodyOffset = pos;
+    return h;
+}
+
+// Reads the values of one element instance, one property at a time, in either encoding.
+class BodyReader {
+public:
+    BodyReader(std::string_view bytes, size_t offset, Encoding encoding, const std::string& file)
+        : bytes_(bytes), pos_(offset), encoding_(encoding), file_(file) {}
+
+    size_t offset() const { return pos_; }
+    size_t remaining() const { return bytes_.size() - pos_; }
+
+    double read(Type t, const std::string& where) {
+        if (encoding_ == Encoding::Ascii) return readAscii(where);
+        const int n = sizeOf(t);
+        if (remaining() < size_t(n)) fail(file_, where, "unexpected end of file at byte " + std::to_string(pos_));
+        // Gather the value's bytes as an integer of its size, byte-swapped when the file's
+        // endianness differs from the machine's, then reinterpret.
+        const bool swap = (encoding_ == Encoding::BinaryBigEndian) == (std::endian::native == std::endian::little);
+        uint64_t raw = 0;
+        std::memcpy(&raw, bytes_.data() + pos_, n);
+        pos_ += n;
+        if (swap) {
+            if (n == 2) raw = __builtin_bswap16(uint16_t(raw));
+            if (n == 4) raw = __builtin_bswap32(uint32_t(raw));
+            if (n == 8) raw = __builtin_bswap64(raw);
+        }
+        unsigned char b[8];
+        std::memcpy(b, &raw, 8);
+        switch (t) {
+            case Type::Int8: return double(int8_t(b[0]));
+            case Type::UInt8: return double(b[0]);
+            case Type::Int16: { int16_t v; std::memcpy(&v, b, 2); return v; }
+            case Type::UInt16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
+            case Type::Int32: { int32_t v; std::memcpy(&v, b, 4); return v; }
+            case Type::UInt32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
+            case Type::Float32: { float v; std::memcpy(&v, b, 4); return v; }
+            case Type::Float64: { double v; std::memcpy(&v, b, 8); return v; }
+        }
+        return 0;
+    }
+
+    // ASCII instances end at a newline; checks nothing is left over on the line.
+    void endInstance(const std::string& where) {
+        if (encoding_ != Encoding::Ascii) return;
+        while (pos_ < bytes_.size() && isBlank(bytes_[pos_])) ++pos_;
+        if (pos_ < bytes_.size() && bytes_[pos_] != '\n') fail(file_, where, "more values than the header declares");
+        if (pos_ < bytes_.size()) ++pos_;
+    }
+
+private:
+    double readAscii(const std::string& where) {
+        while (pos_ < bytes_.size() && isBlank(bytes_[pos_])) ++pos_;
+        if (pos_ >= bytes_.size() || bytes_[pos_] == '\n')
+            fail(file_, where, pos_ >= bytes_.size() ? "unexpected end of file" : "fewer values than the header declares");
+        double v = 0;
+        const char* first = bytes_.data() + pos_;
+        const char* last = bytes_.data() + bytes_.size();
+        auto [end, ec] = std::from_chars(first, last, v);
+        if (ec != std::errc()) fail(file_, where, "not a number at byte " + std::to_string(pos_));
+        pos_ += size_t(end - first);
+        return v;
+    }
+
+    std::string_view bytes_;
+    size_t pos_;
+    Encoding encoding_;
+    const std::string& file_;
+};
+
+// Smallest number of bytes one instance of the element can occupy (binary), or characters
+// (ASCII: at least one digit and a separator per value).
+size_t minimumInstanceBytes(const Element& e, Encoding encoding) {
+    size_t n = 0;
+    for (const Property& p : e.properties)
+        n += encoding == Encoding::Ascii ? 2 : size_t(sizeOf(p.isList ? p.countType : p.type));
+    return std::max<size_t>(n, 1);
+}
+
+int findProperty(const Element& e, std::initializer_list<std::string_view> names) {
+    for (size_t i = 0; i < e.properties.size(); ++i)
+        for (std::string_view n : names)
+            if (e.properties[i].name == n) return int(i);
+    return -1;
+}
+
+}  // namespace
+
+Mesh parsePly(std::string_view bytes, const std::string& file) {
+    const Header h = parseHeader(bytes, file);
+    Mesh mesh;
+    BodyReader reader(bytes, h.bodyOffset, h.encoding, file);
+    size_t vertexCount = 0;
+    bool sawVertices = false, hasNormals = false;
+    for (const Element& e : h.elements) {
+        if (e.count > reader.remaining() / minimumInstanceBytes(e, h.encoding))
+            fail(file, "element '" + e.name + "'", std::to_string(e.count) + " instances cannot fit in the " +
+                                                       std::to_string(reader.remaining()) + " bytes left");
+        const bool isVertex = e.name == "vertex", isFace = e.name == "face";
+        const int x = findProperty(e, {"x"}), y = findProperty(e, {"y"}), z = findProperty(e, {"z"});
+        const int nx = findProperty(e, {"nx"}), ny = findProperty(e, {"ny"}), nz = findProperty(e, {"nz"});
+        const int r = findProperty(e, {"red", "r"}), g = findProperty(e, {"green", "g"}), b = findProperty(e, {"blue", "b"});
+        const int list = findProperty(e, {"vertex_indices", "vertex_index"});
+        if (isVertex) {
+            if (x < 0 || y < 0 || z < 0) fail(file, "element 'vertex'", "no x, y and z properties");
+            sawVertices = true;
+            vertexCount = e.count;
+            hasNormals = nx >= 0 && ny >= 0 && nz >= 0;
+            mesh.positions.resize(e.count);
+            if (hasNormals) mesh.normals.resize(e.count);
+            if (r >= 0 && g >= 0 && b >= 0) mesh.colors.resize(e.count);
+        }
+        if (isFace && list < 0) fail(file, "element 'face'", "no vertex_indices list");
+        if (isFace && !sawVertices) fail(file, "element 'face'", "faces before vertices");
+        double values[64];
+        std::vector<uint32_t> polygon;
+        for (size_t i = 0; i < e.count; ++i) {
+            const std::string where = e.name + " " + std::to_string(i);
+            for (size_t p = 0; p < e.properties.size(); ++p) {
+                const Property& prop = e.properties[p];
+                if (!prop.isList) {
+                    const double v = reader.read(prop.type, where);
+                    if (p < 64) values[p] = v;
+                    continue;
+                }
+                const double countValue = reader.read(prop.countType, where);
+                if (!(countValue >= 0) || countValue > 1e6)
+                    fail(file, where, "list length " + formatValue(countValue) + " is not sane");
+                const size_t count = size_t(countValue);
+                const bool isIndices = isFace && int(p) == list;
+                if (isIndices) polygon.clear();
+                for (size_t k = 0; k < count; ++k) {
+                    const double v = reader.read(prop.type, where);
+                    if (!isIndices) continue;
+                    if (!(v >= 0) || v >= double(vertexCount) || v != std::floor(v))
+                        fail(file, where, "vertex index " + formatValue(v) + " is out of range (" +
+                                              std::to_string(vertexCount) + " vertices)");
+                    polygon.push_back(uint32_t(v));
+                }
+                for (size_t k = 2; isIndices && k < polygon.size(); ++k)
+                    mesh.indices.insert(mesh.indices.end(), {polygon[0], polygon[k - 1], polygon[k]});
+            }
+            reader.endInstance(where);
+            if (!isVertex) continue;
+            const glm::vec3 pos(values[x], values[y], values[z]);
+            if (!std::isfinite(pos.x) || !std::isfinite(pos.y) || !std::isfinite(pos.z))
+                fail(file, where, "position is not finite");
+            mesh.positions[i] = pos;
+            if (hasNormals) mesh.normals[i] = glm::vec3(values[nx], values[ny], values[nz]);
+            if (!mesh.colors.empty()) {
+                const float scale = e.properties[r].type == Type::UInt8 ? 1.0f / 255.0f : 1.0f;
+                mesh.colors[i] = glm::vec3(srgbToLinear(float(values[r]) * scale), srgbToLinear(float(values[g]) * scale),
+                                           srgbToLinear(float(values[b]) * scale));
+            }
+        }
+    }
+    if (!sawVertices) fail(file, "header", "no vertex element");
+    if (!hasNormals) computeVertexNormals(mesh);
+    return mesh;
+}
+
+std::string readFileBytes(const std::filesystem::path& path) {
+    const std::string name = path.string();
+    if (path.extension() == ".gz") {
+        gzFile f = gzopen(name.c_str(), "rb");
+        if (!f) throw InputError(name + ": cannot open file");
+        std::string out;
+        char buffer[1 << 16];
+        int n;
+        while ((n = gzread(f, buffer, sizeof buffer)) > 0) out.append(buffer, size_t(n));
+        int error = Z_OK;
+        const char* message = gzerror(f, &error);
+        const bool failed = n < 0 || (error != Z_OK && error != Z_STREAM_END);
+        const std::string why = failed ? message : "";
+        gzclose(f);
+        if (failed) throw InputError(name + ": corrupt gzip data (" + why + ")");
+        return out;
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(name + ": cannot open file");
+    std::ostringstream buffer;
+    buffer << in.rdbuf();
+    return buffer.str();
+}
+
+Mesh loadPly(const std::filesystem::path& path) { return parsePly(readFileBytes(path), path.string()); }
+
+}  // namespace cuberille::scene

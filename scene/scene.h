@@ -1,0 +1,31 @@
+#pragma once
+// A renderable scene: meshes, a camera, one directional light and a background, whatever
+// produced it (a built-in procedural scene, a PLY or OBJ file).
+
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "raster/draw.h"
+#include "raster/pipeline.h"
+#include "scene/camera.h"
+#include "scene/mesh.h"
+
+namespace cuberille::scene {
+
+struct Scene {
+    std::string name;
+    std::vector<Mesh> meshes;
+    Camera camera;
+    raster::DirectionalLight light;
+    glm::vec4 background{0.0f, 0.0f, 0.0f, 1.0f};
+    raster::CullMode cull = raster::CullMode::Back;
+
+    size_t triangleCount() const;
+    /// Submits every mesh as one depth-tested Lambert draw. The scene must outlive the frame
+    /// (Pipeline::draw records).
+    void draw(raster::Pipeline& pipeline, float aspect) const;
+};
+
+}  // namespace cuberille::scene

@@ -1,0 +1,141 @@
+// PLY: the three encodings give the same mesh; polygons become fans; unknown elements and
+// properties are skipped; every truncation and corrupt count is a clear InputError.
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstring>
+#include <filesystem>
+
+#include <zlib.h>
+
+#include "scene/input_error.h"
+#include "scene/ply_loader.h"
+
+namespace cuberille::scene {
+namespace {
+
+// A square pyramid: 5 vertices with colours, one quad base (a fan of 2) and 4 triangles, plus
+// an unrelated element and property the reader must skip.
+const float kPositions[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5f, 0.5f, 1}};
+const std::vector<std::vector<int>> kFaces = {{0, 3, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+
+std::string header(const std::string& format) {
+    return "ply\nformat " + format + " 1.0\ncomment made by a test\n"
+           "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+           "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty short extra\n"
+           "element face 5\nproperty list uchar int vertex_indices\n"
+           "element edge 1\nproperty int a\nproperty int b\nend_header\n";
+}
+
+std::string asciiPly() {
+    std::string s = header("ascii");
+    for (int i = 0; i < 5; ++i)
+        s += std::to_string(kPositions[i][0]) + " " + std::to_string(kPositions[i][1]) + " " +
+             std::to_string(kPositions[i][2]) + " 255 128 0 -7\n";
+    for (const auto& f : kFaces) {
+        s += std::to_string(f.size());
+        for (int v : f) s += " " + std::to_string(v);
+        s += "\n";
+    }
+    return s + "0 1\n";
+}
+
+template <class T>
+void put(std::string& s, T value, bool bigEndian) {
+    char b[sizeof(T)];
+    std::memcpy(b, &value, sizeof(T));
+    if (bigEndian == (std::endian::native == std::endian::little)) std::reverse(b, b + sizeof(T));
+    s.append(b, sizeof(T));
+}
+
+std::string binaryPly(bool bigEndian) {
+    std::string s = header(bigEndian ? "binary_big_endian" : "binary_little_endian");
+    for (int i = 0; i < 5; ++i) {
+        for (int k = 0; k < 3; ++k) put(s, kPositions[i][k], bigEndian);
+        put<uint8_t>(s, 255, bigEndian), put<uint8_t>(s, 128, bigEndian), put<uint8_t>(s, 0, bigEndian);
+        put<int16_t>(s, -7, bigEndian);
+    }
+    for (const auto& f : kFaces) {
+        put<uint8_t>(s, uint8_t(f.size()), bigEndian);
+        for (int v : f) put<int32_t>(s, v, bigEndian);
+    }
+    put<int32_t>(s, 0, bigEndian), put<int32_t>(s, 1, bigEndian);
+    return s;
+}
+
+void expectPyramid(const Mesh& m) {
+    ASSERT_EQ(m.positions.size(), 5u);
+    for (int i = 0; i < 5; ++i)
+        EXPECT_EQ(m.positions[i], glm::vec3(kPositions[i][0], kPositions[i][1], kPositions[i][2]));
+    const std::vector<uint32_t> expected = {0, 3, 2, 0, 2, 1, 0, 1, 4, 1, 2, 4, 2, 3, 4, 3, 0, 4};
+    EXPECT_EQ(m.indices, expected);
+    ASSERT_EQ(m.colors.size(), 5u);
+    EXPECT_FLOAT_EQ(m.colors[0].r, 1.0f);
+    EXPECT_NEAR(m.colors[0].g, 0.2158f, 1e-3f);  // sRGB 128/255 decoded to linear
+    EXPECT_EQ(m.normals.size(), 5u);              // computed: the file has none
+    EXPECT_NEAR(glm::length(m.normals[4]), 1.0f, 1e-5f);
+}
+
+TEST(PlyLoader, AsciiAndBothBinaryEndiannessesGiveTheSameMesh) {
+    expectPyramid(parsePly(asciiPly(), "a.ply"));
+    expectPyramid(parsePly(binaryPly(false), "le.ply"));
+    expectPyramid(parsePly(binaryPly(true), "be.ply"));
+}
+
+TEST(PlyLoader, ReadsGzipCompressedFiles) {
+    const auto path = std::filesystem::temp_directory_path() / "cuberille-test-pyramid.ply.gz";
+    const std::string bytes = binaryPly(false);
+    gzFile f = gzopen(path.string().c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    gzwrite(f, bytes.data(), unsigned(bytes.size()));
+    gzclose(f);
+    expectPyramid(loadPly(path));
+    std::filesystem::remove(path);
+}
+
+TEST(PlyLoader, EveryTruncationIsAnInputErrorNamingTheFile) {
+    for (const std::string& full : {binaryPly(false), binaryPly(true), asciiPly()}) {
+        const size_t body = full.find("end_header\n") + 11;
+        for (size_t length = 0; length < full.size(); ++length) {
+            // ASCII may legally end after the last face line's digits; every binary cut may not.
+            try {
+                parsePly(std::string_view(full).substr(0, length), "cut.ply");
+                if (length < body || full.find("binary") != std::string::npos)
+                    ADD_FAILURE() << "accepted a file cut at " << length << " of " << full.size();
+            } catch (const InputError& e) {
+                EXPECT_EQ(std::string(e.what()).rfind("cut.ply: ", 0), 0u) << e.what();
+            }
+        }
+    }
+}
+
+TEST(PlyLoader, CorruptCountsAndIndicesAreReportedBeforeUse) {
+    std::string huge = binaryPly(false);
+    huge.replace(huge.find("element vertex 5"), 16, "element vertex 999999999999");
+    EXPECT_THROW(
+        {
+            try {
+                parsePly(huge, "huge.ply");
+            } catch (const InputError& e) {
+                EXPECT_NE(std::string(e.what()).find("cannot fit"), std::string::npos) << e.what();
+                throw;
+            }
+        },
+        InputError);
+
+    std::string badIndex = asciiPly();
+    badIndex.replace(badIndex.find("3 0 1 4"), 7, "3 0 1 9");
+    try {
+        parsePly(badIndex, "bad.ply");
+        ADD_FAILURE() << "accepted an out-of-range index";
+    } catch (const InputError& e) {
+        EXPECT_STREQ(e.what(), "bad.ply: face 1: vertex index 9 is out of range (5 vertices)");
+    }
+    EXPECT_THROW(parsePly("plx\n", "magic.ply"), InputError);
+    EXPECT_THROW(parsePly("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n", "noy.ply"),
+                 InputError);
+}
+
+}  // namespace
+}  // namespace cuberille::scene
