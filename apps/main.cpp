@@ -21,7 +21,7 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     std::string scenes;
     for (const auto& n : cuberille::scene::proceduralSceneNames()) scenes += " " + n;
     render->add_option("scene", o.scene,
-                       "A .tri, .ply, .ply.gz or .obj file, or a built-in scene:" + scenes)
+                       "A .tri, .ply, .ply.gz, .obj, .gltf or .glb file, or a built-in scene:" + scenes)
         ->required();
     render->add_option("--width", o.width, "Image width in pixels")->capture_default_str();
     render->add_option("--height", o.height, "Image height in pixels")->capture_default_str();

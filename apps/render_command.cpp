@@ -101,8 +101,8 @@ RenderResult renderScene(const RenderOptions& o) {
         pipeline.endFrame();
     } else {
         if (!o.scene.ends_with(".tri"))
-            throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz or .obj "
-                                    "file, or a built-in scene name");
+            throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz, .obj, .gltf "
+                                    "or .glb file, or a built-in scene name");
         const scene::TriScene s = scene::loadTriScene(o.scene);
         result.loadMs = nowMs() - t0;
         result.sceneTriangles = s.triangleCount();

@@ -2,21 +2,47 @@
 // The one place that knows about threads. Stage code calls parallelFor over work items whose
 // boundaries it chose itself (batches, tiles); results never depend on how TBB schedules them.
 
+#include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <memory>
+#include <thread>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 namespace cuberille::raster {
 
+#if defined(CUBERILLE_PARALLEL_STD_THREADS)
+/// Threads parallelFor uses in its std::thread mode (0 = hardware concurrency).
+int stdThreadLimit();
+#endif
+
 /// Runs body(i) for i in [0, count), in parallel unless the thread limit is 1.
+///
+/// Built for ThreadSanitizer (the `tsan` preset defines CUBERILLE_PARALLEL_STD_THREADS), it runs
+/// on plain std::threads taking indices from an atomic counter instead of TBB: Debian's TBB is
+/// not instrumented, so TSan cannot see its synchronisation and would report every hand-off as
+/// a race, drowning out real ones in our code. The work items, and so the results, are the same.
 template <class Body>
 void parallelFor(size_t count, Body&& body) {
+#if defined(CUBERILLE_PARALLEL_STD_THREADS)
+    std::atomic<size_t> next{0};
+    auto worker = [&] {
+        for (size_t i = next++; i < count; i = next++) body(i);
+    };
+    std::vector<std::thread> threads;
+    const size_t extra = std::min<size_t>(count, size_t(stdThreadLimit())) - (count > 0);
+    for (size_t t = 0; t < extra; ++t) threads.emplace_back(worker);
+    worker();
+    for (std::thread& t : threads) t.join();
+#else
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1),
                       [&](const tbb::blocked_range<size_t>& r) {
                           for (size_t i = r.begin(); i != r.end(); ++i) body(i);
                       });
+#endif
 }
 
 /// Caps the worker threads for its lifetime (0 = all cores). One per process at a time.

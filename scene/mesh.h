@@ -17,6 +17,7 @@ struct Mesh {
     std::vector<glm::vec3> colors;   // linear RGB per position; empty when the mesh has none
     std::vector<uint32_t> indices;   // three per triangle
     glm::vec3 color{0.8f};           // linear albedo, multiplied with vertex colours
+    bool doubleSided = false;        // never culled, whatever the scene's cull mode
 
     size_t triangleCount() const { return indices.size() / 3; }
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "scene/gltf_loader.h"
 #include "scene/input_error.h"
 #include "scene/ply_loader.h"
 
@@ -22,7 +23,8 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 
 bool isModelFile(const std::filesystem::path& path) {
     const std::string n = lowerName(path);
-    return endsWith(n, ".ply") || endsWith(n, ".ply.gz") || endsWith(n, ".obj");
+    return endsWith(n, ".ply") || endsWith(n, ".ply.gz") || endsWith(n, ".obj") || endsWith(n, ".gltf") ||
+           endsWith(n, ".glb");
 }
 
 Scene loadModelScene(const std::filesystem::path& path, const ViewAngles& view, const WarningSink& warn) {
@@ -30,16 +32,19 @@ Scene loadModelScene(const std::filesystem::path& path, const ViewAngles& view, 
     s.name = path.filename().string();
     const std::string n = lowerName(path);
     if (endsWith(n, ".obj")) s.meshes = loadObj(path, warn);
+    else if (endsWith(n, ".gltf") || endsWith(n, ".glb")) s.meshes = loadGltf(path, warn);
     else s.meshes.push_back(loadPly(path));
-    const Bounds b = boundsOf(s.meshes);
-    if (b.empty()) throw InputError(path.string() + ": no vertices");
+    Bounds b = boundsOf(s.meshes);
+    if (b.empty()) b = {glm::vec3(-1.0f), glm::vec3(1.0f)};  // nothing to draw (warned): any view
     s.camera = frameBounds(b.min, b.max, view.azimuthDegrees, view.elevationDegrees);
     const glm::vec3 toCamera = glm::normalize(s.camera.position - s.camera.target);
     s.light.directionToLight = glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f));
     s.light.radiance = glm::vec3(0.85f);
     s.light.ambient = glm::vec3(0.12f);
     s.background = {0.05f, 0.06f, 0.08f, 1.0f};
-    s.cull = raster::CullMode::None;
+    // glTF says which materials are double-sided; PLY and OBJ scans promise no winding.
+    const bool isGltf = endsWith(n, ".gltf") || endsWith(n, ".glb");
+    s.cull = isGltf ? raster::CullMode::Back : raster::CullMode::None;
     return s;
 }
 

@@ -19,7 +19,7 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
         d.vertexColors = m.colors;
         d.indices = m.indices;
         d.state.shading = raster::ShadingModel::Lambert;
-        d.state.cull = cull;
+        d.state.cull = m.doubleSided ? raster::CullMode::None : cull;
         d.state.constantColor = glm::vec4(m.color, 1.0f);
         d.state.light = light;
         pipeline.draw(d);

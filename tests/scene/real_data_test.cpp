@@ -32,5 +32,32 @@ TEST(RealData, EveryScanLoadsAndRenders) {
     EXPECT_GE(rendered, 3);
 }
 
+TEST(RealData, EveryGltfSampleLoadsAndRenders) {
+    const fs::path data = fs::path(CUBERILLE_SOURCE_DIR) / ".." / "shared" / "data";
+    if (!fs::exists(data / "gltf")) GTEST_SKIP() << data << " is absent; real-data checks skipped";
+    int rendered = 0;
+    for (const char* folder : {"gltf", "asset-generator"}) {
+        for (const auto& entry : fs::recursive_directory_iterator(data / folder)) {
+            const std::string name = entry.path().filename().string();
+            if (!(name.ends_with(".gltf") || name.ends_with(".glb"))) continue;
+            apps::RenderOptions o;
+            o.scene = entry.path().string();
+            o.width = 64;
+            o.height = 48;
+            o.quiet = true;
+            try {
+                const apps::RenderResult r = apps::renderScene(o);
+                if (r.sceneTriangles > 0) {
+                    EXPECT_GT(r.stats.counters.samplesPassed, 0u) << name << " drew nothing";
+                }
+            } catch (const std::exception& e) {
+                ADD_FAILURE() << name << ": " << e.what();
+            }
+            ++rendered;
+        }
+    }
+    EXPECT_GE(rendered, 15);
+}
+
 }  // namespace
 }  // namespace cuberille::testing

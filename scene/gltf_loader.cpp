@@ -1,0 +1,245 @@
+#include "scene/gltf_loader.h"
+
+#include <cmath>
+#include <set>
+#include <string>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <tiny_gltf.h>
+
+#include "scene/input_error.h"
+
+namespace cuberille::scene {
+namespace {
+
+constexpr int kMaxNodeDepth = 256;
+
+class GltfReader {
+public:
+    GltfReader(const tinygltf::Model& model, const std::string& file, const WarningSink& warn)
+        : model_(model), file_(file), warn_(warn) {}
+
+    std::vector<Mesh> read() {
+        warnAboutUnsupported();
+        if (!model_.scenes.empty()) {
+            const int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+            if (sceneIndex >= int(model_.scenes.size())) fail("scene " + std::to_string(sceneIndex), "does not exist");
+            for (int node : model_.scenes[sceneIndex].nodes) visit(node, glm::mat4(1.0f), 0);
+        } else {
+            // No scene: every mesh once, untransformed (glTF 2.0 §3.3 allows files without scenes).
+            for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f));
+        }
+        if (meshes_.empty()) warn_(file_ + ": no triangles to draw");
+        return std::move(meshes_);
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& where, const std::string& problem) const {
+        throw InputError(file_ + ": " + where + ": " + problem);
+    }
+
+    void warnOnce(const std::string& message) {
+        if (warned_.insert(message).second) warn_(file_ + ": " + message);
+    }
+
+    void warnAboutUnsupported() {
+        if (!model_.textures.empty()) warnOnce("textures are not supported yet; base colour factors only");
+        if (!model_.animations.empty()) warnOnce("animations are not supported yet; the static pose is drawn");
+        if (!model_.skins.empty()) warnOnce("skinning is not supported yet; the bind pose is drawn");
+        for (const auto& ext : model_.extensionsUsed)
+            warnOnce("extension " + ext + " is not supported yet and was ignored");
+    }
+
+    static glm::mat4 localTransform(const tinygltf::Node& n) {
+        if (n.matrix.size() == 16) {
+            glm::dmat4 m;
+            for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = n.matrix[i];  // column-major
+            return glm::mat4(m);
+        }
+        glm::dmat4 m(1.0);
+        if (n.translation.size() == 3) m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
+        if (n.rotation.size() == 4)
+            m *= glm::mat4_cast(glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2])));
+        if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
+        return glm::mat4(m);
+    }
+
+    void visit(int index, const glm::mat4& parent, int depth) {
+        const std::string where = "node " + std::to_string(index);
+        if (index < 0 || index >= int(model_.nodes.size())) fail(where, "does not exist");
+        if (depth > kMaxNodeDepth) fail(where, "the hierarchy is deeper than " + std::to_string(kMaxNodeDepth) + " (a cycle?)");
+        const tinygltf::Node& n = model_.nodes[index];
+        const glm::mat4 world = parent * localTransform(n);
+        if (n.mesh >= 0) addMesh(n.mesh, world);
+        for (int child : n.children) visit(child, world, depth + 1);
+    }
+
+    // The accessor's element i, component c, as float (normalised integers scaled to [0, 1]).
+    struct AccessorView {
+        const unsigned char* data;
+        size_t stride, count;
+        int componentType, components;
+        bool normalized;
+
+        float get(size_t i, int c) const {
+            const unsigned char* p = data + i * stride;
+            switch (componentType) {
+                case TINYGLTF_COMPONENT_TYPE_FLOAT: { float v; std::memcpy(&v, p + 4 * c, 4); return v; }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: { const float v = p[c]; return normalized ? v / 255.0f : v; }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t v; std::memcpy(&v, p + 2 * c, 2); return normalized ? v / 65535.0f : v; }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: { uint32_t v; std::memcpy(&v, p + 4 * c, 4); return float(v); }
+                case TINYGLTF_COMPONENT_TYPE_BYTE: { const float v = int8_t(p[c]); return normalized ? std::max(v / 127.0f, -1.0f) : v; }
+                case TINYGLTF_COMPONENT_TYPE_SHORT: { int16_t v; std::memcpy(&v, p + 2 * c, 2); return normalized ? std::max(v / 32767.0f, -1.0f) : v; }
+            }
+            return 0.0f;
+        }
+        uint32_t index(size_t i) const {
+            const unsigned char* p = data + i * stride;
+            switch (componentType) {
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return p[0];
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t v; std::memcpy(&v, p, 2); return v; }
+                default: { uint32_t v; std::memcpy(&v, p, 4); return v; }
+            }
+        }
+    };
+
+    AccessorView view(int accessorIndex, const std::string& where) const {
+        const std::string at = where + ", accessor " + std::to_string(accessorIndex);
+        if (accessorIndex < 0 || accessorIndex >= int(model_.accessors.size())) fail(at, "does not exist");
+        const tinygltf::Accessor& a = model_.accessors[accessorIndex];
+        if (a.sparse.isSparse) fail(at, "sparse accessors are not supported yet");
+        if (a.bufferView < 0 || a.bufferView >= int(model_.bufferViews.size())) fail(at, "has no valid buffer view");
+        const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
+        if (bv.buffer < 0 || bv.buffer >= int(model_.buffers.size())) fail(at, "its buffer view has no valid buffer");
+        const tinygltf::Buffer& buffer = model_.buffers[bv.buffer];
+        const int componentBytes = tinygltf::GetComponentSizeInBytes(uint32_t(a.componentType));
+        const int components = tinygltf::GetNumComponentsInType(uint32_t(a.type));
+        if (componentBytes <= 0 || components <= 0) fail(at, "has an invalid component type or type");
+        const size_t elementBytes = size_t(componentBytes) * size_t(components);
+        const size_t stride = bv.byteStride ? bv.byteStride : elementBytes;
+        // The last element must end inside the view, and the view inside the buffer.
+        if (bv.byteOffset > buffer.data.size() || bv.byteLength > buffer.data.size() - bv.byteOffset)
+            fail(at, "its buffer view runs past the end of buffer " + std::to_string(bv.buffer));
+        if (a.count > 0 && (a.byteOffset > bv.byteLength ||
+                            (a.count - 1) > (bv.byteLength - a.byteOffset - std::min(bv.byteLength - a.byteOffset, elementBytes)) / stride ||
+                            bv.byteLength - a.byteOffset < elementBytes))
+            fail(at, std::to_string(a.count) + " elements do not fit in buffer view " + std::to_string(a.bufferView));
+        return {buffer.data.data() + bv.byteOffset + a.byteOffset, stride, a.count, a.componentType, components,
+                a.normalized};
+    }
+
+    void addMesh(int meshIndex, const glm::mat4& world) {
+        if (meshIndex < 0 || meshIndex >= int(model_.meshes.size())) fail("mesh " + std::to_string(meshIndex), "does not exist");
+        const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
+        const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(world)));
+        const bool mirrored = glm::determinant(glm::mat3(world)) < 0.0f;
+        for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+            const std::string where = "mesh " + std::to_string(meshIndex) + " primitive " + std::to_string(p);
+            const tinygltf::Primitive& prim = mesh.primitives[p];
+            const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+            if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+                warnOnce("points and lines are skipped (" + where + ")");
+                continue;
+            }
+            const auto position = prim.attributes.find("POSITION");
+            if (position == prim.attributes.end()) fail(where, "has no POSITION");
+            const AccessorView pos = view(position->second, where);
+            if (pos.components != 3) fail(where, "POSITION is not a 3-vector");
+
+            Mesh m;
+            m.positions.resize(pos.count);
+            for (size_t i = 0; i < pos.count; ++i) {
+                const glm::vec4 w = world * glm::vec4(pos.get(i, 0), pos.get(i, 1), pos.get(i, 2), 1.0f);
+                m.positions[i] = glm::vec3(w);
+            }
+            if (const auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
+                const AccessorView nv = view(it->second, where);
+                if (nv.components != 3 || nv.count != pos.count) fail(where, "NORMAL does not match POSITION");
+                m.normals.resize(nv.count);
+                for (size_t i = 0; i < nv.count; ++i) {
+                    const glm::vec3 n = normalMatrix * glm::vec3(nv.get(i, 0), nv.get(i, 1), nv.get(i, 2));
+                    const float len = glm::length(n);
+                    m.normals[i] = len > 0.0f ? n / len : glm::vec3(0.0f, 0.0f, 1.0f);
+                }
+            }
+            if (const auto it = prim.attributes.find("COLOR_0"); it != prim.attributes.end()) {
+                const AccessorView cv = view(it->second, where);
+                if ((cv.components != 3 && cv.components != 4) || cv.count != pos.count)
+                    fail(where, "COLOR_0 does not match POSITION");
+                m.colors.resize(cv.count);
+                for (size_t i = 0; i < cv.count; ++i) m.colors[i] = glm::vec3(cv.get(i, 0), cv.get(i, 1), cv.get(i, 2));
+            }
+
+            std::vector<uint32_t> order;  // vertex indices in primitive order
+            if (prim.indices >= 0) {
+                const AccessorView iv = view(prim.indices, where);
+                order.resize(iv.count);
+                for (size_t i = 0; i < iv.count; ++i) {
+                    order[i] = iv.index(i);
+                    if (order[i] >= pos.count)
+                        fail(where, "index " + std::to_string(order[i]) + " at " + std::to_string(i) +
+                                        " is out of range (" + std::to_string(pos.count) + " vertices)");
+                }
+            } else {
+                order.resize(pos.count);
+                for (size_t i = 0; i < pos.count; ++i) order[i] = uint32_t(i);
+            }
+            appendTriangles(mode, order, mirrored, m.indices);
+            if (m.indices.empty()) continue;
+            if (m.normals.empty()) computeVertexNormals(m);
+
+            if (prim.material >= 0 && prim.material < int(model_.materials.size())) {
+                const tinygltf::Material& mat = model_.materials[prim.material];
+                const auto& f = mat.pbrMetallicRoughness.baseColorFactor;  // linear
+                if (f.size() >= 3) m.color = glm::vec3(f[0], f[1], f[2]);
+                m.doubleSided = mat.doubleSided;
+                if (mat.alphaMode != "OPAQUE") warnOnce("alpha modes are not supported yet; drawn opaque");
+            } else {
+                m.color = glm::vec3(1.0f);  // glTF's default material
+            }
+            meshes_.push_back(std::move(m));
+        }
+    }
+
+    // Lists, strips (alternating order keeps the winding) and fans as triangle lists; a mirrored
+    // node transform reverses each triangle so front faces stay counter-clockwise.
+    static void appendTriangles(int mode, const std::vector<uint32_t>& v, bool mirrored, std::vector<uint32_t>& out) {
+        auto emit = [&](uint32_t a, uint32_t b, uint32_t c) {
+            if (mirrored) std::swap(b, c);
+            out.insert(out.end(), {a, b, c});
+        };
+        if (mode == TINYGLTF_MODE_TRIANGLES)
+            for (size_t i = 0; i + 2 < v.size(); i += 3) emit(v[i], v[i + 1], v[i + 2]);
+        if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
+            for (size_t i = 0; i + 2 < v.size(); ++i)
+                i % 2 ? emit(v[i + 1], v[i], v[i + 2]) : emit(v[i], v[i + 1], v[i + 2]);
+        if (mode == TINYGLTF_MODE_TRIANGLE_FAN)
+            for (size_t i = 1; i + 1 < v.size(); ++i) emit(v[0], v[i], v[i + 1]);
+    }
+
+    const tinygltf::Model& model_;
+    const std::string& file_;
+    const WarningSink& warn_;
+    std::set<std::string> warned_;
+    std::vector<Mesh> meshes_;
+};
+
+}  // namespace
+
+std::vector<Mesh> loadGltf(const std::filesystem::path& path, const WarningSink& warn) {
+    const std::string file = path.string();
+    if (!std::filesystem::exists(path)) throw InputError(file + ": cannot open file");
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model model;
+    std::string error, warning;
+    const bool binary = path.extension() == ".glb" || path.extension() == ".GLB";
+    const bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, file)
+                           : loader.LoadASCIIFromFile(&model, &error, &warning, file);
+    if (!warning.empty()) warn(file + ": " + warning);
+    if (!ok) throw InputError(file + ": " + (error.empty() ? "not a valid glTF file" : error));
+    return GltfReader(model, file, warn).read();
+}
+
+}  // namespace cuberille::scene

@@ -1,0 +1,25 @@
+#pragma once
+// glTF 2.0 (`.gltf`, `.glb`) through tinygltf, static pose: the default scene's node
+// hierarchy (TRS or matrix, mirrored transforms flip the winding back), every mesh primitive
+// of mode TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN (POINTS and LINES are skipped with one
+// warning), indexed or not, with POSITION, NORMAL (computed when absent), COLOR_0 (float or
+// normalised integers), the material's baseColorFactor and doubleSided flag.
+// Not yet: textures, alpha modes, cameras, KHR_lights_punctual, animation, skinning, morph
+// targets (issue 3); a file that uses them loads with a warning naming what was ignored.
+//
+// What we do with tinygltf's answer is checked: every accessor's range against its buffer
+// view and buffer, every index against the vertex count, the node depth (at most 256) and
+// cycles, before anything is read. Failures throw InputError naming the file, the place
+// (mesh, primitive, accessor, node) and the problem.
+
+#include <filesystem>
+#include <vector>
+
+#include "scene/mesh.h"
+#include "scene/obj_loader.h"  // WarningSink
+
+namespace cuberille::scene {
+
+std::vector<Mesh> loadGltf(const std::filesystem::path& path, const WarningSink& warn);
+
+}  // namespace cuberille::scene

@@ -1,0 +1,145 @@
+// glTF: node transforms (including a mirroring one), strips and fans, indexed and not, vertex
+// colours, points skipped with a warning, and corrupt accessors reported, on files the test
+// writes itself.
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "scene/gltf_loader.h"
+#include "scene/input_error.h"
+
+namespace cuberille::scene {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string base64(const std::string& in) {
+    static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    size_t i = 0;
+    for (; i + 2 < in.size(); i += 3) {
+        const uint32_t v = (uint8_t(in[i]) << 16) | (uint8_t(in[i + 1]) << 8) | uint8_t(in[i + 2]);
+        out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], k[v & 63]};
+    }
+    if (i + 1 == in.size()) {
+        const uint32_t v = uint8_t(in[i]) << 16;
+        out += {k[v >> 18], k[(v >> 12) & 63], '=', '='};
+    } else if (i + 2 == in.size()) {
+        const uint32_t v = (uint8_t(in[i]) << 16) | (uint8_t(in[i + 1]) << 8);
+        out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], '='};
+    }
+    return out;
+}
+
+// Buffer: 4 positions (a unit square in z = 0: 0 1 2 3 as a strip, 0 1 3 2 as a fan, both
+// counter-clockwise from +z), 4 RGBA8 colours, then 4 unsigned-byte indices.
+std::string bufferBytes() {
+    const float p[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+    std::string b(reinterpret_cast<const char*>(p), sizeof p);
+    const uint8_t c[16] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255};
+    b.append(reinterpret_cast<const char*>(c), sizeof c);
+    const uint8_t idx[4] = {0, 1, 3, 2};  // the triangle uses the first 3, the fan all 4
+    b.append(reinterpret_cast<const char*>(idx), sizeof idx);
+    return b;
+}
+
+std::string gltf(const std::string& positionCount = "4") {
+    const std::string b = bufferBytes();
+    return R"({
+  "asset": {"version": "2.0"},
+  "scene": 0,
+  "scenes": [{"nodes": [0]}],
+  "nodes": [
+    {"translation": [10, 0, 0], "children": [1, 2]},
+    {"mesh": 0},
+    {"mesh": 0, "scale": [-1, 1, 1]}
+  ],
+  "meshes": [{"primitives": [
+    {"attributes": {"POSITION": 0, "COLOR_0": 1}, "mode": 5},
+    {"attributes": {"POSITION": 0}, "indices": 3, "mode": 6, "material": 0},
+    {"attributes": {"POSITION": 0}, "indices": 2},
+    {"attributes": {"POSITION": 0}, "mode": 0}
+  ]}],
+  "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1, 1]}, "doubleSided": true}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": )" + positionCount + R"(, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+    {"bufferView": 1, "componentType": 5121, "normalized": true, "count": 4, "type": "VEC4"},
+    {"bufferView": 2, "componentType": 5121, "count": 3, "type": "SCALAR"},
+    {"bufferView": 2, "componentType": 5121, "count": 4, "type": "SCALAR"}
+  ],
+  "bufferViews": [
+    {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+    {"buffer": 0, "byteOffset": 48, "byteLength": 16},
+    {"buffer": 0, "byteOffset": 64, "byteLength": 4}
+  ],
+  "buffers": [{"byteLength": )" + std::to_string(b.size()) + R"(, "uri": "data:application/octet-stream;base64,)" + base64(b) + R"("}]
+})";
+}
+
+fs::path write(const std::string& name, const std::string& text) {
+    const fs::path p = fs::temp_directory_path() / name;
+    std::ofstream(p) << text;
+    return p;
+}
+
+// Signed area in the xy plane (positive = counter-clockwise seen from +z).
+float area(const Mesh& m, size_t t) {
+    const glm::vec3 a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]],
+                    c = m.positions[m.indices[3 * t + 2]];
+    return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+}
+
+TEST(GltfLoader, HierarchyStripsFansIndicesColoursAndMirroring) {
+    std::vector<std::string> warnings;
+    const auto meshes = loadGltf(write("cuberille-test.gltf", gltf()), [&](const std::string& w) { warnings.push_back(w); });
+    // 2 nodes x 3 drawable primitives; the POINTS primitive is skipped with one warning.
+    ASSERT_EQ(meshes.size(), 6u);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("points and lines are skipped"), std::string::npos);
+    const size_t triangles[3] = {2, 2, 1};  // strip of 4, fan of 4, one indexed triangle
+    for (size_t i = 0; i < 6; ++i) {
+        const Mesh& m = meshes[i];
+        EXPECT_EQ(m.triangleCount(), triangles[i % 3]) << i;
+        const bool mirrored = i >= 3;
+        EXPECT_EQ(m.positions[1], mirrored ? glm::vec3(9, 0, 0) : glm::vec3(11, 0, 0)) << i;
+        for (size_t t = 0; t < m.triangleCount(); ++t) {
+            // Mirroring flips the geometry; the loader flips the order back, so the facing
+            // (counter-clockwise from +z, the normal's side) is kept.
+            EXPECT_GT(area(m, t), 0.0f) << "mesh " << i << " triangle " << t;
+        }
+        for (const glm::vec3& n : m.normals) EXPECT_NEAR(n.z, 1.0f, 1e-5f);
+    }
+    EXPECT_EQ(meshes[0].colors.size(), 4u);
+    EXPECT_EQ(meshes[0].colors[1], glm::vec3(0, 1, 0));
+    EXPECT_EQ(meshes[1].color, glm::vec3(0.5f, 0.25f, 1.0f));
+    EXPECT_TRUE(meshes[1].doubleSided);
+    EXPECT_FALSE(meshes[2].doubleSided);
+}
+
+TEST(GltfLoader, AccessorPastItsBufferIsAnInputError) {
+    try {
+        loadGltf(write("cuberille-bad-accessor.gltf", gltf("400")), [](const std::string&) {});
+        ADD_FAILURE() << "accepted an accessor larger than its buffer view";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("cuberille-bad-accessor.gltf"), std::string::npos) << what;
+        EXPECT_NE(what.find("accessor 0"), std::string::npos) << what;
+    }
+}
+
+TEST(GltfLoader, TruncatedOrMissingFilesAreInputErrors) {
+    const std::string full = gltf();
+    for (size_t length : {size_t(0), size_t(10), full.size() / 2, full.size() - 3}) {
+        const fs::path p = write("cuberille-cut.gltf", full.substr(0, length));
+        EXPECT_THROW(loadGltf(p, [](const std::string&) {}), InputError) << length;
+    }
+    EXPECT_THROW(loadGltf("/nonexistent/model.glb", [](const std::string&) {}), InputError);
+    const fs::path glb = write("cuberille-cut.glb", std::string("glTF\x02\0\0\0", 8));
+    EXPECT_THROW(loadGltf(glb, [](const std::string&) {}), InputError);
+}
+
+}  // namespace
+}  // namespace cuberille::scene
