@@ -38,6 +38,8 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
         ->capture_default_str();
     render->add_option("--elevation", o.elevation, "Camera elevation for mesh files, degrees")
         ->capture_default_str();
+    render->add_option("--camera-index", o.cameraIndex,
+                       "Use the file's N-th camera (glTF, in node order) instead of framing the model");
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 

@@ -92,7 +92,7 @@ RenderResult renderScene(const RenderOptions& o) {
         pipeline.endFrame();  // while the scene's arrays are alive (Pipeline::draw's contract)
     } else if (scene::isModelFile(o.scene)) {
         const scene::Scene s = scene::loadModelScene(
-            o.scene, {o.azimuth, o.elevation},
+            o.scene, {o.azimuth, o.elevation, o.cameraIndex},
             [&](const std::string& w) { if (!o.quiet) std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str()); });
         result.loadMs = nowMs() - t0;
         result.sceneTriangles = s.triangleCount();

@@ -24,6 +24,7 @@ struct RenderOptions {
     float detail = 1.0f;  // tessellation scale of built-in scenes
     float azimuth = 30.0f;    // degrees, for mesh files (which carry no camera)
     float elevation = 20.0f;  // degrees
+    int cameraIndex = -1;     // a camera of the file (glTF), instead of framing the model
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;

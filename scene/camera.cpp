@@ -10,6 +10,10 @@ namespace cuberille::scene {
 glm::mat4 Camera::viewFromWorld() const { return glm::lookAtRH(position, target, up); }
 
 glm::mat4 Camera::clipFromView(float aspect) const {
+    if (orthographic) {
+        const float h = orthographicHalfHeight;
+        return glm::orthoRH_ZO(-h * aspect, h * aspect, -h, h, nearPlane, farPlane);
+    }
     return glm::perspectiveRH_ZO(glm::radians(verticalFovDegrees), aspect, nearPlane, farPlane);
 }
 

@@ -13,6 +13,8 @@ struct Camera {
     float verticalFovDegrees = 45.0f;
     float nearPlane = 0.1f;
     float farPlane = 1000.0f;
+    bool orthographic = false;
+    float orthographicHalfHeight = 1.0f;  // world units, when orthographic
 
     glm::mat4 viewFromWorld() const;
     glm::mat4 clipFromView(float aspect) const;

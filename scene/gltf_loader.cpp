@@ -21,7 +21,7 @@ public:
     GltfReader(const tinygltf::Model& model, const std::string& file, const WarningSink& warn)
         : model_(model), file_(file), warn_(warn) {}
 
-    std::vector<Mesh> read() {
+    GltfScene read() {
         warnAboutUnsupported();
         if (!model_.scenes.empty()) {
             const int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : 0;
@@ -32,7 +32,7 @@ public:
             for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f));
         }
         if (meshes_.empty()) warn_(file_ + ": no triangles to draw");
-        return std::move(meshes_);
+        return {std::move(meshes_), std::move(cameras_)};
     }
 
 private:
@@ -73,7 +73,32 @@ private:
         const tinygltf::Node& n = model_.nodes[index];
         const glm::mat4 world = parent * localTransform(n);
         if (n.mesh >= 0) addMesh(n.mesh, world);
+        if (n.camera >= 0) addCamera(n.camera, world, where);
         for (int child : n.children) visit(child, world, depth + 1);
+    }
+
+    // A camera looks down its node's -z with +y up (glTF 2.0 §3.10).
+    void addCamera(int index, const glm::mat4& world, const std::string& where) {
+        if (index >= int(model_.cameras.size())) fail(where, "camera " + std::to_string(index) + " does not exist");
+        const tinygltf::Camera& c = model_.cameras[index];
+        Camera cam;
+        cam.position = glm::vec3(world[3]);
+        cam.target = cam.position - glm::normalize(glm::vec3(world[2]));
+        cam.up = glm::normalize(glm::vec3(world[1]));
+        if (c.type == "orthographic") {
+            cam.orthographic = true;
+            cam.orthographicHalfHeight = float(c.orthographic.ymag);
+            cam.nearPlane = float(c.orthographic.znear);
+            cam.farPlane = float(c.orthographic.zfar);
+        } else {
+            cam.verticalFovDegrees = float(glm::degrees(c.perspective.yfov));
+            cam.nearPlane = float(c.perspective.znear);
+            // An infinite projection (no zfar) gets a far plane a million near planes away.
+            cam.farPlane = c.perspective.zfar > 0.0 ? float(c.perspective.zfar) : cam.nearPlane * 1e6f;
+        }
+        if (!(cam.nearPlane > 0.0f) || !(cam.farPlane > cam.nearPlane))
+            fail(where, "camera " + std::to_string(index) + " has invalid near/far planes");
+        cameras_.push_back(cam);
     }
 
     // The accessor's element i, component c, as float (normalised integers scaled to [0, 1]).
@@ -224,11 +249,12 @@ private:
     const WarningSink& warn_;
     std::set<std::string> warned_;
     std::vector<Mesh> meshes_;
+    std::vector<Camera> cameras_;
 };
 
 }  // namespace
 
-std::vector<Mesh> loadGltf(const std::filesystem::path& path, const WarningSink& warn) {
+GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn) {
     const std::string file = path.string();
     if (!std::filesystem::exists(path)) throw InputError(file + ": cannot open file");
     tinygltf::TinyGLTF loader;

@@ -4,7 +4,8 @@
 // of mode TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN (POINTS and LINES are skipped with one
 // warning), indexed or not, with POSITION, NORMAL (computed when absent), COLOR_0 (float or
 // normalised integers), the material's baseColorFactor and doubleSided flag.
-// Not yet: textures, alpha modes, cameras, KHR_lights_punctual, animation, skinning, morph
+// Cameras (perspective and orthographic) are read from the nodes that carry them.
+// Not yet: textures, alpha modes, KHR_lights_punctual, animation, skinning, morph
 // targets (issue 3); a file that uses them loads with a warning naming what was ignored.
 //
 // What we do with tinygltf's answer is checked: every accessor's range against its buffer
@@ -15,11 +16,17 @@
 #include <filesystem>
 #include <vector>
 
+#include "scene/camera.h"
 #include "scene/mesh.h"
 #include "scene/obj_loader.h"  // WarningSink
 
 namespace cuberille::scene {
 
-std::vector<Mesh> loadGltf(const std::filesystem::path& path, const WarningSink& warn);
+struct GltfScene {
+    std::vector<Mesh> meshes;
+    std::vector<Camera> cameras;  // the scene's camera nodes, in traversal order
+};
+
+GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn);
 
 }  // namespace cuberille::scene

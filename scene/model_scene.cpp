@@ -31,12 +31,26 @@ Scene loadModelScene(const std::filesystem::path& path, const ViewAngles& view, 
     Scene s;
     s.name = path.filename().string();
     const std::string n = lowerName(path);
-    if (endsWith(n, ".obj")) s.meshes = loadObj(path, warn);
-    else if (endsWith(n, ".gltf") || endsWith(n, ".glb")) s.meshes = loadGltf(path, warn);
-    else s.meshes.push_back(loadPly(path));
+    std::vector<Camera> cameras;
+    if (endsWith(n, ".obj")) {
+        s.meshes = loadObj(path, warn);
+    } else if (endsWith(n, ".gltf") || endsWith(n, ".glb")) {
+        GltfScene g = loadGltf(path, warn);
+        s.meshes = std::move(g.meshes);
+        cameras = std::move(g.cameras);
+    } else {
+        s.meshes.push_back(loadPly(path));
+    }
     Bounds b = boundsOf(s.meshes);
     if (b.empty()) b = {glm::vec3(-1.0f), glm::vec3(1.0f)};  // nothing to draw (warned): any view
-    s.camera = frameBounds(b.min, b.max, view.azimuthDegrees, view.elevationDegrees);
+    if (view.cameraIndex >= 0) {
+        if (view.cameraIndex >= int(cameras.size()))
+            throw InputError("--camera-index " + std::to_string(view.cameraIndex) + ": " + path.string() + " has " +
+                             std::to_string(cameras.size()) + " camera(s)");
+        s.camera = cameras[view.cameraIndex];
+    } else {
+        s.camera = frameBounds(b.min, b.max, view.azimuthDegrees, view.elevationDegrees);
+    }
     const glm::vec3 toCamera = glm::normalize(s.camera.position - s.camera.target);
     s.light.directionToLight = glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f));
     s.light.radiance = glm::vec3(0.85f);

@@ -13,6 +13,7 @@ namespace cuberille::scene {
 struct ViewAngles {
     float azimuthDegrees = 30.0f;
     float elevationDegrees = 20.0f;
+    int cameraIndex = -1;  // a camera of the file (glTF) instead of framing the bounds
 };
 
 bool isModelFile(const std::filesystem::path& path);

@@ -53,10 +53,12 @@ std::string gltf(const std::string& positionCount = "4") {
   "scene": 0,
   "scenes": [{"nodes": [0]}],
   "nodes": [
-    {"translation": [10, 0, 0], "children": [1, 2]},
+    {"translation": [10, 0, 0], "children": [1, 2, 3]},
     {"mesh": 0},
-    {"mesh": 0, "scale": [-1, 1, 1]}
+    {"mesh": 0, "scale": [-1, 1, 1]},
+    {"camera": 0, "translation": [0, 0, 5], "rotation": [0, 0.7071068, 0, 0.7071068]}
   ],
+  "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1, "zfar": 100}}],
   "meshes": [{"primitives": [
     {"attributes": {"POSITION": 0, "COLOR_0": 1}, "mode": 5},
     {"attributes": {"POSITION": 0}, "indices": 3, "mode": 6, "material": 0},
@@ -94,7 +96,8 @@ float area(const Mesh& m, size_t t) {
 
 TEST(GltfLoader, HierarchyStripsFansIndicesColoursAndMirroring) {
     std::vector<std::string> warnings;
-    const auto meshes = loadGltf(write("cuberille-test.gltf", gltf()), [&](const std::string& w) { warnings.push_back(w); });
+    const GltfScene scene = loadGltf(write("cuberille-test.gltf", gltf()), [&](const std::string& w) { warnings.push_back(w); });
+    const auto& meshes = scene.meshes;
     // 2 nodes x 3 drawable primitives; the POINTS primitive is skipped with one warning.
     ASSERT_EQ(meshes.size(), 6u);
     ASSERT_EQ(warnings.size(), 1u);
@@ -117,6 +120,14 @@ TEST(GltfLoader, HierarchyStripsFansIndicesColoursAndMirroring) {
     EXPECT_EQ(meshes[1].color, glm::vec3(0.5f, 0.25f, 1.0f));
     EXPECT_TRUE(meshes[1].doubleSided);
     EXPECT_FALSE(meshes[2].doubleSided);
+
+    // The camera node sits at (10, 0, 5), turned 90 degrees about +y: it looks down world -x.
+    ASSERT_EQ(scene.cameras.size(), 1u);
+    const Camera& c = scene.cameras[0];
+    EXPECT_NEAR(glm::distance(c.position, glm::vec3(10, 0, 5)), 0.0f, 1e-5f);
+    EXPECT_NEAR(glm::distance(c.target - c.position, glm::vec3(-1, 0, 0)), 0.0f, 1e-5f);
+    EXPECT_NEAR(c.verticalFovDegrees, glm::degrees(0.5f), 1e-4f);
+    EXPECT_EQ(c.farPlane, 100.0f);
 }
 
 TEST(GltfLoader, AccessorPastItsBufferIsAnInputError) {
