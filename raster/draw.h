@@ -28,7 +28,10 @@ enum class CullMode : uint8_t { None, Back, Front };
 enum class ShadingModel : uint8_t {
     ConstantColor,  // one colour per triangle (or per draw); no interpolation
     Lambert,        // interpolated normal and colour, one directional light plus ambient
+    TexturedLambert,  // Lambert with albedo x baseColorTexture(uv), trilinear filtering
 };
+
+class Texture;
 
 struct DirectionalLight {
     glm::vec3 directionToLight{0.0f, 1.0f, 0.0f};  // world space, normalised
@@ -56,6 +59,7 @@ struct DrawState {
     int occlusionSlot = -1;
     glm::vec4 constantColor{1.0f};  // used when there are no per-triangle or per-vertex colours
     DirectionalLight light;
+    const Texture* baseColorTexture = nullptr;  // TexturedLambert; must outlive the frame
 };
 
 struct DrawCall {
@@ -68,6 +72,7 @@ struct DrawCall {
     std::span<const glm::vec3> normals;         // per vertex; Lambert needs them
     std::span<const glm::vec3> vertexColors;    // per vertex, linear RGB; optional
     std::span<const glm::vec4> triangleColors;  // per triangle, linear RGBA; ConstantColor only
+    std::span<const glm::vec2> texCoords;       // per vertex; TexturedLambert
 
     DrawState state;
 

@@ -16,6 +16,7 @@
 #include <glm/glm.hpp>
 
 #include "raster/draw.h"
+#include "raster/texture.h"
 #include "raster/limits.h"
 #include "raster/setup.h"
 
@@ -68,6 +69,69 @@ struct LambertShader {
             const float ax = w0 * v[3] + w1 * v[9] + w2 * v[15];
             const float ay = w0 * v[4] + w1 * v[10] + w2 * v[16];
             const float az = w0 * v[5] + w1 * v[11] + w2 * v[17];
+            const float len2 = nx * nx + ny * ny + nz * nz;
+            const float nDotL = nx * l.x + ny * l.y + nz * l.z;
+            const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
+            q.red[i] = ax * (amb.x + rad.x * cosine);
+            q.green[i] = ay * (amb.y + rad.y * cosine);
+            q.blue[i] = az * (amb.z + rad.z * cosine);
+            q.alpha[i] = 1.0f;
+        }
+    }
+};
+
+/// Lambert with a base colour texture: albedo = interpolated colour x texture(uv), varyings
+/// normal (3), colour (3), uv (2). The level of detail comes from exact UV derivatives: the
+/// perspective-correct UV is also evaluated one pixel right and one pixel down, from the same
+/// edge functions stepped by A·256 and B·256, and differenced (per pixel, where a GPU
+/// differences across a 2x2 quad).
+struct TexturedLambertShader {
+    DirectionalLight light;
+    const Texture* texture;
+
+    void shade(const TriangleSetup& t, const float* v, ShadeQueue& q) const {
+        const float invArea = float(t.invDoubleArea);
+        const glm::vec3 l = light.directionToLight, rad = light.radiance, amb = light.ambient;
+        // Clamped weights at the pixel centre (the value shaded, as in LambertShader) ...
+        auto weights = [&](const int64_t e0, const int64_t e1, const int64_t e2) {
+            const float q0 = std::max(0.0f, float(e0 - t.fillBias[0]) * invArea) * t.invW[0];
+            const float q1 = std::max(0.0f, float(e1 - t.fillBias[1]) * invArea) * t.invW[1];
+            const float q2 = std::max(0.0f, float(e2 - t.fillBias[2]) * invArea) * t.invW[2];
+            const float norm = 1.0f / (q0 + q1 + q2);
+            return glm::vec3(q0 * norm, q1 * norm, q2 * norm);
+        };
+        // ... and unclamped ones for derivatives, which like a GPU's helper pixels extrapolate
+        // the attribute plane past the triangle's edges (clamping would bend it there). A
+        // degenerate extrapolation gives NaN, which the level of detail treats as level 0.
+        auto extrapolatedWeights = [&](const int64_t e0, const int64_t e1, const int64_t e2) {
+            const float q0 = float(e0 - t.fillBias[0]) * invArea * t.invW[0];
+            const float q1 = float(e1 - t.fillBias[1]) * invArea * t.invW[1];
+            const float q2 = float(e2 - t.fillBias[2]) * invArea * t.invW[2];
+            const float sum = q0 + q1 + q2;
+            const float norm = sum > 0.0f ? 1.0f / sum : NAN;
+            return glm::vec3(q0 * norm, q1 * norm, q2 * norm);
+        };
+        auto uvAt = [&](const glm::vec3& w) {
+            return glm::vec2(w.x * v[6] + w.y * v[14] + w.z * v[22], w.x * v[7] + w.y * v[15] + w.z * v[23]);
+        };
+        const int64_t stepX[3] = {int64_t{t.edgeA[0]} * kSubpixelsPerPixel, int64_t{t.edgeA[1]} * kSubpixelsPerPixel,
+                                  int64_t{t.edgeA[2]} * kSubpixelsPerPixel};
+        const int64_t stepY[3] = {int64_t{t.edgeB[0]} * kSubpixelsPerPixel, int64_t{t.edgeB[1]} * kSubpixelsPerPixel,
+                                  int64_t{t.edgeB[2]} * kSubpixelsPerPixel};
+        for (int i = 0; i < q.count; ++i) {
+            const glm::vec3 w = weights(q.edge0[i], q.edge1[i], q.edge2[i]);
+            const glm::vec2 uv = uvAt(w);
+            const glm::vec2 uvPlane = uvAt(extrapolatedWeights(q.edge0[i], q.edge1[i], q.edge2[i]));
+            const glm::vec2 uvRight = uvAt(extrapolatedWeights(q.edge0[i] + stepX[0], q.edge1[i] + stepX[1], q.edge2[i] + stepX[2]));
+            const glm::vec2 uvDown = uvAt(extrapolatedWeights(q.edge0[i] + stepY[0], q.edge1[i] + stepY[1], q.edge2[i] + stepY[2]));
+            const glm::vec4 texel =
+                texture->sampleTrilinear(uv, texture->levelOfDetail(uvRight - uvPlane, uvDown - uvPlane));
+            const float nx = w.x * v[0] + w.y * v[8] + w.z * v[16];
+            const float ny = w.x * v[1] + w.y * v[9] + w.z * v[17];
+            const float nz = w.x * v[2] + w.y * v[10] + w.z * v[18];
+            const float ax = (w.x * v[3] + w.y * v[11] + w.z * v[19]) * texel.r;
+            const float ay = (w.x * v[4] + w.y * v[12] + w.z * v[20]) * texel.g;
+            const float az = (w.x * v[5] + w.y * v[13] + w.z * v[21]) * texel.b;
             const float len2 = nx * nx + ny * ny + nz * nz;
             const float nDotL = nx * l.x + ny * l.y + nz * l.z;
             const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;

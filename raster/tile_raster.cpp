@@ -241,6 +241,13 @@ void dispatchShader(const TriangleBatch& batch, int tile, const SamplePattern& s
         case ShadingModel::Lambert:
             rasterizeBinned<S>(batch, tile, LambertShader{target.state->light}, sp, target);
             break;
+        case ShadingModel::TexturedLambert:
+            if (target.state->baseColorTexture)
+                rasterizeBinned<S>(batch, tile, TexturedLambertShader{target.state->light, target.state->baseColorTexture},
+                                   sp, target);
+            else
+                rasterizeBinned<S>(batch, tile, LambertShader{target.state->light}, sp, target);
+            break;
     }
 }
 

@@ -14,16 +14,21 @@ void transformPositions(const DrawCall& draw, size_t begin, size_t end, glm::vec
     for (size_t i = begin; i < end; ++i) out[i] = m * glm::vec4(draw.positions[i], 1.0f);
 }
 
-// Lambert varyings: world-space normal (3) then linear colour (3).
-void lambertVaryings(const DrawCall& draw, size_t begin, size_t end, float* out) {
+// Lambert varyings: world-space normal (3) then linear colour (3); TexturedLambert adds the
+// texture coordinates (2).
+void lambertVaryings(const DrawCall& draw, size_t begin, size_t end, int stride, float* out) {
     const glm::vec3 base(draw.state.constantColor);
     for (size_t i = begin; i < end; ++i) {
         glm::vec3 n = draw.normals.size() <= i ? glm::vec3(0.0f, 0.0f, 1.0f)
                                                : draw.worldFromObjectNormals * draw.normals[i];
         glm::vec3 c = draw.vertexColors.size() <= i ? base : base * draw.vertexColors[i];
-        float* v = out + i * 6;
+        float* v = out + i * stride;
         v[0] = n.x, v[1] = n.y, v[2] = n.z;
         v[3] = c.x, v[4] = c.y, v[5] = c.z;
+        if (stride == 8) {
+            const glm::vec2 uv = draw.texCoords.size() > i ? draw.texCoords[i] : glm::vec2(0.0f);
+            v[6] = uv.x, v[7] = uv.y;
+        }
     }
 }
 
@@ -56,6 +61,7 @@ int varyingCountFor(ShadingModel model) {
     switch (model) {
         case ShadingModel::ConstantColor: return 0;
         case ShadingModel::Lambert: return 6;
+        case ShadingModel::TexturedLambert: return 8;
     }
     return 0;
 }
@@ -63,8 +69,8 @@ int varyingCountFor(ShadingModel model) {
 void runVertexStage(const DrawCall& draw, const ClipVolume& volume, const SetupContext& viewport,
                     size_t begin, size_t end, VertexStageOutput& out) {
     transformPositions(draw, begin, end, out.clipPositions.data());
-    if (draw.state.shading == ShadingModel::Lambert)
-        lambertVaryings(draw, begin, end, out.varyings.data());
+    if (draw.state.shading != ShadingModel::ConstantColor)
+        lambertVaryings(draw, begin, end, out.varyingCount, out.varyings.data());
     postTransform(volume, viewport, begin, end, out);
 }
 

@@ -1,6 +1,8 @@
 #include "scene/gltf_loader.h"
 
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <set>
 #include <string>
 
@@ -45,7 +47,10 @@ private:
     }
 
     void warnAboutUnsupported() {
-        if (!model_.textures.empty()) warnOnce("textures are not supported yet; base colour factors only");
+        for (const auto& m : model_.materials)
+            if (m.normalTexture.index >= 0 || m.occlusionTexture.index >= 0 || m.emissiveTexture.index >= 0 ||
+                m.pbrMetallicRoughness.metallicRoughnessTexture.index >= 0)
+                warnOnce("normal, occlusion, emissive and metallic-roughness textures are not used yet");
         if (!model_.animations.empty()) warnOnce("animations are not supported yet; the static pose is drawn");
         if (!model_.skins.empty()) warnOnce("skinning is not supported yet; the bind pose is drawn");
         for (const auto& ext : model_.extensionsUsed)
@@ -220,12 +225,83 @@ private:
                 const auto& f = mat.pbrMetallicRoughness.baseColorFactor;  // linear
                 if (f.size() >= 3) m.color = glm::vec3(f[0], f[1], f[2]);
                 m.doubleSided = mat.doubleSided;
+                addBaseColorTexture(mat.pbrMetallicRoughness.baseColorTexture, prim, pos.count, where, m);
                 if (mat.alphaMode != "OPAQUE") warnOnce("alpha modes are not supported yet; drawn opaque");
             } else {
                 m.color = glm::vec3(1.0f);  // glTF's default material
             }
             meshes_.push_back(std::move(m));
         }
+    }
+
+    // baseColorTexture with its sampler's wrap modes and its TEXCOORD set; a texture that cannot
+    // be used warns and the primitive falls back to its colour factor.
+    void addBaseColorTexture(const tinygltf::TextureInfo& info, const tinygltf::Primitive& prim, size_t vertexCount,
+                             const std::string& where, Mesh& m) {
+        if (info.index < 0) return;
+        const auto uvs = prim.attributes.find("TEXCOORD_" + std::to_string(info.texCoord));
+        if (uvs == prim.attributes.end()) {
+            warnOnce(where + ": base colour texture without TEXCOORD_" + std::to_string(info.texCoord) + "; ignored");
+            return;
+        }
+        const AccessorView uv = view(uvs->second, where);
+        if (uv.components != 2 || uv.count != vertexCount) fail(where, "TEXCOORD does not match POSITION");
+        std::shared_ptr<const raster::Texture> texture = textureFor(info.index, where);
+        if (!texture) return;
+        m.texCoords.resize(uv.count);
+        for (size_t i = 0; i < uv.count; ++i) m.texCoords[i] = glm::vec2(uv.get(i, 0), uv.get(i, 1));
+        m.baseColorTexture = std::move(texture);
+    }
+
+    static raster::WrapMode wrapMode(int glWrap) {
+        switch (glWrap) {
+            case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE: return raster::WrapMode::ClampToEdge;
+            case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT: return raster::WrapMode::MirroredRepeat;
+            default: return raster::WrapMode::Repeat;
+        }
+    }
+
+    // Decoded once per glTF texture and shared by every primitive using it. Base colour is
+    // sRGB-encoded (glTF 2.0 §3.9.2) and decoded to linear here.
+    std::shared_ptr<const raster::Texture> textureFor(int index, const std::string& where) {
+        if (auto it = textures_.find(index); it != textures_.end()) return it->second;
+        std::shared_ptr<const raster::Texture> result;
+        if (index >= int(model_.textures.size())) fail(where, "texture " + std::to_string(index) + " does not exist");
+        const tinygltf::Texture& tex = model_.textures[index];
+        const bool validImage = tex.source >= 0 && tex.source < int(model_.images.size());
+        const tinygltf::Image* image = validImage ? &model_.images[tex.source] : nullptr;
+        const bool decoded = image && image->width > 0 && image->height > 0 && image->component >= 1 &&
+                             image->component <= 4 && (image->bits == 8 || image->bits == 16) &&
+                             image->image.size() == size_t(image->width) * image->height * image->component * (image->bits / 8);
+        if (!decoded) {
+            warnOnce("texture " + std::to_string(index) + " has no decodable image; its colour factor is used");
+        } else {
+            std::vector<glm::vec4> texels(size_t(image->width) * image->height);
+            const int c = image->component;
+            for (size_t i = 0; i < texels.size(); ++i) {
+                float v[4] = {0, 0, 0, 1};
+                for (int k = 0; k < c; ++k) {
+                    if (image->bits == 8) {
+                        v[k] = image->image[i * c + k] / 255.0f;
+                    } else {
+                        uint16_t x;
+                        std::memcpy(&x, &image->image[(i * c + k) * 2], 2);
+                        v[k] = x / 65535.0f;
+                    }
+                }
+                if (c <= 2) v[1] = v[2] = v[0];  // grey (+ alpha)
+                texels[i] = glm::vec4(srgbToLinear(v[0]), srgbToLinear(v[1]), srgbToLinear(v[2]), c == 2 ? v[1] : v[3]);
+                if (c == 2) texels[i].a = image->bits == 8 ? image->image[i * 2 + 1] / 255.0f : texels[i].a;
+            }
+            raster::WrapMode wrapU = raster::WrapMode::Repeat, wrapV = raster::WrapMode::Repeat;
+            if (tex.sampler >= 0 && tex.sampler < int(model_.samplers.size())) {
+                wrapU = wrapMode(model_.samplers[tex.sampler].wrapS);
+                wrapV = wrapMode(model_.samplers[tex.sampler].wrapT);
+            }
+            result = std::make_shared<raster::Texture>(image->width, image->height, std::move(texels), wrapU, wrapV);
+        }
+        textures_[index] = result;
+        return result;
     }
 
     // Lists, strips (alternating order keeps the winding) and fans as triangle lists; a mirrored
@@ -250,6 +326,7 @@ private:
     std::set<std::string> warned_;
     std::vector<Mesh> meshes_;
     std::vector<Camera> cameras_;
+    std::map<int, std::shared_ptr<const raster::Texture>> textures_;
 };
 
 }  // namespace

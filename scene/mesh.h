@@ -5,9 +5,12 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include <glm/glm.hpp>
+
+#include "raster/texture.h"
 
 namespace cuberille::scene {
 
@@ -18,6 +21,8 @@ struct Mesh {
     std::vector<uint32_t> indices;   // three per triangle
     glm::vec3 color{0.8f};           // linear albedo, multiplied with vertex colours
     bool doubleSided = false;        // never culled, whatever the scene's cull mode
+    std::vector<glm::vec2> texCoords;  // per position, when the mesh is textured
+    std::shared_ptr<const raster::Texture> baseColorTexture;  // multiplies the albedo
 
     size_t triangleCount() const { return indices.size() / 3; }
 };

@@ -18,7 +18,12 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
         d.normals = m.normals;
         d.vertexColors = m.colors;
         d.indices = m.indices;
-        d.state.shading = raster::ShadingModel::Lambert;
+        const bool textured = m.baseColorTexture && m.texCoords.size() == m.positions.size();
+        d.state.shading = textured ? raster::ShadingModel::TexturedLambert : raster::ShadingModel::Lambert;
+        if (textured) {
+            d.texCoords = m.texCoords;
+            d.state.baseColorTexture = m.baseColorTexture.get();
+        }
         d.state.cull = m.doubleSided ? raster::CullMode::None : cull;
         d.state.constantColor = glm::vec4(m.color, 1.0f);
         d.state.light = light;

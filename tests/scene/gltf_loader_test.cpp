@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "apps/image_io.h"
 #include "scene/gltf_loader.h"
 #include "scene/input_error.h"
 
@@ -128,6 +129,49 @@ TEST(GltfLoader, HierarchyStripsFansIndicesColoursAndMirroring) {
     EXPECT_NEAR(glm::distance(c.target - c.position, glm::vec3(-1, 0, 0)), 0.0f, 1e-5f);
     EXPECT_NEAR(c.verticalFovDegrees, glm::degrees(0.5f), 1e-4f);
     EXPECT_EQ(c.farPlane, 100.0f);
+}
+
+TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
+    // A 2x1 PNG (sRGB 255 and 128 in red), written with OpenImageIO beside the .gltf.
+    const fs::path dir = fs::temp_directory_path() / "cuberille-gltf-texture";
+    fs::create_directories(dir);
+    raster::Image png;
+    png.width = 2;
+    png.height = 1;
+    png.rgba = {1.0f, 0, 0, 1, 0.21586f, 0, 0, 1};  // linear; written as sRGB 255 and 128
+    apps::writeImageAtomically(dir / "tex.png", png);
+    auto swap = [](std::string& text, const std::string& from, const std::string& to) {
+        const size_t at = text.find(from);
+        ASSERT_NE(at, std::string::npos) << from;
+        text.replace(at, from.size(), to);
+    };
+    std::string text = gltf();
+    swap(text, R"("materials": [{)", R"("textures": [{"source": 0, "sampler": 0}], "images": [{"uri": "tex.png"}],
+  "samplers": [{"wrapS": 33071, "wrapT": 33648}],
+  "materials": [{)");
+    swap(text, R"("baseColorFactor": [0.5, 0.25, 1, 1]})",
+         R"("baseColorFactor": [0.5, 0.25, 1, 1], "baseColorTexture": {"index": 0}})");
+    swap(text, R"({"attributes": {"POSITION": 0}, "indices": 3)",
+         R"({"attributes": {"POSITION": 0, "TEXCOORD_0": 4}, "indices": 3)");
+    swap(text, R"({"bufferView": 2, "componentType": 5121, "count": 4, "type": "SCALAR"})",
+         R"({"bufferView": 2, "componentType": 5121, "count": 4, "type": "SCALAR"},
+    {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC2"})");
+    swap(text, R"({"buffer": 0, "byteOffset": 0, "byteLength": 48})",
+         R"({"buffer": 0, "byteOffset": 0, "byteLength": 48, "byteStride": 12})");
+    std::ofstream(dir / "t.gltf") << text;
+    const GltfScene scene = loadGltf(dir / "t.gltf", [](const std::string&) {});
+    fs::remove_all(dir);
+    const Mesh& fan = scene.meshes[1];
+    ASSERT_TRUE(fan.baseColorTexture);
+    ASSERT_EQ(fan.texCoords.size(), 4u);
+    EXPECT_EQ(fan.texCoords[3], glm::vec2(1, 1));  // x, y of position 3 read as u, v
+    const raster::Texture& t = *fan.baseColorTexture;
+    ASSERT_EQ(t.width(), 2);
+    EXPECT_FLOAT_EQ(t.texel(0, 0, 0).r, 1.0f);
+    EXPECT_NEAR(t.texel(0, 1, 0).r, 0.2158f, 1e-3f);  // sRGB 128 decoded
+    // Clamp in u: far right samples the last texel; mirrored in v (one row: always that row).
+    EXPECT_EQ(t.sampleBilinear(0, glm::vec2(7.0f, 0.5f)), t.texel(0, 1, 0));
+    EXPECT_FALSE(scene.meshes[0].baseColorTexture) << "untextured primitives stay untextured";
 }
 
 TEST(GltfLoader, AccessorPastItsBufferIsAnInputError) {

@@ -1,0 +1,92 @@
+// Textures: exact texel centres, bilinear midpoints, the three wrap modes, the mip chain, the
+// level of detail, and a textured draw that maps one texel to one pixel reproducing the texture
+// through the whole pipeline.
+
+#include <gtest/gtest.h>
+
+#include "raster/pipeline.h"
+#include "raster/resolve.h"
+#include "raster/texture.h"
+#include "tests/raster/test_support.h"
+
+namespace cuberille::testing {
+namespace {
+
+using raster::Texture;
+using raster::WrapMode;
+
+// Texel (x, y) = (x, y, x + y, 1) / 16: every texel distinct and easy to predict.
+Texture ramp(int w, int h, WrapMode u = WrapMode::Repeat, WrapMode v = WrapMode::Repeat) {
+    std::vector<glm::vec4> t;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) t.emplace_back(x / 16.0f, y / 16.0f, (x + y) / 16.0f, 1.0f);
+    return Texture(w, h, std::move(t), u, v);
+}
+
+glm::vec2 centre(int x, int y, int w, int h) { return {(x + 0.5f) / w, (y + 0.5f) / h}; }
+
+TEST(Texture, TexelCentresAreExactAndMidpointsAverage) {
+    const Texture t = ramp(8, 4);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 8; ++x) EXPECT_EQ(t.sampleBilinear(0, centre(x, y, 8, 4)), t.texel(0, x, y));
+    const glm::vec2 mid = (centre(2, 1, 8, 4) + centre(3, 1, 8, 4)) * 0.5f;
+    EXPECT_EQ(t.sampleBilinear(0, mid), 0.5f * (t.texel(0, 2, 1) + t.texel(0, 3, 1)));
+}
+
+TEST(Texture, WrapModes) {
+    const Texture repeat = ramp(8, 4), clamp = ramp(8, 4, WrapMode::ClampToEdge, WrapMode::ClampToEdge),
+                  mirror = ramp(8, 4, WrapMode::MirroredRepeat, WrapMode::MirroredRepeat);
+    const glm::vec2 c = centre(1, 2, 8, 4);
+    EXPECT_EQ(repeat.sampleBilinear(0, c + glm::vec2(3, -2)), repeat.texel(0, 1, 2));
+    EXPECT_EQ(clamp.sampleBilinear(0, glm::vec2(5.0f, -3.0f)), clamp.texel(0, 7, 0));
+    // Mirrored: u in (1, 2) runs backwards, so texel 1 reappears as texel 8 - 1 - 1 = 6.
+    EXPECT_EQ(mirror.sampleBilinear(0, glm::vec2(1.0f, 0.0f) + glm::vec2(1.0f - c.x, c.y)), mirror.texel(0, 1, 2));
+    // Non-finite coordinates do not crash or produce NaN.
+    const glm::vec4 s = repeat.sampleBilinear(0, glm::vec2(NAN, INFINITY));
+    EXPECT_TRUE(std::isfinite(s.r) && std::isfinite(s.a));
+}
+
+TEST(Texture, MipChainBoxFiltersDownToOneTexel) {
+    const Texture t = ramp(8, 4);
+    ASSERT_EQ(t.levelCount(), 4);  // 8x4, 4x2, 2x1, 1x1
+    EXPECT_EQ(t.width(3), 1);
+    EXPECT_EQ(t.height(3), 1);
+    EXPECT_EQ(t.texel(1, 1, 0), 0.25f * (t.texel(0, 2, 0) + t.texel(0, 3, 0) + t.texel(0, 2, 1) + t.texel(0, 3, 1)));
+    // Trilinear: integer lods are single levels, halfway blends the two.
+    const glm::vec2 uv = centre(1, 0, 4, 2);
+    EXPECT_EQ(t.sampleTrilinear(uv, 1.0f), t.sampleBilinear(1, uv));
+    EXPECT_EQ(t.sampleTrilinear(uv, 0.5f), glm::mix(t.sampleBilinear(0, uv), t.sampleBilinear(1, uv), 0.5f));
+    EXPECT_EQ(t.sampleTrilinear(uv, -3.0f), t.sampleBilinear(0, uv));
+    EXPECT_EQ(t.levelOfDetail(glm::vec2(1.0f / 8, 0), glm::vec2(0)), 0.0f);
+    EXPECT_EQ(t.levelOfDetail(glm::vec2(0), glm::vec2(0, 4.0f / 4)), 2.0f);
+}
+
+TEST(TexturedDraw, OneTexelPerPixelReproducesTheTexture) {
+    constexpr int kSize = 32;
+    const Texture t = ramp(kSize, kSize, WrapMode::ClampToEdge, WrapMode::ClampToEdge);
+    std::vector<glm::vec3> positions = {{0, 0, 0.5f}, {0, kSize, 0.5f}, {kSize, kSize, 0.5f},
+                                        {0, 0, 0.5f}, {kSize, kSize, 0.5f}, {kSize, 0, 0.5f}};
+    std::vector<glm::vec2> uvs = {{0, 0}, {0, 1}, {1, 1}, {0, 0}, {1, 1}, {1, 0}};
+    std::vector<glm::vec3> normals(6, glm::vec3(0, 0, 1));
+    raster::DrawCall d;
+    d.space = raster::PositionSpace::Window;
+    d.positions = positions;
+    d.normals = normals;
+    d.texCoords = uvs;
+    d.state.shading = raster::ShadingModel::TexturedLambert;
+    d.state.light = {glm::vec3(0, 0, 1), glm::vec3(1), glm::vec3(0)};
+    d.state.baseColorTexture = &t;
+    raster::Pipeline p;
+    p.beginFrame(frame(kSize, kSize, 1));
+    p.draw(d);
+    p.endFrame();
+    raster::Image img;
+    raster::resolveColor(p.framebuffer(), img);
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x)
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(img.pixel(x, y)[c], t.texel(0, x, y)[c], 1e-4f) << x << "," << y;
+}
+
+}  // namespace
+}  // namespace cuberille::testing
