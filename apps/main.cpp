@@ -40,6 +40,9 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
         ->capture_default_str();
     render->add_option("--camera-index", o.cameraIndex,
                        "Use the file's N-th camera (glTF, in node order) instead of framing the model");
+    render->add_option("--time", o.timeSeconds,
+                       "glTF: pose the first animation at this time, in seconds (node transforms)")
+        ->capture_default_str();
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 

@@ -1,6 +1,7 @@
 #include "apps/render_command.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -32,6 +33,7 @@ void validate(const RenderOptions& o) {
         throw InputError("--msaa: " + std::to_string(o.msaa) + " is not 1, 2, 4, 8 or 16");
     if (o.threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
     if (!(o.detail > 0.0f && o.detail <= 16.0f)) throw InputError("--detail: must be in (0, 16]");
+    if (!std::isfinite(o.timeSeconds)) throw InputError("--time: must be a finite number of seconds");
 }
 
 raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) {
@@ -92,7 +94,7 @@ RenderResult renderScene(const RenderOptions& o) {
         pipeline.endFrame();  // while the scene's arrays are alive (Pipeline::draw's contract)
     } else if (scene::isModelFile(o.scene)) {
         const scene::Scene s = scene::loadModelScene(
-            o.scene, {o.azimuth, o.elevation, o.cameraIndex},
+            o.scene, {o.azimuth, o.elevation, o.cameraIndex, o.timeSeconds},
             [&](const std::string& w) { if (!o.quiet) std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str()); });
         result.loadMs = nowMs() - t0;
         result.sceneTriangles = s.triangleCount();

@@ -25,6 +25,7 @@ struct RenderOptions {
     float azimuth = 30.0f;    // degrees, for mesh files (which carry no camera)
     float elevation = 20.0f;  // degrees
     int cameraIndex = -1;     // a camera of the file (glTF), instead of framing the model
+    float timeSeconds = 0.0f; // glTF animation time
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;

@@ -20,11 +20,12 @@ constexpr int kMaxNodeDepth = 256;
 
 class GltfReader {
 public:
-    GltfReader(const tinygltf::Model& model, const std::string& file, const WarningSink& warn)
-        : model_(model), file_(file), warn_(warn) {}
+    GltfReader(const tinygltf::Model& model, const std::string& file, const WarningSink& warn, float timeSeconds)
+        : model_(model), file_(file), warn_(warn), timeSeconds_(timeSeconds) {}
 
     GltfScene read() {
         warnAboutUnsupported();
+        poseAnimation();
         if (!model_.scenes.empty()) {
             const int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : 0;
             if (sceneIndex >= int(model_.scenes.size())) fail("scene " + std::to_string(sceneIndex), "does not exist");
@@ -51,13 +52,24 @@ private:
             if (m.normalTexture.index >= 0 || m.occlusionTexture.index >= 0 || m.emissiveTexture.index >= 0 ||
                 m.pbrMetallicRoughness.metallicRoughnessTexture.index >= 0)
                 warnOnce("normal, occlusion, emissive and metallic-roughness textures are not used yet");
-        if (!model_.animations.empty()) warnOnce("animations are not supported yet; the static pose is drawn");
+        if (model_.animations.size() > 1) warnOnce("only the first of " + std::to_string(model_.animations.size()) + " animations is played");
         if (!model_.skins.empty()) warnOnce("skinning is not supported yet; the bind pose is drawn");
         for (const auto& ext : model_.extensionsUsed)
             warnOnce("extension " + ext + " is not supported yet and was ignored");
     }
 
-    static glm::mat4 localTransform(const tinygltf::Node& n) {
+    struct NodePose {
+        glm::vec3 translation{0.0f};
+        glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+        glm::vec3 scale{1.0f};
+    };
+
+    glm::mat4 localTransform(int index, const tinygltf::Node& n) const {
+        if (const auto it = pose_.find(index); it != pose_.end()) {
+            const NodePose& p = it->second;  // animated nodes use TRS (glTF 2.0 §3.11)
+            return glm::translate(glm::mat4(1.0f), p.translation) * glm::mat4_cast(p.rotation) *
+                   glm::scale(glm::mat4(1.0f), p.scale);
+        }
         if (n.matrix.size() == 16) {
             glm::dmat4 m;
             for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = n.matrix[i];  // column-major
@@ -76,7 +88,7 @@ private:
         if (index < 0 || index >= int(model_.nodes.size())) fail(where, "does not exist");
         if (depth > kMaxNodeDepth) fail(where, "the hierarchy is deeper than " + std::to_string(kMaxNodeDepth) + " (a cycle?)");
         const tinygltf::Node& n = model_.nodes[index];
-        const glm::mat4 world = parent * localTransform(n);
+        const glm::mat4 world = parent * localTransform(index, n);
         if (n.mesh >= 0) addMesh(n.mesh, world);
         if (n.camera >= 0) addCamera(n.camera, world, where);
         for (int child : n.children) visit(child, world, depth + 1);
@@ -158,6 +170,81 @@ private:
             fail(at, std::to_string(a.count) + " elements do not fit in buffer view " + std::to_string(a.bufferView));
         return {buffer.data.data() + bv.byteOffset + a.byteOffset, stride, a.count, a.componentType, components,
                 a.normalized};
+    }
+
+    // The first animation's node channels at timeSeconds_: keyframes found by binary search,
+    // the time clamped to each sampler's range; STEP, LINEAR (slerp for rotations) and
+    // CUBICSPLINE (Hermite over in-tangent, value, out-tangent triplets, glTF 2.0 Appendix C).
+    void poseAnimation() {
+        if (model_.animations.empty()) return;
+        const tinygltf::Animation& anim = model_.animations[0];
+        for (size_t c = 0; c < anim.channels.size(); ++c) {
+            const tinygltf::AnimationChannel& ch = anim.channels[c];
+            const std::string where = "animation 0 channel " + std::to_string(c);
+            const int components = ch.target_path == "rotation" ? 4 : 3;
+            if (ch.target_path != "translation" && ch.target_path != "rotation" && ch.target_path != "scale") {
+                warnOnce("animated " + ch.target_path + " is not supported yet");
+                continue;
+            }
+            if (ch.target_node < 0 || ch.target_node >= int(model_.nodes.size())) fail(where, "targets no node");
+            if (ch.sampler < 0 || ch.sampler >= int(anim.samplers.size())) fail(where, "has no sampler");
+            const tinygltf::AnimationSampler& sm = anim.samplers[ch.sampler];
+            const AccessorView times = view(sm.input, where);
+            const AccessorView values = view(sm.output, where);
+            const bool cubic = sm.interpolation == "CUBICSPLINE";
+            if (times.count == 0 || times.components != 1 || values.components != components ||
+                values.count != times.count * (cubic ? 3 : 1))
+                fail(where, "sampler input and output do not match");
+            auto [it, inserted] = pose_.try_emplace(ch.target_node);
+            if (inserted) it->second = restPose(model_.nodes[ch.target_node]);
+            const glm::vec4 v = sample(times, values, sm.interpolation, components);
+            if (components == 4) it->second.rotation = glm::normalize(glm::quat(v.w, v.x, v.y, v.z));
+            else if (ch.target_path == "translation") it->second.translation = glm::vec3(v);
+            else it->second.scale = glm::vec3(v);
+        }
+    }
+
+    static NodePose restPose(const tinygltf::Node& n) {
+        NodePose p;
+        if (n.translation.size() == 3) p.translation = glm::vec3(n.translation[0], n.translation[1], n.translation[2]);
+        if (n.rotation.size() == 4) p.rotation = glm::quat(float(n.rotation[3]), float(n.rotation[0]), float(n.rotation[1]), float(n.rotation[2]));
+        if (n.scale.size() == 3) p.scale = glm::vec3(n.scale[0], n.scale[1], n.scale[2]);
+        return p;
+    }
+
+    glm::vec4 sample(const AccessorView& times, const AccessorView& values, const std::string& mode, int components) const {
+        const bool cubic = mode == "CUBICSPLINE";
+        auto value = [&](size_t key, int part) {  // part: 0 in-tangent, 1 value, 2 out-tangent
+            const size_t i = cubic ? key * 3 + size_t(part) : key;
+            glm::vec4 r(0.0f);
+            for (int k = 0; k < components; ++k) r[k] = values.get(i, k);
+            return r;
+        };
+        const size_t n = times.count;
+        const float t = timeSeconds_;
+        if (n == 1 || t <= times.get(0, 0)) return value(0, 1);
+        if (t >= times.get(n - 1, 0)) return value(n - 1, 1);
+        size_t lo = 0, hi = n - 1;  // times[lo] <= t < times[hi]
+        while (hi - lo > 1) {
+            const size_t mid = (lo + hi) / 2;
+            (times.get(mid, 0) <= t ? lo : hi) = mid;
+        }
+        const float t0 = times.get(lo, 0), t1 = times.get(hi, 0);
+        const float dt = t1 - t0;
+        const float u = dt > 0.0f ? (t - t0) / dt : 0.0f;
+        if (mode == "STEP") return value(lo, 1);
+        if (cubic) {
+            const float u2 = u * u, u3 = u2 * u;
+            const glm::vec4 r = (2 * u3 - 3 * u2 + 1) * value(lo, 1) + (u3 - 2 * u2 + u) * dt * value(lo, 2) +
+                                (-2 * u3 + 3 * u2) * value(hi, 1) + (u3 - u2) * dt * value(hi, 0);
+            return r;
+        }
+        if (components == 4) {
+            const glm::vec4 a = value(lo, 1), b = value(hi, 1);
+            const glm::quat q = glm::slerp(glm::quat(a.w, a.x, a.y, a.z), glm::quat(b.w, b.x, b.y, b.z), u);
+            return glm::vec4(q.x, q.y, q.z, q.w);
+        }
+        return glm::mix(value(lo, 1), value(hi, 1), u);
     }
 
     void addMesh(int meshIndex, const glm::mat4& world) {
@@ -327,11 +414,13 @@ private:
     std::vector<Mesh> meshes_;
     std::vector<Camera> cameras_;
     std::map<int, std::shared_ptr<const raster::Texture>> textures_;
+    float timeSeconds_;
+    std::map<int, NodePose> pose_;  // animated nodes
 };
 
 }  // namespace
 
-GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn) {
+GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds) {
     const std::string file = path.string();
     if (!std::filesystem::exists(path)) throw InputError(file + ": cannot open file");
     tinygltf::TinyGLTF loader;
@@ -342,7 +431,7 @@ GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn) {
                            : loader.LoadASCIIFromFile(&model, &error, &warning, file);
     if (!warning.empty()) warn(file + ": " + warning);
     if (!ok) throw InputError(file + ": " + (error.empty() ? "not a valid glTF file" : error));
-    return GltfReader(model, file, warn).read();
+    return GltfReader(model, file, warn, timeSeconds).read();
 }
 
 }  // namespace cuberille::scene

@@ -5,7 +5,7 @@
 // warning), indexed or not, with POSITION, NORMAL (computed when absent), COLOR_0 (float or
 // normalised integers), the material's baseColorFactor and doubleSided flag.
 // Cameras (perspective and orthographic) are read from the nodes that carry them.
-// Not yet: other texture slots, KHR_texture_transform, alpha modes, KHR_lights_punctual, animation, skinning, morph
+// Not yet: other texture slots, KHR_texture_transform, alpha modes, KHR_lights_punctual, skinning, morph
 // targets (issue 3); a file that uses them loads with a warning naming what was ignored.
 //
 // What we do with tinygltf's answer is checked: every accessor's range against its buffer
@@ -27,6 +27,8 @@ struct GltfScene {
     std::vector<Camera> cameras;  // the scene's camera nodes, in traversal order
 };
 
-GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn);
+/// timeSeconds poses the first animation's node channels (translation, rotation, scale) at that
+/// time, clamped to the clip's range.
+GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds = 0.0f);
 
 }  // namespace cuberille::scene

@@ -27,7 +27,7 @@ bool isModelFile(const std::filesystem::path& path) {
            endsWith(n, ".glb");
 }
 
-Scene loadModelScene(const std::filesystem::path& path, const ViewAngles& view, const WarningSink& warn) {
+Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions& view, const WarningSink& warn) {
     Scene s;
     s.name = path.filename().string();
     const std::string n = lowerName(path);
@@ -35,7 +35,7 @@ Scene loadModelScene(const std::filesystem::path& path, const ViewAngles& view, 
     if (endsWith(n, ".obj")) {
         s.meshes = loadObj(path, warn);
     } else if (endsWith(n, ".gltf") || endsWith(n, ".glb")) {
-        GltfScene g = loadGltf(path, warn);
+        GltfScene g = loadGltf(path, warn, view.timeSeconds);
         s.meshes = std::move(g.meshes);
         cameras = std::move(g.cameras);
     } else {

@@ -10,15 +10,16 @@
 
 namespace cuberille::scene {
 
-struct ViewAngles {
+struct ModelSceneOptions {
     float azimuthDegrees = 30.0f;
     float elevationDegrees = 20.0f;
-    int cameraIndex = -1;  // a camera of the file (glTF) instead of framing the bounds
+    int cameraIndex = -1;      // a camera of the file (glTF) instead of framing the bounds
+    float timeSeconds = 0.0f;  // glTF: the pose of the first animation at this time
 };
 
 bool isModelFile(const std::filesystem::path& path);
 
 /// Throws InputError for unreadable or malformed files.
-Scene loadModelScene(const std::filesystem::path& path, const ViewAngles& view, const WarningSink& warn);
+Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions& view, const WarningSink& warn);
 
 }  // namespace cuberille::scene

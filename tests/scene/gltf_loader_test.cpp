@@ -36,7 +36,7 @@ std::string base64(const std::string& in) {
 }
 
 // Buffer: 4 positions (a unit square in z = 0: 0 1 2 3 as a strip, 0 1 3 2 as a fan, both
-// counter-clockwise from +z), 4 RGBA8 colours, then 4 unsigned-byte indices.
+// counter-clockwise from +z), 4 RGBA8 colours, 4 unsigned-byte indices, animation keys.
 std::string bufferBytes() {
     const float p[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
     std::string b(reinterpret_cast<const char*>(p), sizeof p);
@@ -44,6 +44,11 @@ std::string bufferBytes() {
     b.append(reinterpret_cast<const char*>(c), sizeof c);
     const uint8_t idx[4] = {0, 1, 3, 2};  // the triangle uses the first 3, the fan all 4
     b.append(reinterpret_cast<const char*>(idx), sizeof idx);
+    // Animation of node 1 at byte 68: times {0, 1}; translation (0,0,0) → (0,2,0); rotation
+    // identity → 90° about z; scale (1,1,1) → (2,2,2), STEP.
+    const float s = 0.70710678f;
+    const float anim[22] = {0, 1, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1, 0, 0, s, s, 1, 1, 1, 2, 2, 2};
+    b.append(reinterpret_cast<const char*>(anim), sizeof anim);
     return b;
 }
 
@@ -71,12 +76,23 @@ std::string gltf(const std::string& positionCount = "4") {
     {"bufferView": 0, "componentType": 5126, "count": )" + positionCount + R"(, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
     {"bufferView": 1, "componentType": 5121, "normalized": true, "count": 4, "type": "VEC4"},
     {"bufferView": 2, "componentType": 5121, "count": 3, "type": "SCALAR"},
-    {"bufferView": 2, "componentType": 5121, "count": 4, "type": "SCALAR"}
+    {"bufferView": 2, "componentType": 5121, "count": 4, "type": "SCALAR"},
+    {"bufferView": 3, "byteOffset": 0, "componentType": 5126, "count": 2, "type": "SCALAR"},
+    {"bufferView": 3, "byteOffset": 8, "componentType": 5126, "count": 2, "type": "VEC3"},
+    {"bufferView": 3, "byteOffset": 32, "componentType": 5126, "count": 2, "type": "VEC4"},
+    {"bufferView": 3, "byteOffset": 64, "componentType": 5126, "count": 2, "type": "VEC3"}
   ],
+  "animations": [{
+    "samplers": [{"input": 4, "output": 5}, {"input": 4, "output": 6}, {"input": 4, "output": 7, "interpolation": "STEP"}],
+    "channels": [{"sampler": 0, "target": {"node": 1, "path": "translation"}},
+                 {"sampler": 1, "target": {"node": 1, "path": "rotation"}},
+                 {"sampler": 2, "target": {"node": 1, "path": "scale"}}]
+  }],
   "bufferViews": [
     {"buffer": 0, "byteOffset": 0, "byteLength": 48},
     {"buffer": 0, "byteOffset": 48, "byteLength": 16},
-    {"buffer": 0, "byteOffset": 64, "byteLength": 4}
+    {"buffer": 0, "byteOffset": 64, "byteLength": 4},
+    {"buffer": 0, "byteOffset": 68, "byteLength": 88}
   ],
   "buffers": [{"byteLength": )" + std::to_string(b.size()) + R"(, "uri": "data:application/octet-stream;base64,)" + base64(b) + R"("}]
 })";
@@ -152,9 +168,9 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     swap(text, R"("baseColorFactor": [0.5, 0.25, 1, 1]})",
          R"("baseColorFactor": [0.5, 0.25, 1, 1], "baseColorTexture": {"index": 0}})");
     swap(text, R"({"attributes": {"POSITION": 0}, "indices": 3)",
-         R"({"attributes": {"POSITION": 0, "TEXCOORD_0": 4}, "indices": 3)");
-    swap(text, R"({"bufferView": 2, "componentType": 5121, "count": 4, "type": "SCALAR"})",
-         R"({"bufferView": 2, "componentType": 5121, "count": 4, "type": "SCALAR"},
+         R"({"attributes": {"POSITION": 0, "TEXCOORD_0": 8}, "indices": 3)");
+    swap(text, R"({"bufferView": 3, "byteOffset": 64, "componentType": 5126, "count": 2, "type": "VEC3"})",
+         R"({"bufferView": 3, "byteOffset": 64, "componentType": 5126, "count": 2, "type": "VEC3"},
     {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC2"})");
     swap(text, R"({"buffer": 0, "byteOffset": 0, "byteLength": 48})",
          R"({"buffer": 0, "byteOffset": 0, "byteLength": 48, "byteStride": 12})");
@@ -172,6 +188,20 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     // Clamp in u: far right samples the last texel; mirrored in v (one row: always that row).
     EXPECT_EQ(t.sampleBilinear(0, glm::vec2(7.0f, 0.5f)), t.texel(0, 1, 0));
     EXPECT_FALSE(scene.meshes[0].baseColorTexture) << "untextured primitives stay untextured";
+}
+
+TEST(GltfLoader, AnimationPosesNodesAtTheRequestedTime) {
+    const fs::path path = write("cuberille-anim.gltf", gltf());
+    auto vertex1 = [&](float time) {  // the strip's vertex (1, 0, 0) under node 0 then node 1
+        return loadGltf(path, [](const std::string&) {}, time).meshes[0].positions[1];
+    };
+    const float r = 0.70710678f;
+    EXPECT_NEAR(glm::distance(vertex1(0.0f), glm::vec3(11, 0, 0)), 0.0f, 1e-5f);
+    // Halfway: translated by (0, 1, 0), rotated 45° about z (slerp), scale still 1 (STEP).
+    EXPECT_NEAR(glm::distance(vertex1(0.5f), glm::vec3(10 + r, 1 + r, 0)), 0.0f, 1e-5f);
+    // Past the end: clamped to the last key: (0, 2, 0) + R90 (2, 0, 0) = (0, 4, 0).
+    EXPECT_NEAR(glm::distance(vertex1(7.0f), glm::vec3(10, 4, 0)), 0.0f, 1e-5f);
+    EXPECT_NEAR(glm::distance(vertex1(-1.0f), glm::vec3(11, 0, 0)), 0.0f, 1e-5f);
 }
 
 TEST(GltfLoader, AccessorPastItsBufferIsAnInputError) {
