@@ -29,10 +29,17 @@ public:
         if (!model_.scenes.empty()) {
             const int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : 0;
             if (sceneIndex >= int(model_.scenes.size())) fail("scene " + std::to_string(sceneIndex), "does not exist");
+            globals_.assign(model_.nodes.size(), glm::mat4(1.0f));
             for (int node : model_.scenes[sceneIndex].nodes) visit(node, glm::mat4(1.0f), 0);
+            // Meshes after every global transform is known: a skin's joints may come later.
+            for (int node : visited_) {
+                const tinygltf::Node& n = model_.nodes[node];
+                if (n.mesh >= 0) addMesh(n.mesh, globals_[node], n.skin);
+                if (n.camera >= 0) addCamera(n.camera, globals_[node], "node " + std::to_string(node));
+            }
         } else {
             // No scene: every mesh once, untransformed (glTF 2.0 §3.3 allows files without scenes).
-            for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f));
+            for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f), -1);
         }
         if (meshes_.empty()) warn_(file_ + ": no triangles to draw");
         return {std::move(meshes_), std::move(cameras_)};
@@ -53,7 +60,6 @@ private:
                 m.pbrMetallicRoughness.metallicRoughnessTexture.index >= 0)
                 warnOnce("normal, occlusion, emissive and metallic-roughness textures are not used yet");
         if (model_.animations.size() > 1) warnOnce("only the first of " + std::to_string(model_.animations.size()) + " animations is played");
-        if (!model_.skins.empty()) warnOnce("skinning is not supported yet; the bind pose is drawn");
         for (const auto& ext : model_.extensionsUsed)
             warnOnce("extension " + ext + " is not supported yet and was ignored");
     }
@@ -89,8 +95,8 @@ private:
         if (depth > kMaxNodeDepth) fail(where, "the hierarchy is deeper than " + std::to_string(kMaxNodeDepth) + " (a cycle?)");
         const tinygltf::Node& n = model_.nodes[index];
         const glm::mat4 world = parent * localTransform(index, n);
-        if (n.mesh >= 0) addMesh(n.mesh, world);
-        if (n.camera >= 0) addCamera(n.camera, world, where);
+        globals_[index] = world;
+        visited_.push_back(index);
         for (int child : n.children) visit(child, world, depth + 1);
     }
 
@@ -247,7 +253,50 @@ private:
         return glm::mix(value(lo, 1), value(hi, 1), u);
     }
 
-    void addMesh(int meshIndex, const glm::mat4& world) {
+    // Skinning (glTF 2.0 §3.7.3): a vertex's matrix is the weighted sum of its joints' matrices,
+    // global(joint) x inverseBind(joint); the skinned mesh node's own transform is ignored.
+    // Empty when the node has no skin or the primitive no JOINTS_0 / WEIGHTS_0.
+    std::vector<glm::mat4> skinMatrices(int skinIndex, const tinygltf::Primitive& prim, size_t vertexCount,
+                                        const std::string& where) const {
+        const auto joints = prim.attributes.find("JOINTS_0"), weights = prim.attributes.find("WEIGHTS_0");
+        if (skinIndex < 0 || joints == prim.attributes.end() || weights == prim.attributes.end()) return {};
+        if (skinIndex >= int(model_.skins.size())) fail(where, "skin " + std::to_string(skinIndex) + " does not exist");
+        const tinygltf::Skin& skin = model_.skins[skinIndex];
+        std::vector<glm::mat4> jointMatrices(skin.joints.size(), glm::mat4(1.0f));
+        const AccessorView* inverseBind = nullptr;
+        AccessorView ibm{};
+        if (skin.inverseBindMatrices >= 0) {
+            ibm = view(skin.inverseBindMatrices, where);
+            if (ibm.components != 16 || ibm.count < skin.joints.size()) fail(where, "inverse bind matrices do not match the joints");
+            inverseBind = &ibm;
+        }
+        for (size_t j = 0; j < skin.joints.size(); ++j) {
+            const int node = skin.joints[j];
+            if (node < 0 || node >= int(model_.nodes.size())) fail(where, "joint " + std::to_string(j) + " is no node");
+            glm::mat4 inverse(1.0f);
+            if (inverseBind)
+                for (int k = 0; k < 16; ++k) glm::value_ptr(inverse)[k] = inverseBind->get(j, k);
+            jointMatrices[j] = globals_[node] * inverse;
+        }
+        const AccessorView jv = view(joints->second, where), wv = view(weights->second, where);
+        if (jv.components != 4 || wv.components != 4 || jv.count != vertexCount || wv.count != vertexCount)
+            fail(where, "JOINTS_0 / WEIGHTS_0 do not match POSITION");
+        std::vector<glm::mat4> out(vertexCount, glm::mat4(0.0f));
+        for (size_t i = 0; i < vertexCount; ++i) {
+            for (int k = 0; k < 4; ++k) {
+                const float w = wv.get(i, k);
+                if (w == 0.0f) continue;
+                const float joint = jv.get(i, k);
+                if (!(joint >= 0.0f) || joint >= float(jointMatrices.size()))
+                    fail(where, "vertex " + std::to_string(i) + " names joint " + std::to_string(int(joint)) +
+                                    " of " + std::to_string(jointMatrices.size()));
+                out[i] += w * jointMatrices[size_t(joint)];
+            }
+        }
+        return out;
+    }
+
+    void addMesh(int meshIndex, const glm::mat4& world, int skinIndex) {
         if (meshIndex < 0 || meshIndex >= int(model_.meshes.size())) fail("mesh " + std::to_string(meshIndex), "does not exist");
         const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
         const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(world)));
@@ -266,17 +315,20 @@ private:
             if (pos.components != 3) fail(where, "POSITION is not a 3-vector");
 
             Mesh m;
+            const std::vector<glm::mat4> skinned = skinMatrices(skinIndex, prim, pos.count, where);
             m.positions.resize(pos.count);
             for (size_t i = 0; i < pos.count; ++i) {
-                const glm::vec4 w = world * glm::vec4(pos.get(i, 0), pos.get(i, 1), pos.get(i, 2), 1.0f);
-                m.positions[i] = glm::vec3(w);
+                const glm::mat4& toWorld = skinned.empty() ? world : skinned[i];
+                m.positions[i] = glm::vec3(toWorld * glm::vec4(pos.get(i, 0), pos.get(i, 1), pos.get(i, 2), 1.0f));
             }
             if (const auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
                 const AccessorView nv = view(it->second, where);
                 if (nv.components != 3 || nv.count != pos.count) fail(where, "NORMAL does not match POSITION");
                 m.normals.resize(nv.count);
                 for (size_t i = 0; i < nv.count; ++i) {
-                    const glm::vec3 n = normalMatrix * glm::vec3(nv.get(i, 0), nv.get(i, 1), nv.get(i, 2));
+                    const glm::vec3 in(nv.get(i, 0), nv.get(i, 1), nv.get(i, 2));
+                    // Skinned normals use the blended matrix directly: exact for rigid joints.
+                    const glm::vec3 n = skinned.empty() ? normalMatrix * in : glm::mat3(skinned[i]) * in;
                     const float len = glm::length(n);
                     m.normals[i] = len > 0.0f ? n / len : glm::vec3(0.0f, 0.0f, 1.0f);
                 }
@@ -416,6 +468,8 @@ private:
     std::map<int, std::shared_ptr<const raster::Texture>> textures_;
     float timeSeconds_;
     std::map<int, NodePose> pose_;  // animated nodes
+    std::vector<glm::mat4> globals_;  // node → world, for the scene's nodes
+    std::vector<int> visited_;        // the scene's nodes in traversal order
 };
 
 }  // namespace

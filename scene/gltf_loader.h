@@ -5,7 +5,8 @@
 // warning), indexed or not, with POSITION, NORMAL (computed when absent), COLOR_0 (float or
 // normalised integers), the material's baseColorFactor and doubleSided flag.
 // Cameras (perspective and orthographic) are read from the nodes that carry them.
-// Not yet: other texture slots, KHR_texture_transform, alpha modes, KHR_lights_punctual, skinning, morph
+// Skins deform their meshes on the CPU at load (linear blend of joint matrices).
+// Not yet: other texture slots, KHR_texture_transform, alpha modes, KHR_lights_punctual, morph
 // targets (issue 3); a file that uses them loads with a warning naming what was ignored.
 //
 // What we do with tinygltf's answer is checked: every accessor's range against its buffer

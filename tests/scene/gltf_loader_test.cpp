@@ -204,6 +204,34 @@ TEST(GltfLoader, AnimationPosesNodesAtTheRequestedTime) {
     EXPECT_NEAR(glm::distance(vertex1(-1.0f), glm::vec3(11, 0, 0)), 0.0f, 1e-5f);
 }
 
+TEST(GltfLoader, SkinBlendsJointMatricesAndIgnoresTheMeshNodeTransform) {
+    // One triangle; every vertex 50/50 on joint 0 (translated by (1,0,0)) and joint 1
+    // (translated by (0,2,0)); identity inverse bind matrices; the mesh node's (100,0,0) is ignored.
+    std::string b;
+    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    b.append(reinterpret_cast<const char*>(p), sizeof p);
+    const uint8_t j[12] = {0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0};
+    b.append(reinterpret_cast<const char*>(j), sizeof j);
+    const float w[12] = {0.5f, 0.5f, 0, 0, 0.5f, 0.5f, 0, 0, 0.5f, 0.5f, 0, 0};
+    b.append(reinterpret_cast<const char*>(w), sizeof w);
+    const std::string text = R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+  "nodes": [{"mesh": 0, "skin": 0, "translation": [100, 0, 0]}, {"translation": [1, 0, 0]}, {"translation": [0, 2, 0]}],
+  "skins": [{"joints": [1, 2]}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "JOINTS_0": 1, "WEIGHTS_0": 2}}]}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+    {"bufferView": 1, "componentType": 5121, "count": 3, "type": "VEC4"},
+    {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC4"}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 12},
+                  {"buffer": 0, "byteOffset": 48, "byteLength": 48}],
+  "buffers": [{"byteLength": 96, "uri": "data:application/octet-stream;base64,)" + base64(b) + R"("}]})";
+    const GltfScene scene = loadGltf(write("cuberille-skin.gltf", text), [](const std::string&) {});
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    const std::vector<glm::vec3> expected = {{0.5f, 1, 0}, {1.5f, 1, 0}, {0.5f, 2, 0}};
+    for (int i = 0; i < 3; ++i)
+        EXPECT_NEAR(glm::distance(scene.meshes[0].positions[i], expected[i]), 0.0f, 1e-6f) << i;
+}
+
 TEST(GltfLoader, AccessorPastItsBufferIsAnInputError) {
     try {
         loadGltf(write("cuberille-bad-accessor.gltf", gltf("400")), [](const std::string&) {});
