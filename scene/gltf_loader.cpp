@@ -34,12 +34,12 @@ public:
             // Meshes after every global transform is known: a skin's joints may come later.
             for (int node : visited_) {
                 const tinygltf::Node& n = model_.nodes[node];
-                if (n.mesh >= 0) addMesh(n.mesh, globals_[node], n.skin);
+                if (n.mesh >= 0) addMesh(n.mesh, globals_[node], n.skin, node);
                 if (n.camera >= 0) addCamera(n.camera, globals_[node], "node " + std::to_string(node));
             }
         } else {
             // No scene: every mesh once, untransformed (glTF 2.0 §3.3 allows files without scenes).
-            for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f), -1);
+            for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f), -1, -1);
         }
         if (meshes_.empty()) warn_(file_ + ": no triangles to draw");
         return {std::move(meshes_), std::move(cameras_)};
@@ -187,26 +187,34 @@ private:
         for (size_t c = 0; c < anim.channels.size(); ++c) {
             const tinygltf::AnimationChannel& ch = anim.channels[c];
             const std::string where = "animation 0 channel " + std::to_string(c);
-            const int components = ch.target_path == "rotation" ? 4 : 3;
-            if (ch.target_path != "translation" && ch.target_path != "rotation" && ch.target_path != "scale") {
-                warnOnce("animated " + ch.target_path + " is not supported yet");
+            if (ch.target_path != "translation" && ch.target_path != "rotation" && ch.target_path != "scale" &&
+                ch.target_path != "weights") {
+                warnOnce("animated " + ch.target_path + " is not supported");
                 continue;
             }
             if (ch.target_node < 0 || ch.target_node >= int(model_.nodes.size())) fail(where, "targets no node");
+            const bool isWeights = ch.target_path == "weights";
+            const int components = isWeights ? morphTargetCount(ch.target_node) : ch.target_path == "rotation" ? 4 : 3;
+            if (components == 0) continue;  // weights of a mesh without targets
             if (ch.sampler < 0 || ch.sampler >= int(anim.samplers.size())) fail(where, "has no sampler");
             const tinygltf::AnimationSampler& sm = anim.samplers[ch.sampler];
             const AccessorView times = view(sm.input, where);
             const AccessorView values = view(sm.output, where);
             const bool cubic = sm.interpolation == "CUBICSPLINE";
-            if (times.count == 0 || times.components != 1 || values.components != components ||
-                values.count != times.count * (cubic ? 3 : 1))
+            const size_t perKey = isWeights ? size_t(components) : 1;  // weights: scalars per key
+            if (times.count == 0 || times.components != 1 || values.components != (isWeights ? 1 : components) ||
+                values.count != times.count * perKey * (cubic ? 3 : 1))
                 fail(where, "sampler input and output do not match");
+            const std::vector<float> v = sampleChannel(times, values, sm.interpolation, components);
+            if (isWeights) {
+                poseWeights_[ch.target_node] = v;
+                continue;
+            }
             auto [it, inserted] = pose_.try_emplace(ch.target_node);
             if (inserted) it->second = restPose(model_.nodes[ch.target_node]);
-            const glm::vec4 v = sample(times, values, sm.interpolation, components);
-            if (components == 4) it->second.rotation = glm::normalize(glm::quat(v.w, v.x, v.y, v.z));
-            else if (ch.target_path == "translation") it->second.translation = glm::vec3(v);
-            else it->second.scale = glm::vec3(v);
+            if (components == 4) it->second.rotation = glm::normalize(glm::quat(v[3], v[0], v[1], v[2]));
+            else if (ch.target_path == "translation") it->second.translation = glm::vec3(v[0], v[1], v[2]);
+            else it->second.scale = glm::vec3(v[0], v[1], v[2]);
         }
     }
 
@@ -218,39 +226,57 @@ private:
         return p;
     }
 
-    glm::vec4 sample(const AccessorView& times, const AccessorView& values, const std::string& mode, int components) const {
-        const bool cubic = mode == "CUBICSPLINE";
-        auto value = [&](size_t key, int part) {  // part: 0 in-tangent, 1 value, 2 out-tangent
-            const size_t i = cubic ? key * 3 + size_t(part) : key;
-            glm::vec4 r(0.0f);
-            for (int k = 0; k < components; ++k) r[k] = values.get(i, k);
-            return r;
-        };
+    struct Keyframe {
+        size_t lo, hi;  // equal when the time is clamped to an end
+        float u, dt;    // position in [lo, hi] and the interval's length
+    };
+
+    Keyframe findKeyframe(const AccessorView& times) const {
         const size_t n = times.count;
         const float t = timeSeconds_;
-        if (n == 1 || t <= times.get(0, 0)) return value(0, 1);
-        if (t >= times.get(n - 1, 0)) return value(n - 1, 1);
+        if (n == 1 || t <= times.get(0, 0)) return {0, 0, 0.0f, 0.0f};
+        if (t >= times.get(n - 1, 0)) return {n - 1, n - 1, 0.0f, 0.0f};
         size_t lo = 0, hi = n - 1;  // times[lo] <= t < times[hi]
         while (hi - lo > 1) {
             const size_t mid = (lo + hi) / 2;
             (times.get(mid, 0) <= t ? lo : hi) = mid;
         }
-        const float t0 = times.get(lo, 0), t1 = times.get(hi, 0);
-        const float dt = t1 - t0;
-        const float u = dt > 0.0f ? (t - t0) / dt : 0.0f;
-        if (mode == "STEP") return value(lo, 1);
-        if (cubic) {
-            const float u2 = u * u, u3 = u2 * u;
-            const glm::vec4 r = (2 * u3 - 3 * u2 + 1) * value(lo, 1) + (u3 - 2 * u2 + u) * dt * value(lo, 2) +
-                                (-2 * u3 + 3 * u2) * value(hi, 1) + (u3 - u2) * dt * value(hi, 0);
-            return r;
+        const float t0 = times.get(lo, 0), dt = times.get(hi, 0) - t0;
+        return {lo, hi, dt > 0.0f ? (t - t0) / dt : 0.0f, dt};
+    }
+
+    // `width` values per key: the components of one element (vectors), or `width` consecutive
+    // scalar elements (morph weights). Rotations (width 4, vectors) interpolate by slerp.
+    std::vector<float> sampleChannel(const AccessorView& times, const AccessorView& values, const std::string& mode,
+                                     int width) const {
+        const bool cubic = mode == "CUBICSPLINE", scalars = values.components == 1 && width > 1;
+        auto value = [&](size_t key, int part, int k) {  // part: 0 in-tangent, 1 value, 2 out-tangent
+            const size_t element = cubic ? key * 3 + size_t(part) : key;
+            return scalars ? values.get(element * size_t(width) + size_t(k), 0) : values.get(element, k);
+        };
+        const Keyframe f = findKeyframe(times);
+        std::vector<float> out(static_cast<size_t>(width));
+        const float u = f.u, u2 = u * u, u3 = u2 * u;
+        for (int k = 0; k < width; ++k) {
+            if (f.lo == f.hi || mode == "STEP") out[k] = value(f.lo, 1, k);
+            else if (cubic)
+                out[k] = (2 * u3 - 3 * u2 + 1) * value(f.lo, 1, k) + (u3 - 2 * u2 + u) * f.dt * value(f.lo, 2, k) +
+                         (-2 * u3 + 3 * u2) * value(f.hi, 1, k) + (u3 - u2) * f.dt * value(f.hi, 0, k);
+            else out[k] = value(f.lo, 1, k) + u * (value(f.hi, 1, k) - value(f.lo, 1, k));
         }
-        if (components == 4) {
-            const glm::vec4 a = value(lo, 1), b = value(hi, 1);
-            const glm::quat q = glm::slerp(glm::quat(a.w, a.x, a.y, a.z), glm::quat(b.w, b.x, b.y, b.z), u);
-            return glm::vec4(q.x, q.y, q.z, q.w);
+        if (width == 4 && !scalars && f.lo != f.hi && mode == "LINEAR") {
+            const glm::quat a(value(f.lo, 1, 3), value(f.lo, 1, 0), value(f.lo, 1, 1), value(f.lo, 1, 2));
+            const glm::quat b(value(f.hi, 1, 3), value(f.hi, 1, 0), value(f.hi, 1, 1), value(f.hi, 1, 2));
+            const glm::quat q = glm::slerp(a, b, u);
+            out = {q.x, q.y, q.z, q.w};
         }
-        return glm::mix(value(lo, 1), value(hi, 1), u);
+        return out;
+    }
+
+    int morphTargetCount(int node) const {
+        const int mesh = model_.nodes[node].mesh;
+        if (mesh < 0 || mesh >= int(model_.meshes.size()) || model_.meshes[mesh].primitives.empty()) return 0;
+        return int(model_.meshes[mesh].primitives[0].targets.size());
     }
 
     // Skinning (glTF 2.0 §3.7.3): a vertex's matrix is the weighted sum of its joints' matrices,
@@ -296,7 +322,33 @@ private:
         return out;
     }
 
-    void addMesh(int meshIndex, const glm::mat4& world, int skinIndex) {
+    // Morph target weights of a node's mesh: animated, else the node's, else the mesh's.
+    std::vector<double> morphWeights(int node, const tinygltf::Mesh& mesh) const {
+        if (node >= 0) {
+            if (const auto it = poseWeights_.find(node); it != poseWeights_.end())
+                return std::vector<double>(it->second.begin(), it->second.end());
+            if (!model_.nodes[node].weights.empty()) return model_.nodes[node].weights;
+        }
+        return mesh.weights;
+    }
+
+    // Object-space attribute (POSITION or NORMAL) with the weighted morph target deltas added.
+    std::vector<glm::vec3> morphed(const tinygltf::Primitive& prim, const AccessorView& base, const char* attribute,
+                                   const std::vector<double>& weights, const std::string& where) const {
+        std::vector<glm::vec3> out(base.count);
+        for (size_t i = 0; i < base.count; ++i) out[i] = glm::vec3(base.get(i, 0), base.get(i, 1), base.get(i, 2));
+        for (size_t t = 0; t < prim.targets.size() && t < weights.size(); ++t) {
+            const float w = float(weights[t]);
+            const auto it = prim.targets[t].find(attribute);
+            if (w == 0.0f || it == prim.targets[t].end()) continue;
+            const AccessorView d = view(it->second, where + ", morph target " + std::to_string(t));
+            if (d.components != 3 || d.count != base.count) fail(where, "morph target " + std::to_string(t) + " does not match " + attribute);
+            for (size_t i = 0; i < base.count; ++i) out[i] += w * glm::vec3(d.get(i, 0), d.get(i, 1), d.get(i, 2));
+        }
+        return out;
+    }
+
+    void addMesh(int meshIndex, const glm::mat4& world, int skinIndex, int node) {
         if (meshIndex < 0 || meshIndex >= int(model_.meshes.size())) fail("mesh " + std::to_string(meshIndex), "does not exist");
         const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
         const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(world)));
@@ -316,17 +368,20 @@ private:
 
             Mesh m;
             const std::vector<glm::mat4> skinned = skinMatrices(skinIndex, prim, pos.count, where);
+            const std::vector<double> weights = morphWeights(node, mesh);
+            const std::vector<glm::vec3> objectPositions = morphed(prim, pos, "POSITION", weights, where);
             m.positions.resize(pos.count);
             for (size_t i = 0; i < pos.count; ++i) {
                 const glm::mat4& toWorld = skinned.empty() ? world : skinned[i];
-                m.positions[i] = glm::vec3(toWorld * glm::vec4(pos.get(i, 0), pos.get(i, 1), pos.get(i, 2), 1.0f));
+                m.positions[i] = glm::vec3(toWorld * glm::vec4(objectPositions[i], 1.0f));
             }
             if (const auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
                 const AccessorView nv = view(it->second, where);
                 if (nv.components != 3 || nv.count != pos.count) fail(where, "NORMAL does not match POSITION");
                 m.normals.resize(nv.count);
+                const std::vector<glm::vec3> objectNormals = morphed(prim, nv, "NORMAL", weights, where);
                 for (size_t i = 0; i < nv.count; ++i) {
-                    const glm::vec3 in(nv.get(i, 0), nv.get(i, 1), nv.get(i, 2));
+                    const glm::vec3& in = objectNormals[i];
                     // Skinned normals use the blended matrix directly: exact for rigid joints.
                     const glm::vec3 n = skinned.empty() ? normalMatrix * in : glm::mat3(skinned[i]) * in;
                     const float len = glm::length(n);
@@ -468,6 +523,7 @@ private:
     std::map<int, std::shared_ptr<const raster::Texture>> textures_;
     float timeSeconds_;
     std::map<int, NodePose> pose_;  // animated nodes
+    std::map<int, std::vector<float>> poseWeights_;  // animated morph weights per node
     std::vector<glm::mat4> globals_;  // node → world, for the scene's nodes
     std::vector<int> visited_;        // the scene's nodes in traversal order
 };

@@ -1,13 +1,16 @@
 #pragma once
-// glTF 2.0 (`.gltf`, `.glb`) through tinygltf, static pose: the default scene's node
-// hierarchy (TRS or matrix, mirrored transforms flip the winding back), every mesh primitive
-// of mode TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN (POINTS and LINES are skipped with one
-// warning), indexed or not, with POSITION, NORMAL (computed when absent), COLOR_0 (float or
-// normalised integers), the material's baseColorFactor and doubleSided flag.
-// Cameras (perspective and orthographic) are read from the nodes that carry them.
-// Skins deform their meshes on the CPU at load (linear blend of joint matrices).
-// Not yet: other texture slots, KHR_texture_transform, alpha modes, KHR_lights_punctual, morph
-// targets (issue 3); a file that uses them loads with a warning naming what was ignored.
+// glTF 2.0 (`.gltf`, `.glb`) through tinygltf: the default scene's node hierarchy (TRS or
+// matrix; mirrored transforms flip the winding back), posed by the first animation at a time,
+// every mesh primitive of mode TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN (POINTS and LINES are
+// skipped with one warning), indexed or not, with POSITION, NORMAL (computed when absent),
+// COLOR_0 (float or normalised integers), the material's baseColorFactor, baseColorTexture
+// (with its sampler's wrap modes; trilinear filtering) and doubleSided flag. Cameras
+// (perspective and orthographic) come from the nodes that carry them. Skins and morph targets
+// (POSITION and NORMAL deltas; weights animated, per node or per mesh) deform the meshes on the
+// CPU at load.
+// Not yet (issue 3): other texture slots, KHR_texture_transform, alpha modes,
+// KHR_lights_punctual and other extensions; a file that uses them loads with a warning naming
+// what was ignored.
 //
 // What we do with tinygltf's answer is checked: every accessor's range against its buffer
 // view and buffer, every index against the vertex count, the node depth (at most 256) and

@@ -232,6 +232,37 @@ TEST(GltfLoader, SkinBlendsJointMatricesAndIgnoresTheMeshNodeTransform) {
         EXPECT_NEAR(glm::distance(scene.meshes[0].positions[i], expected[i]), 0.0f, 1e-6f) << i;
 }
 
+TEST(GltfLoader, MorphTargetsBlendByMeshNodeAndAnimatedWeights) {
+    // One triangle with two targets: +z and +x on every vertex. Node 0 uses the mesh's weights
+    // (0.5, 0); node 1 overrides them (0, 1); node 2 is animated from (0, 0) at t=0 to (1, 1) at t=1.
+    std::string b;
+    const float data[] = {0, 0, 0, 1, 0, 0, 0, 1, 0,   // positions
+                          0, 0, 1, 0, 0, 1, 0, 0, 1,   // target 0
+                          1, 0, 0, 1, 0, 0, 1, 0, 0,   // target 1
+                          0, 1,                         // key times
+                          0, 0, 1, 1};                  // key weights (2 per key)
+    b.append(reinterpret_cast<const char*>(data), sizeof data);
+    const std::string text = R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+  "nodes": [{"mesh": 0}, {"mesh": 0, "weights": [0, 1]}, {"mesh": 0}],
+  "meshes": [{"weights": [0.5, 0], "primitives": [{"attributes": {"POSITION": 0},
+              "targets": [{"POSITION": 1}, {"POSITION": 2}]}]}],
+  "animations": [{"samplers": [{"input": 3, "output": 4}], "channels": [{"sampler": 0, "target": {"node": 2, "path": "weights"}}]}],
+  "accessors": [
+    {"bufferView": 0, "byteOffset": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+    {"bufferView": 0, "byteOffset": 36, "componentType": 5126, "count": 3, "type": "VEC3"},
+    {"bufferView": 0, "byteOffset": 72, "componentType": 5126, "count": 3, "type": "VEC3"},
+    {"bufferView": 0, "byteOffset": 108, "componentType": 5126, "count": 2, "type": "SCALAR"},
+    {"bufferView": 0, "byteOffset": 116, "componentType": 5126, "count": 4, "type": "SCALAR"}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 132}],
+  "buffers": [{"byteLength": 132, "uri": "data:application/octet-stream;base64,)" + base64(b) + R"("}]})";
+    const fs::path path = write("cuberille-morph.gltf", text);
+    const GltfScene at25 = loadGltf(path, [](const std::string&) {}, 0.25f);
+    ASSERT_EQ(at25.meshes.size(), 3u);
+    EXPECT_EQ(at25.meshes[0].positions[1], glm::vec3(1, 0, 0.5f));     // mesh weights
+    EXPECT_EQ(at25.meshes[1].positions[1], glm::vec3(2, 0, 0));        // node weights
+    EXPECT_EQ(at25.meshes[2].positions[1], glm::vec3(1.25f, 0, 0.25f)); // animated, a quarter in
+}
+
 TEST(GltfLoader, AccessorPastItsBufferIsAnInputError) {
     try {
         loadGltf(write("cuberille-bad-accessor.gltf", gltf("400")), [](const std::string&) {});
