@@ -36,13 +36,14 @@ public:
                 const tinygltf::Node& n = model_.nodes[node];
                 if (n.mesh >= 0) addMesh(n.mesh, globals_[node], n.skin, node);
                 if (n.camera >= 0) addCamera(n.camera, globals_[node], "node " + std::to_string(node));
+                addLight(n, globals_[node], "node " + std::to_string(node));
             }
         } else {
             // No scene: every mesh once, untransformed (glTF 2.0 §3.3 allows files without scenes).
             for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f), -1, -1);
         }
         if (meshes_.empty()) warn_(file_ + ": no triangles to draw");
-        return {std::move(meshes_), std::move(cameras_)};
+        return {std::move(meshes_), std::move(cameras_), std::move(lights_)};
     }
 
 private:
@@ -61,7 +62,7 @@ private:
                 warnOnce("normal, occlusion, emissive and metallic-roughness textures are not used yet");
         if (model_.animations.size() > 1) warnOnce("only the first of " + std::to_string(model_.animations.size()) + " animations is played");
         for (const auto& ext : model_.extensionsUsed)
-            warnOnce("extension " + ext + " is not supported yet and was ignored");
+            if (ext != "KHR_lights_punctual") warnOnce("extension " + ext + " is not supported yet and was ignored");
     }
 
     struct NodePose {
@@ -98,6 +99,25 @@ private:
         globals_[index] = world;
         visited_.push_back(index);
         for (int child : n.children) visit(child, world, depth + 1);
+    }
+
+    // KHR_lights_punctual: a light shines down its node's -z, so the direction towards it is +z.
+    void addLight(const tinygltf::Node& n, const glm::mat4& world, const std::string& where) {
+        const auto ext = n.extensions.find("KHR_lights_punctual");
+        if (ext == n.extensions.end() || !ext->second.Has("light")) return;
+        const int index = ext->second.Get("light").GetNumberAsInt();
+        if (index < 0 || index >= int(model_.lights.size())) fail(where, "light " + std::to_string(index) + " does not exist");
+        const tinygltf::Light& l = model_.lights[index];
+        if (l.type != "directional") {
+            warnOnce(l.type + " lights are not supported yet; only directional lights are used");
+            return;
+        }
+        raster::DirectionalLight d;
+        d.directionToLight = glm::normalize(glm::vec3(world[2]));
+        const glm::vec3 color = l.color.size() >= 3 ? glm::vec3(l.color[0], l.color[1], l.color[2]) : glm::vec3(1.0f);
+        d.radiance = color * float(l.intensity);
+        d.ambient = glm::vec3(0.12f);
+        lights_.push_back(d);
     }
 
     // A camera looks down its node's -z with +y up (glTF 2.0 §3.10).
@@ -520,6 +540,7 @@ private:
     std::set<std::string> warned_;
     std::vector<Mesh> meshes_;
     std::vector<Camera> cameras_;
+    std::vector<raster::DirectionalLight> lights_;
     std::map<int, std::shared_ptr<const raster::Texture>> textures_;
     float timeSeconds_;
     std::map<int, NodePose> pose_;  // animated nodes

@@ -8,9 +8,9 @@
 // (perspective and orthographic) come from the nodes that carry them. Skins and morph targets
 // (POSITION and NORMAL deltas; weights animated, per node or per mesh) deform the meshes on the
 // CPU at load.
-// Not yet (issue 3): other texture slots, KHR_texture_transform, alpha modes,
-// KHR_lights_punctual and other extensions; a file that uses them loads with a warning naming
-// what was ignored.
+// KHR_lights_punctual directional lights are collected (the renderer uses the first).
+// Not yet (issue 3): other texture slots, KHR_texture_transform, alpha modes, point and spot
+// lights, other extensions; a file that uses them loads with a warning naming what was ignored.
 //
 // What we do with tinygltf's answer is checked: every accessor's range against its buffer
 // view and buffer, every index against the vertex count, the node depth (at most 256) and
@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "raster/draw.h"
 #include "scene/camera.h"
 #include "scene/mesh.h"
 #include "scene/obj_loader.h"  // WarningSink
@@ -29,6 +30,7 @@ namespace cuberille::scene {
 struct GltfScene {
     std::vector<Mesh> meshes;
     std::vector<Camera> cameras;  // the scene's camera nodes, in traversal order
+    std::vector<raster::DirectionalLight> directionalLights;  // KHR_lights_punctual, node order
 };
 
 /// timeSeconds poses the first animation's node channels (translation, rotation, scale) at that

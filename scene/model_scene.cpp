@@ -32,12 +32,14 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     s.name = path.filename().string();
     const std::string n = lowerName(path);
     std::vector<Camera> cameras;
+    std::vector<raster::DirectionalLight> lights;
     if (endsWith(n, ".obj")) {
         s.meshes = loadObj(path, warn);
     } else if (endsWith(n, ".gltf") || endsWith(n, ".glb")) {
         GltfScene g = loadGltf(path, warn, view.timeSeconds);
         s.meshes = std::move(g.meshes);
         cameras = std::move(g.cameras);
+        lights = std::move(g.directionalLights);
     } else {
         s.meshes.push_back(loadPly(path));
     }
@@ -55,6 +57,10 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     s.light.directionToLight = glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f));
     s.light.radiance = glm::vec3(0.85f);
     s.light.ambient = glm::vec3(0.12f);
+    if (!lights.empty()) {
+        if (lights.size() > 1) warn(path.string() + ": " + std::to_string(lights.size()) + " directional lights; the first is used");
+        s.light = lights[0];
+    }
     s.background = {0.05f, 0.06f, 0.08f, 1.0f};
     // glTF says which materials are double-sided; PLY and OBJ scans promise no winding.
     const bool isGltf = endsWith(n, ".gltf") || endsWith(n, ".glb");

@@ -98,6 +98,13 @@ std::string gltf(const std::string& positionCount = "4") {
 })";
 }
 
+// Replaces the one occurrence of `from` (a test-authoring error, reported, when absent).
+void replaceOnce(std::string& text, const std::string& from, const std::string& to) {
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+}
+
 fs::path write(const std::string& name, const std::string& text) {
     const fs::path p = fs::temp_directory_path() / name;
     std::ofstream(p) << text;
@@ -156,23 +163,18 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     png.height = 1;
     png.rgba = {1.0f, 0, 0, 1, 0.21586f, 0, 0, 1};  // linear; written as sRGB 255 and 128
     apps::writeImageAtomically(dir / "tex.png", png);
-    auto swap = [](std::string& text, const std::string& from, const std::string& to) {
-        const size_t at = text.find(from);
-        ASSERT_NE(at, std::string::npos) << from;
-        text.replace(at, from.size(), to);
-    };
     std::string text = gltf();
-    swap(text, R"("materials": [{)", R"("textures": [{"source": 0, "sampler": 0}], "images": [{"uri": "tex.png"}],
+    replaceOnce(text, R"("materials": [{)", R"("textures": [{"source": 0, "sampler": 0}], "images": [{"uri": "tex.png"}],
   "samplers": [{"wrapS": 33071, "wrapT": 33648}],
   "materials": [{)");
-    swap(text, R"("baseColorFactor": [0.5, 0.25, 1, 1]})",
+    replaceOnce(text, R"("baseColorFactor": [0.5, 0.25, 1, 1]})",
          R"("baseColorFactor": [0.5, 0.25, 1, 1], "baseColorTexture": {"index": 0}})");
-    swap(text, R"({"attributes": {"POSITION": 0}, "indices": 3)",
+    replaceOnce(text, R"({"attributes": {"POSITION": 0}, "indices": 3)",
          R"({"attributes": {"POSITION": 0, "TEXCOORD_0": 8}, "indices": 3)");
-    swap(text, R"({"bufferView": 3, "byteOffset": 64, "componentType": 5126, "count": 2, "type": "VEC3"})",
+    replaceOnce(text, R"({"bufferView": 3, "byteOffset": 64, "componentType": 5126, "count": 2, "type": "VEC3"})",
          R"({"bufferView": 3, "byteOffset": 64, "componentType": 5126, "count": 2, "type": "VEC3"},
     {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC2"})");
-    swap(text, R"({"buffer": 0, "byteOffset": 0, "byteLength": 48})",
+    replaceOnce(text, R"({"buffer": 0, "byteOffset": 0, "byteLength": 48})",
          R"({"buffer": 0, "byteOffset": 0, "byteLength": 48, "byteStride": 12})");
     std::ofstream(dir / "t.gltf") << text;
     const GltfScene scene = loadGltf(dir / "t.gltf", [](const std::string&) {});
@@ -261,6 +263,28 @@ TEST(GltfLoader, MorphTargetsBlendByMeshNodeAndAnimatedWeights) {
     EXPECT_EQ(at25.meshes[0].positions[1], glm::vec3(1, 0, 0.5f));     // mesh weights
     EXPECT_EQ(at25.meshes[1].positions[1], glm::vec3(2, 0, 0));        // node weights
     EXPECT_EQ(at25.meshes[2].positions[1], glm::vec3(1.25f, 0, 0.25f)); // animated, a quarter in
+}
+
+TEST(GltfLoader, DirectionalLightsFromKhrLightsPunctual) {
+    std::string text = gltf();
+    replaceOnce(text, R"("asset": {"version": "2.0"},)", R"("asset": {"version": "2.0"},
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+    {"type": "directional", "color": [1, 0.5, 0.25], "intensity": 2}, {"type": "point"}]}},)");
+    // Node 3 (the camera node, turned 90 degrees about +y) also carries light 0; node 2 light 1.
+    replaceOnce(text, R"({"camera": 0,)", R"({"camera": 0, "extensions": {"KHR_lights_punctual": {"light": 0}},)");
+    replaceOnce(text, R"({"mesh": 0, "scale": [-1, 1, 1]})",
+                R"({"mesh": 0, "scale": [-1, 1, 1], "extensions": {"KHR_lights_punctual": {"light": 1}}})");
+    std::vector<std::string> warnings;
+    const GltfScene scene = loadGltf(write("cuberille-lights.gltf", text), [&](const std::string& w) { warnings.push_back(w); });
+    ASSERT_EQ(scene.directionalLights.size(), 1u);
+    const raster::DirectionalLight& l = scene.directionalLights[0];
+    // The node's +z, turned 90 degrees about +y, is world +x: the light comes from +x.
+    EXPECT_NEAR(glm::distance(l.directionToLight, glm::vec3(1, 0, 0)), 0.0f, 1e-5f);
+    EXPECT_EQ(l.radiance, glm::vec3(2, 1, 0.5f));
+    bool warnedPoint = false;
+    for (const auto& w : warnings) warnedPoint = warnedPoint || w.find("point lights are not supported") != std::string::npos;
+    EXPECT_TRUE(warnedPoint);
 }
 
 TEST(GltfLoader, AccessorPastItsBufferIsAnInputError) {
