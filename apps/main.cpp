@@ -43,6 +43,8 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_option("--time", o.timeSeconds,
                        "glTF: pose the first animation at this time, in seconds (node transforms)")
         ->capture_default_str();
+    render->add_option("--turntable", o.turntable,
+                       "Write N frames turning around the scene (OUT_000.png, OUT_001.png, ...)");
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 

@@ -1,6 +1,8 @@
 #include "apps/render_command.h"
 
 #include <chrono>
+
+#include <glm/gtc/matrix_transform.hpp>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -79,39 +81,77 @@ View parseView(const std::string& name) {
     throw scene::InputError("--view: '" + name + "' is not color, depth, tiles or overdraw");
 }
 
+namespace {
+
+bool isTriFile(const RenderOptions& o) { return o.scene.ends_with(".tri"); }
+
+// Built-in or mesh-file scenes: everything but .tri.
+scene::Scene load3dScene(const RenderOptions& o) {
+    if (scene::isProceduralScene(o.scene)) return scene::makeProceduralScene(o.scene, o.detail);
+    if (scene::isModelFile(o.scene))
+        return scene::loadModelScene(o.scene, {o.azimuth, o.elevation, o.cameraIndex, o.timeSeconds},
+                                     [&](const std::string& w) {
+                                         if (!o.quiet) std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str());
+                                     });
+    throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz, .obj, .gltf "
+                            "or .glb file, or a built-in scene name");
+}
+
+void renderFrame(const scene::Scene& s, const RenderOptions& o, RenderResult& result) {
+    raster::Pipeline pipeline;
+    result.sceneTriangles = s.triangleCount();
+    pipeline.beginFrame(frameDesc(o, s.background));
+    s.draw(pipeline, float(o.width) / float(o.height));
+    pipeline.endFrame();  // while the scene's arrays are alive (Pipeline::draw's contract)
+    result.stats = pipeline.stats();
+    finishView(pipeline, o.view, result.image, result.stats.times.resolveMs);
+}
+
+// The camera turned about the world's up axis through its target.
+scene::Camera orbit(const scene::Camera& c, float degrees) {
+    const glm::mat3 turn(glm::rotate(glm::mat4(1.0f), glm::radians(degrees), glm::vec3(0, 1, 0)));
+    scene::Camera r = c;
+    r.position = c.target + turn * (c.position - c.target);
+    r.up = turn * c.up;
+    return r;
+}
+
+std::filesystem::path frameFileName(const std::filesystem::path& out, int frame) {
+    char suffix[16];
+    std::snprintf(suffix, sizeof suffix, "_%03d", frame);
+    return out.parent_path() / (out.stem().string() + suffix + out.extension().string());
+}
+
+void writeStats(const std::filesystem::path& path, const nlohmann::json& json) {
+    const std::filesystem::path temp = path.string() + ".tmp";
+    {
+        std::ofstream f(temp);
+        f << json.dump(2) << "\n";
+        if (!f) throw std::runtime_error(path.string() + ": cannot write stats");
+    }
+    std::filesystem::rename(temp, path);
+}
+
+}  // namespace
+
 RenderResult renderScene(const RenderOptions& o) {
     validate(o);
     raster::ThreadLimit threadLimit(o.threads);
     RenderResult result;
-    raster::Pipeline pipeline;
     const double t0 = nowMs();
-    if (scene::isProceduralScene(o.scene)) {
-        const scene::Scene s = scene::makeProceduralScene(o.scene, o.detail);
+    if (!isTriFile(o)) {
+        const scene::Scene s = load3dScene(o);
         result.loadMs = nowMs() - t0;
-        result.sceneTriangles = s.triangleCount();
-        pipeline.beginFrame(frameDesc(o, s.background));
-        s.draw(pipeline, float(o.width) / float(o.height));
-        pipeline.endFrame();  // while the scene's arrays are alive (Pipeline::draw's contract)
-    } else if (scene::isModelFile(o.scene)) {
-        const scene::Scene s = scene::loadModelScene(
-            o.scene, {o.azimuth, o.elevation, o.cameraIndex, o.timeSeconds},
-            [&](const std::string& w) { if (!o.quiet) std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str()); });
-        result.loadMs = nowMs() - t0;
-        result.sceneTriangles = s.triangleCount();
-        pipeline.beginFrame(frameDesc(o, s.background));
-        s.draw(pipeline, float(o.width) / float(o.height));
-        pipeline.endFrame();
-    } else {
-        if (!o.scene.ends_with(".tri"))
-            throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz, .obj, .gltf "
-                                    "or .glb file, or a built-in scene name");
-        const scene::TriScene s = scene::loadTriScene(o.scene);
-        result.loadMs = nowMs() - t0;
-        result.sceneTriangles = s.triangleCount();
-        pipeline.beginFrame(frameDesc(o, glm::vec4(0.0f)));
-        pipeline.draw(s.drawCall());
-        pipeline.endFrame();
+        renderFrame(s, o, result);
+        return result;
     }
+    const scene::TriScene s = scene::loadTriScene(o.scene);
+    result.loadMs = nowMs() - t0;
+    result.sceneTriangles = s.triangleCount();
+    raster::Pipeline pipeline;
+    pipeline.beginFrame(frameDesc(o, glm::vec4(0.0f)));
+    pipeline.draw(s.drawCall());
+    pipeline.endFrame();
     result.stats = pipeline.stats();
     finishView(pipeline, o.view, result.image, result.stats.times.resolveMs);
     return result;
@@ -158,36 +198,59 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
     return j;
 }
 
+void printSummary(const RenderOptions& o, const std::filesystem::path& file, const RenderResult& r) {
+    const raster::StageCounters& c = r.stats.counters;
+    std::printf("wrote %s (%dx%d, %d sample%s, view %s)\n", file.c_str(), o.width, o.height, o.msaa,
+                o.msaa > 1 ? "s" : "", viewName(o.view));
+    std::printf("  %zu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms a frame "
+                "(vertex %.1f, front end %.1f, back end %.1f, resolve %.1f)\n",
+                r.sceneTriangles, (unsigned long long)c.trianglesSetUp,
+                (unsigned long long)(c.trianglesCulled + c.trianglesClipRejected),
+                (unsigned long long)c.trianglesClipped, r.stats.times.frameMs, r.stats.times.vertexMs,
+                r.stats.times.frontEndMs, r.stats.times.backEndMs, r.stats.times.resolveMs);
+    std::printf("  blocks: %llu full, %llu partial, %llu hidden by hierarchical Z; %llu samples passed "
+                "depth, %llu pixels shaded\n",
+                (unsigned long long)c.blocksFull, (unsigned long long)c.blocksPartial,
+                (unsigned long long)c.blocksDepthCulled, (unsigned long long)c.samplesPassed,
+                (unsigned long long)c.pixelsShaded);
+}
+
+int runTurntable(const RenderOptions& o);
+
 int runRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png or .exr)");
     imageFormatFor(o.out);  // reject a bad extension before any work
+    if (o.turntable > 0) return runTurntable(o);
     const RenderResult r = renderScene(o);
     writeImageAtomically(o.out, r.image);
-    if (!o.statsPath.empty()) {
-        const std::filesystem::path temp = o.statsPath.string() + ".tmp";
-        {
-            std::ofstream f(temp);
-            f << statsToJson(o, r).dump(2) << "\n";
-            if (!f) throw std::runtime_error(o.statsPath.string() + ": cannot write stats");
-        }
-        std::filesystem::rename(temp, o.statsPath);
+    if (!o.statsPath.empty()) writeStats(o.statsPath, statsToJson(o, r));
+    if (!o.quiet) printSummary(o, o.out, r);
+    return 0;
+}
+
+// --turntable N: the scene is loaded once, then N frames go around it, the camera turned about
+// the world's up axis by 360/N degrees a frame; files are named OUT_000.ext, OUT_001.ext, ...
+int runTurntable(const RenderOptions& o) {
+    if (isTriFile(o)) throw scene::InputError("--turntable: " + o.scene + " is a 2D .tri scene");
+    if (o.turntable > 3600) throw scene::InputError("--turntable: at most 3600 frames");
+    validate(o);
+    raster::ThreadLimit threadLimit(o.threads);
+    const double t0 = nowMs();
+    scene::Scene s = load3dScene(o);
+    const double loadMs = nowMs() - t0;
+    const scene::Camera start = s.camera;
+    nlohmann::json frames = nlohmann::json::array();
+    for (int i = 0; i < o.turntable; ++i) {
+        s.camera = orbit(start, 360.0f * float(i) / float(o.turntable));
+        RenderResult r;
+        r.loadMs = i == 0 ? loadMs : 0.0;
+        renderFrame(s, o, r);
+        const std::filesystem::path file = frameFileName(o.out, i);
+        writeImageAtomically(file, r.image);
+        if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
+        if (!o.quiet) printSummary(o, file, r);
     }
-    if (!o.quiet) {
-        const raster::StageCounters& c = r.stats.counters;
-        std::printf("wrote %s (%dx%d, %d sample%s, view %s)\n", o.out.c_str(), o.width, o.height,
-                    o.msaa, o.msaa > 1 ? "s" : "", viewName(o.view));
-        std::printf("  %zu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms a frame "
-                    "(vertex %.1f, front end %.1f, back end %.1f, resolve %.1f)\n",
-                    r.sceneTriangles, (unsigned long long)c.trianglesSetUp,
-                    (unsigned long long)(c.trianglesCulled + c.trianglesClipRejected),
-                    (unsigned long long)c.trianglesClipped, r.stats.times.frameMs,
-                    r.stats.times.vertexMs, r.stats.times.frontEndMs, r.stats.times.backEndMs,
-                    r.stats.times.resolveMs);
-        std::printf("  blocks: %llu full, %llu partial; %llu samples passed depth, %llu pixels "
-                    "shaded\n",
-                    (unsigned long long)c.blocksFull, (unsigned long long)c.blocksPartial,
-                    (unsigned long long)c.samplesPassed, (unsigned long long)c.pixelsShaded);
-    }
+    if (!o.statsPath.empty()) writeStats(o.statsPath, {{"frames", frames}});
     return 0;
 }
 

@@ -26,6 +26,7 @@ struct RenderOptions {
     float elevation = 20.0f;  // degrees
     int cameraIndex = -1;     // a camera of the file (glTF), instead of framing the model
     float timeSeconds = 0.0f; // glTF animation time
+    int turntable = 0;        // > 0: that many frames around the scene, OUT_000.ext ...
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;

@@ -106,6 +106,23 @@ TEST_F(Cli, RendersMeshFilesAndRejectsBrokenOnes) {
     EXPECT_EQ(run("render " + write("x.stl", "solid").string() + " --out " + (dir_ / "x.png").string()).exitCode, 2);
 }
 
+TEST_F(Cli, TurntableWritesNumberedFramesThatDiffer) {
+    const fs::path obj = write("wedge.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    const CommandRun r = run("render " + obj.string() + " --turntable 3 --width 32 --height 24 --out " +
+                             (dir_ / "t.exr").string() + " --stats " + (dir_ / "t.json").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::vector<std::string> contents;
+    for (const char* name : {"t_000.exr", "t_001.exr", "t_002.exr"}) {
+        ASSERT_TRUE(fs::exists(dir_ / name)) << name;
+        std::ifstream in(dir_ / name, std::ios::binary);
+        contents.emplace_back((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    }
+    EXPECT_NE(contents[0], contents[1]) << "frames must show the model from different sides";
+    EXPECT_FALSE(fs::exists(dir_ / "t_003.exr"));
+    EXPECT_EQ(run("render " + write("flat.tri", "0 0 1 0 0 1 1\n").string() + " --turntable 2 --out " +
+                  (dir_ / "f.png").string()).exitCode, 2);
+}
+
 TEST_F(Cli, HelpOnEveryLevel) {
     EXPECT_EQ(run("--help").exitCode, 0);
     const CommandRun r = run("render --help");
