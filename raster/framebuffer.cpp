@@ -45,9 +45,4 @@ void Framebuffer::touchTile(int tile) {
     std::fill_n(tileBlockMaxDepth(tile), kBlocksPerTile, desc_.clearDepth);
 }
 
-size_t Framebuffer::memoryBytes() const {
-    return sampleCapacity_ * (sizeof(glm::vec4) + sizeof(float)) +
-           (overdraw_.size() + blockPartial_.size() + blockFull_.size()) * sizeof(uint32_t);
-}
-
 }  // namespace cuberille::raster

@@ -68,7 +68,6 @@ public:
     int blocksY() const { return (desc_.heightPixels + kBlockSizePixels - 1) / kBlockSizePixels; }
 
     size_t samplesPerTile() const { return size_t(kPixelsPerTile) * desc_.samples; }
-    size_t memoryBytes() const;
 
 private:
     FramebufferDesc desc_;

@@ -17,7 +17,6 @@ double nowMs() {
 }
 
 struct TriangleInput {
-    const DrawCall& draw;
     const VertexStageOutput& vertices;
     ClipVolume volume;
     SetupContext setup;
@@ -152,7 +151,7 @@ void Pipeline::frontEnd(const BatchRef& ref, TriangleBatch& batch) const {
     batch.clear();
     batch.drawIndex = int(ref.draw);
     batch.varyingCount = vertices.varyingCount;
-    const TriangleInput in{call, vertices, clipVolumeFor(call, framebuffer_),
+    const TriangleInput in{vertices, clipVolumeFor(call, framebuffer_),
                            setupContextFor(call, framebuffer_)};
     const size_t vertexCount = vertices.clipPositions.size();
     const size_t end = std::min(call.triangleCount(), ref.firstTriangle + kTrianglesPerBatch);

@@ -15,8 +15,6 @@ struct SamplePattern {
     std::array<int8_t, kMaxSamples> dy{};
     // Extremes over the samples, so the coarse stage can bound a block's sample positions.
     int minDx = 0, maxDx = 0, minDy = 0, maxDy = 0;
-
-    uint32_t allSamplesMask() const { return count == 32 ? ~0u : (1u << count) - 1u; }
 };
 
 bool isSupportedSampleCount(int count);

@@ -42,11 +42,6 @@ struct TriangleSetup {
     double invDoubleArea;  // 1 / (A·X + B·Y + C of edge k at vertex k), in 1/subpixels²
     uint32_t varyingOffset;  // into the batch's varyings: 3 vertices x varyingCount floats
     glm::vec4 flatColor;     // ConstantColor shading
-
-    /// Unbiased edge value at a sample position (subpixels).
-    int64_t edgeAt(int k, int64_t x, int64_t y) const {
-        return int64_t{edgeA[k]} * x + int64_t{edgeB[k]} * y + edgeC[k] - fillBias[k];
-    }
 };
 
 enum class SetupResult : uint8_t {
