@@ -29,6 +29,8 @@ enum class ShadingModel : uint8_t {
     ConstantColor,  // one colour per triangle (or per draw); no interpolation
     Lambert,        // interpolated normal and colour, one directional light plus ambient
     TexturedLambert,  // Lambert with albedo x baseColorTexture(uv), trilinear filtering
+    Unlit,            // the interpolated colour alone, no lighting (KHR_materials_unlit)
+    TexturedUnlit,    // Unlit with albedo x baseColorTexture(uv)
 };
 
 class Texture;

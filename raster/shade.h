@@ -46,13 +46,20 @@ struct ConstantColorShader {
     }
 };
 
-/// Lambert: varyings are world normal (3) and linear colour (3); one directional light.
-/// Per pixel: perspective-correct weights (screen weights clamped to the triangle, times 1/w,
-/// renormalised), interpolated normal and albedo, albedo * (ambient + radiance * max(0, n.l)).
-struct LambertShader {
+/// The surface shading models, specialised at compile time so a draw pays only for what its
+/// material uses: kTextured multiplies the albedo by the base colour texture (trilinear, with
+/// exact per-pixel UV derivatives); kLit applies Lambert with one directional light plus
+/// ambient, otherwise the colour is the albedo alone (KHR_materials_unlit).
+/// Varyings per vertex: normal (3), linear colour (3), and uv (2) when textured. Per pixel:
+/// perspective-correct weights (screen weights clamped to the triangle, times 1/w,
+/// renormalised), interpolated attributes, then albedo * (ambient + radiance * max(0, n.l)).
+template <bool kTextured, bool kLit>
+struct SurfaceShader {
     DirectionalLight light;
+    const Texture* texture = nullptr;
 
     void shade(const TriangleSetup& t, const float* v, ShadeQueue& q) const {
+        constexpr int n = kTextured ? 8 : 6;  // varyings per vertex
         const float invArea = float(t.invDoubleArea);
         const float bias0 = t.fillBias[0], bias1 = t.fillBias[1], bias2 = t.fillBias[2];
         const float invW0 = t.invW[0], invW1 = t.invW[1], invW2 = t.invW[2];
@@ -63,47 +70,41 @@ struct LambertShader {
             const float q2 = std::max(0.0f, float(q.edge2[i] - int64_t(bias2)) * invArea) * invW2;
             const float norm = 1.0f / (q0 + q1 + q2);
             const float w0 = q0 * norm, w1 = q1 * norm, w2 = q2 * norm;
-            const float nx = w0 * v[0] + w1 * v[6] + w2 * v[12];
-            const float ny = w0 * v[1] + w1 * v[7] + w2 * v[13];
-            const float nz = w0 * v[2] + w1 * v[8] + w2 * v[14];
-            const float ax = w0 * v[3] + w1 * v[9] + w2 * v[15];
-            const float ay = w0 * v[4] + w1 * v[10] + w2 * v[16];
-            const float az = w0 * v[5] + w1 * v[11] + w2 * v[17];
-            const float len2 = nx * nx + ny * ny + nz * nz;
-            const float nDotL = nx * l.x + ny * l.y + nz * l.z;
-            const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
-            q.red[i] = ax * (amb.x + rad.x * cosine);
-            q.green[i] = ay * (amb.y + rad.y * cosine);
-            q.blue[i] = az * (amb.z + rad.z * cosine);
+            float ax = w0 * v[3] + w1 * v[n + 3] + w2 * v[2 * n + 3];
+            float ay = w0 * v[4] + w1 * v[n + 4] + w2 * v[2 * n + 4];
+            float az = w0 * v[5] + w1 * v[n + 5] + w2 * v[2 * n + 5];
+            if constexpr (kTextured) {
+                const glm::vec4 texel = sampleTexture(t, v, q, i, glm::vec3(w0, w1, w2));
+                ax *= texel.r, ay *= texel.g, az *= texel.b;
+            }
+            if constexpr (kLit) {
+                const float nx = w0 * v[0] + w1 * v[n] + w2 * v[2 * n];
+                const float ny = w0 * v[1] + w1 * v[n + 1] + w2 * v[2 * n + 1];
+                const float nz = w0 * v[2] + w1 * v[n + 2] + w2 * v[2 * n + 2];
+                const float len2 = nx * nx + ny * ny + nz * nz;
+                const float nDotL = nx * l.x + ny * l.y + nz * l.z;
+                const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
+                q.red[i] = ax * (amb.x + rad.x * cosine);
+                q.green[i] = ay * (amb.y + rad.y * cosine);
+                q.blue[i] = az * (amb.z + rad.z * cosine);
+            } else {
+                q.red[i] = ax, q.green[i] = ay, q.blue[i] = az;
+            }
             q.alpha[i] = 1.0f;
         }
     }
-};
 
-/// Lambert with a base colour texture: albedo = interpolated colour x texture(uv), varyings
-/// normal (3), colour (3), uv (2). The level of detail comes from exact UV derivatives: the
-/// perspective-correct UV is also evaluated one pixel right and one pixel down, from the same
-/// edge functions stepped by A·256 and B·256, and differenced (per pixel, where a GPU
-/// differences across a 2x2 quad).
-struct TexturedLambertShader {
-    DirectionalLight light;
-    const Texture* texture;
-
-    void shade(const TriangleSetup& t, const float* v, ShadeQueue& q) const {
+private:
+    // The level of detail comes from exact UV derivatives: the perspective-correct UV is also
+    // evaluated one pixel right and one pixel down, from the same edge functions stepped by
+    // A·256 and B·256, and differenced (per pixel, where a GPU differences across a 2x2 quad).
+    // Those neighbours use unclamped weights, which like a GPU's helper pixels extrapolate the
+    // attribute plane past the triangle's edges (clamping would bend it there); a degenerate
+    // extrapolation gives NaN, which the level of detail treats as level 0.
+    glm::vec4 sampleTexture(const TriangleSetup& t, const float* v, const ShadeQueue& q, int i,
+                            const glm::vec3& w) const {
         const float invArea = float(t.invDoubleArea);
-        const glm::vec3 l = light.directionToLight, rad = light.radiance, amb = light.ambient;
-        // Clamped weights at the pixel centre (the value shaded, as in LambertShader) ...
-        auto weights = [&](const int64_t e0, const int64_t e1, const int64_t e2) {
-            const float q0 = std::max(0.0f, float(e0 - t.fillBias[0]) * invArea) * t.invW[0];
-            const float q1 = std::max(0.0f, float(e1 - t.fillBias[1]) * invArea) * t.invW[1];
-            const float q2 = std::max(0.0f, float(e2 - t.fillBias[2]) * invArea) * t.invW[2];
-            const float norm = 1.0f / (q0 + q1 + q2);
-            return glm::vec3(q0 * norm, q1 * norm, q2 * norm);
-        };
-        // ... and unclamped ones for derivatives, which like a GPU's helper pixels extrapolate
-        // the attribute plane past the triangle's edges (clamping would bend it there). A
-        // degenerate extrapolation gives NaN, which the level of detail treats as level 0.
-        auto extrapolatedWeights = [&](const int64_t e0, const int64_t e1, const int64_t e2) {
+        auto extrapolatedWeights = [&](int64_t e0, int64_t e1, int64_t e2) {
             const float q0 = float(e0 - t.fillBias[0]) * invArea * t.invW[0];
             const float q1 = float(e1 - t.fillBias[1]) * invArea * t.invW[1];
             const float q2 = float(e2 - t.fillBias[2]) * invArea * t.invW[2];
@@ -111,35 +112,16 @@ struct TexturedLambertShader {
             const float norm = sum > 0.0f ? 1.0f / sum : NAN;
             return glm::vec3(q0 * norm, q1 * norm, q2 * norm);
         };
-        auto uvAt = [&](const glm::vec3& w) {
-            return glm::vec2(w.x * v[6] + w.y * v[14] + w.z * v[22], w.x * v[7] + w.y * v[15] + w.z * v[23]);
+        auto uvAt = [&](const glm::vec3& b) {
+            return glm::vec2(b.x * v[6] + b.y * v[14] + b.z * v[22], b.x * v[7] + b.y * v[15] + b.z * v[23]);
         };
-        const int64_t stepX[3] = {int64_t{t.edgeA[0]} * kSubpixelsPerPixel, int64_t{t.edgeA[1]} * kSubpixelsPerPixel,
-                                  int64_t{t.edgeA[2]} * kSubpixelsPerPixel};
-        const int64_t stepY[3] = {int64_t{t.edgeB[0]} * kSubpixelsPerPixel, int64_t{t.edgeB[1]} * kSubpixelsPerPixel,
-                                  int64_t{t.edgeB[2]} * kSubpixelsPerPixel};
-        for (int i = 0; i < q.count; ++i) {
-            const glm::vec3 w = weights(q.edge0[i], q.edge1[i], q.edge2[i]);
-            const glm::vec2 uv = uvAt(w);
-            const glm::vec2 uvPlane = uvAt(extrapolatedWeights(q.edge0[i], q.edge1[i], q.edge2[i]));
-            const glm::vec2 uvRight = uvAt(extrapolatedWeights(q.edge0[i] + stepX[0], q.edge1[i] + stepX[1], q.edge2[i] + stepX[2]));
-            const glm::vec2 uvDown = uvAt(extrapolatedWeights(q.edge0[i] + stepY[0], q.edge1[i] + stepY[1], q.edge2[i] + stepY[2]));
-            const glm::vec4 texel =
-                texture->sampleTrilinear(uv, texture->levelOfDetail(uvRight - uvPlane, uvDown - uvPlane));
-            const float nx = w.x * v[0] + w.y * v[8] + w.z * v[16];
-            const float ny = w.x * v[1] + w.y * v[9] + w.z * v[17];
-            const float nz = w.x * v[2] + w.y * v[10] + w.z * v[18];
-            const float ax = (w.x * v[3] + w.y * v[11] + w.z * v[19]) * texel.r;
-            const float ay = (w.x * v[4] + w.y * v[12] + w.z * v[20]) * texel.g;
-            const float az = (w.x * v[5] + w.y * v[13] + w.z * v[21]) * texel.b;
-            const float len2 = nx * nx + ny * ny + nz * nz;
-            const float nDotL = nx * l.x + ny * l.y + nz * l.z;
-            const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
-            q.red[i] = ax * (amb.x + rad.x * cosine);
-            q.green[i] = ay * (amb.y + rad.y * cosine);
-            q.blue[i] = az * (amb.z + rad.z * cosine);
-            q.alpha[i] = 1.0f;
-        }
+        auto step = [&](const int32_t* coefficient, int k) { return int64_t{coefficient[k]} * kSubpixelsPerPixel; };
+        const glm::vec2 uvPlane = uvAt(extrapolatedWeights(q.edge0[i], q.edge1[i], q.edge2[i]));
+        const glm::vec2 uvRight = uvAt(extrapolatedWeights(q.edge0[i] + step(t.edgeA, 0), q.edge1[i] + step(t.edgeA, 1),
+                                                           q.edge2[i] + step(t.edgeA, 2)));
+        const glm::vec2 uvDown = uvAt(extrapolatedWeights(q.edge0[i] + step(t.edgeB, 0), q.edge1[i] + step(t.edgeB, 1),
+                                                          q.edge2[i] + step(t.edgeB, 2)));
+        return texture->sampleTrilinear(uvAt(w), texture->levelOfDetail(uvRight - uvPlane, uvDown - uvPlane));
     }
 };
 

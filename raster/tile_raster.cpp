@@ -231,6 +231,18 @@ void rasterizeBinned(const TriangleBatch& batch, int tile, const Shader& shader,
     }
 }
 
+// A textured model without a texture shades as its untextured twin.
+template <int S, bool kLit>
+void rasterizeSurface(const TriangleBatch& batch, int tile, const SamplePattern& sp, const TileTarget& target,
+                      bool textured) {
+    const DirectionalLight& light = target.state->light;
+    const Texture* texture = textured ? target.state->baseColorTexture : nullptr;
+    if (texture)
+        rasterizeBinned<S>(batch, tile, SurfaceShader<true, kLit>{light, texture}, sp, target);
+    else
+        rasterizeBinned<S>(batch, tile, SurfaceShader<false, kLit>{light}, sp, target);
+}
+
 template <int S>
 void dispatchShader(const TriangleBatch& batch, int tile, const SamplePattern& sp,
                     const TileTarget& target) {
@@ -238,16 +250,10 @@ void dispatchShader(const TriangleBatch& batch, int tile, const SamplePattern& s
         case ShadingModel::ConstantColor:
             rasterizeBinned<S>(batch, tile, ConstantColorShader{}, sp, target);
             break;
-        case ShadingModel::Lambert:
-            rasterizeBinned<S>(batch, tile, LambertShader{target.state->light}, sp, target);
-            break;
-        case ShadingModel::TexturedLambert:
-            if (target.state->baseColorTexture)
-                rasterizeBinned<S>(batch, tile, TexturedLambertShader{target.state->light, target.state->baseColorTexture},
-                                   sp, target);
-            else
-                rasterizeBinned<S>(batch, tile, LambertShader{target.state->light}, sp, target);
-            break;
+        case ShadingModel::Lambert: rasterizeSurface<S, true>(batch, tile, sp, target, false); break;
+        case ShadingModel::TexturedLambert: rasterizeSurface<S, true>(batch, tile, sp, target, true); break;
+        case ShadingModel::Unlit: rasterizeSurface<S, false>(batch, tile, sp, target, false); break;
+        case ShadingModel::TexturedUnlit: rasterizeSurface<S, false>(batch, tile, sp, target, true); break;
     }
 }
 

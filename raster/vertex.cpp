@@ -62,6 +62,8 @@ int varyingCountFor(ShadingModel model) {
         case ShadingModel::ConstantColor: return 0;
         case ShadingModel::Lambert: return 6;
         case ShadingModel::TexturedLambert: return 8;
+        case ShadingModel::Unlit: return 6;
+        case ShadingModel::TexturedUnlit: return 8;
     }
     return 0;
 }

@@ -62,7 +62,8 @@ private:
                 warnOnce("normal, occlusion, emissive and metallic-roughness textures are not used yet");
         if (model_.animations.size() > 1) warnOnce("only the first of " + std::to_string(model_.animations.size()) + " animations is played");
         for (const auto& ext : model_.extensionsUsed)
-            if (ext != "KHR_lights_punctual") warnOnce("extension " + ext + " is not supported yet and was ignored");
+            if (ext != "KHR_lights_punctual" && ext != "KHR_materials_unlit")
+                warnOnce("extension " + ext + " is not supported yet and was ignored");
     }
 
     struct NodePose {
@@ -439,6 +440,7 @@ private:
                 const auto& f = mat.pbrMetallicRoughness.baseColorFactor;  // linear
                 if (f.size() >= 3) m.color = glm::vec3(f[0], f[1], f[2]);
                 m.doubleSided = mat.doubleSided;
+                m.unlit = mat.extensions.count("KHR_materials_unlit") > 0;
                 addBaseColorTexture(mat.pbrMetallicRoughness.baseColorTexture, prim, pos.count, where, m);
                 if (mat.alphaMode != "OPAQUE") warnOnce("alpha modes are not supported yet; drawn opaque");
             } else {

@@ -8,7 +8,8 @@
 // (perspective and orthographic) come from the nodes that carry them. Skins and morph targets
 // (POSITION and NORMAL deltas; weights animated, per node or per mesh) deform the meshes on the
 // CPU at load.
-// KHR_lights_punctual directional lights are collected (the renderer uses the first).
+// KHR_lights_punctual directional lights are collected (the renderer uses the first);
+// KHR_materials_unlit materials are drawn without lighting.
 // Not yet (issue 3): other texture slots, KHR_texture_transform, alpha modes, point and spot
 // lights, other extensions; a file that uses them loads with a warning naming what was ignored.
 //

@@ -21,6 +21,7 @@ struct Mesh {
     std::vector<uint32_t> indices;   // three per triangle
     glm::vec3 color{0.8f};           // linear albedo, multiplied with vertex colours
     bool doubleSided = false;        // never culled, whatever the scene's cull mode
+    bool unlit = false;              // colour without lighting (KHR_materials_unlit)
     std::vector<glm::vec2> texCoords;  // per position, when the mesh is textured
     std::shared_ptr<const raster::Texture> baseColorTexture;  // multiplies the albedo
 

@@ -19,7 +19,9 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
         d.vertexColors = m.colors;
         d.indices = m.indices;
         const bool textured = m.baseColorTexture && m.texCoords.size() == m.positions.size();
-        d.state.shading = textured ? raster::ShadingModel::TexturedLambert : raster::ShadingModel::Lambert;
+        using raster::ShadingModel;
+        d.state.shading = m.unlit ? (textured ? ShadingModel::TexturedUnlit : ShadingModel::Unlit)
+                                  : (textured ? ShadingModel::TexturedLambert : ShadingModel::Lambert);
         if (textured) {
             d.texCoords = m.texCoords;
             d.state.baseColorTexture = m.baseColorTexture.get();

@@ -93,6 +93,24 @@ TEST(Culling, BackAndFrontFacesFollowScreenWinding) {
     }
 }
 
+TEST(ShadingModels, UnlitIgnoresTheLightLambertDoesNot) {
+    std::vector<glm::vec3> quad;
+    addQuad(quad, 0, 0, 8, 8, 0.5f);
+    const std::vector<glm::vec3> normals(6, glm::vec3(0, 0, 1));
+    for (auto [model, expected] : {std::pair{raster::ShadingModel::Unlit, 0.6f},
+                                   std::pair{raster::ShadingModel::Lambert, 0.6f * 0.25f}}) {
+        raster::DrawCall d = windowDraw(quad, glm::vec4(0.6f, 0.6f, 0.6f, 1.0f));
+        d.normals = normals;
+        d.state.shading = model;
+        d.state.light = {glm::vec3(0, 0, 1), glm::vec3(0.0f), glm::vec3(0.25f)};  // ambient only
+        raster::Pipeline p;
+        p.beginFrame(frame(8, 8, 1));
+        p.draw(d);
+        p.endFrame();
+        EXPECT_FLOAT_EQ(sampleColor(p.framebuffer(), 4, 4, 0).r, expected);
+    }
+}
+
 TEST(Overdraw, RecordsDepthPassingSamplesPerPixel) {
     std::vector<glm::vec3> quads;
     addQuad(quads, 0, 0, 8, 8, 0.9f);

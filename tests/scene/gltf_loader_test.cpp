@@ -71,7 +71,8 @@ std::string gltf(const std::string& positionCount = "4") {
     {"attributes": {"POSITION": 0}, "indices": 2},
     {"attributes": {"POSITION": 0}, "mode": 0}
   ]}],
-  "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1, 1]}, "doubleSided": true}],
+  "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1, 1]}, "doubleSided": true,
+                 "extensions": {"KHR_materials_unlit": {}}}],
   "accessors": [
     {"bufferView": 0, "componentType": 5126, "count": )" + positionCount + R"(, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
     {"bufferView": 1, "componentType": 5121, "normalized": true, "count": 4, "type": "VEC4"},
@@ -144,6 +145,8 @@ TEST(GltfLoader, HierarchyStripsFansIndicesColoursAndMirroring) {
     EXPECT_EQ(meshes[1].color, glm::vec3(0.5f, 0.25f, 1.0f));
     EXPECT_TRUE(meshes[1].doubleSided);
     EXPECT_FALSE(meshes[2].doubleSided);
+    EXPECT_TRUE(meshes[1].unlit);  // KHR_materials_unlit
+    EXPECT_FALSE(meshes[2].unlit);
 
     // The camera node sits at (10, 0, 5), turned 90 degrees about +y: it looks down world -x.
     ASSERT_EQ(scene.cameras.size(), 1u);
