@@ -50,6 +50,13 @@ enum ColorWriteBits : uint8_t {
     kWriteAll = 15,
 };
 
+/// How a draw's alpha (material alpha x texture alpha) is used (glTF's alphaMode).
+enum class AlphaMode : uint8_t {
+    Opaque,  // ignored
+    Mask,    // a pixel whose alpha is below alphaCutoff is discarded: no colour, no depth
+    Blend,   // over-blended onto the target: src * a + dst * (1 - a)
+};
+
 struct DrawState {
     ShadingModel shading = ShadingModel::ConstantColor;
     CullMode cull = CullMode::None;
@@ -62,6 +69,8 @@ struct DrawState {
     glm::vec4 constantColor{1.0f};  // used when there are no per-triangle or per-vertex colours
     DirectionalLight light;
     const Texture* baseColorTexture = nullptr;  // TexturedLambert; must outlive the frame
+    AlphaMode alphaMode = AlphaMode::Opaque;
+    float alphaCutoff = 0.5f;  // Mask
 };
 
 struct DrawCall {

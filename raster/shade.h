@@ -57,6 +57,7 @@ template <bool kTextured, bool kLit>
 struct SurfaceShader {
     DirectionalLight light;
     const Texture* texture = nullptr;
+    float alpha = 1.0f;  // the material's; times the texture's when textured
 
     void shade(const TriangleSetup& t, const float* v, ShadeQueue& q) const {
         constexpr int n = kTextured ? 8 : 6;  // varyings per vertex
@@ -73,9 +74,10 @@ struct SurfaceShader {
             float ax = w0 * v[3] + w1 * v[n + 3] + w2 * v[2 * n + 3];
             float ay = w0 * v[4] + w1 * v[n + 4] + w2 * v[2 * n + 4];
             float az = w0 * v[5] + w1 * v[n + 5] + w2 * v[2 * n + 5];
+            float a = alpha;
             if constexpr (kTextured) {
                 const glm::vec4 texel = sampleTexture(t, v, q, i, glm::vec3(w0, w1, w2));
-                ax *= texel.r, ay *= texel.g, az *= texel.b;
+                ax *= texel.r, ay *= texel.g, az *= texel.b, a *= texel.a;
             }
             if constexpr (kLit) {
                 const float nx = w0 * v[0] + w1 * v[n] + w2 * v[2 * n];
@@ -90,7 +92,7 @@ struct SurfaceShader {
             } else {
                 q.red[i] = ax, q.green[i] = ay, q.blue[i] = az;
             }
-            q.alpha[i] = 1.0f;
+            q.alpha[i] = a;
         }
     }
 

@@ -164,47 +164,76 @@ private:
         StageCounters& c = *target_.counters;
         c.samplesTested += std::popcount(covered);
         if (!pass) return 0;
+        if (state.alphaMode == AlphaMode::Mask) {
+            // Alpha test: whether the pixel exists is known only after shading, so its samples
+            // are counted and its depths written then (late depth write, shadeAndMerge). It
+            // reports no pass, so hierarchical Z is not tightened on its account.
+            queuePixel(first, pass, centreEdges);
+            return 0;
+        }
+        if (state.colorWriteMask) queuePixel(first, pass, centreEdges);
+        writeDepthAndCount(x, y, first, pass, depth, maxDepthPassed);
+        return pass;
+    }
+
+    void queuePixel(size_t first, uint32_t pass, const int64_t centreEdges[3]) {
+        const int i = queue_.count++;
+        queue_.edge0[i] = centreEdges[0];
+        queue_.edge1[i] = centreEdges[1];
+        queue_.edge2[i] = centreEdges[2];
+        queue_.firstSample[i] = uint32_t(first);
+        queue_.passMask[i] = pass;
+        if (shadeImmediately_) shadeAndMerge();
+    }
+
+    // Counters of depth-passing samples, then the depth writes (output merge's depth half).
+    void writeDepthAndCount(int32_t x, int32_t y, size_t first, uint32_t pass, const float* depth,
+                            float* maxDepthPassed) {
+        const DrawState& state = *target_.state;
+        StageCounters& c = *target_.counters;
         const int passed = std::popcount(pass);
         c.samplesPassed += passed;
         if (target_.occlusion) *target_.occlusion += passed;
         if (target_.overdraw) target_.overdraw[size_t(y) * target_.imageWidth + x] += passed;
-        if (state.colorWriteMask) {
-            const int i = queue_.count++;
-            queue_.edge0[i] = centreEdges[0];
-            queue_.edge1[i] = centreEdges[1];
-            queue_.edge2[i] = centreEdges[2];
-            queue_.firstSample[i] = uint32_t(first);
-            queue_.passMask[i] = pass;
-            if (shadeImmediately_) shadeAndMerge();
+        if (!state.depthWrite) return;
+        mergeDepth<S>(target_.depth + first, pass, depth);
+        float written = 0.0f;
+        for (int s = 0; s < S; ++s)
+            if (pass & (1u << s)) written = std::max(written, depth[s]);
+        if (maxDepthPassed) *maxDepthPassed = written;
+        // Without a depth test a write can raise a depth: keep the block's bound above it.
+        if (!state.depthTest) {
+            float& bound = target_.blockMaxDepth[((y - target_.originY) / kBlockSizePixels) * kBlocksPerTileSide +
+                                                 (x - target_.originX) / kBlockSizePixels];
+            bound = std::max(bound, written);
         }
-        if (state.depthWrite) {
-            mergeDepth<S>(target_.depth + first, pass, depth);
-            float written = 0.0f;
-            for (int s = 0; s < S; ++s)
-                if (pass & (1u << s)) written = std::max(written, depth[s]);
-            if (maxDepthPassed) *maxDepthPassed = written;
-            // Without a depth test a write can raise a depth: keep the block's bound above it.
-            if (!state.depthTest) {
-                float& bound = target_.blockMaxDepth[((y - target_.originY) / kBlockSizePixels) *
-                                                         kBlocksPerTileSide +
-                                                     (x - target_.originX) / kBlockSizePixels];
-                bound = std::max(bound, written);
-            }
-        }
-        return pass;
     }
 
     // Shade stage over the queued pixels in one loop, then output merge. The pixels of one
-    // triangle never overlap, so deferring colour writes to here changes nothing.
+    // triangle never overlap, so deferring colour (and, for alpha-tested draws, depth) writes
+    // to here changes nothing but the order of independent writes.
     void shadeAndMerge() {
         if (queue_.count == 0) return;
+        const DrawState& state = *target_.state;
         shader_.shade(t_, varyings_, queue_);
         target_.counters->pixelsShaded += queue_.count;
-        const uint8_t writeMask = target_.state->colorWriteMask;
-        for (int i = 0; i < queue_.count; ++i)
-            mergeColor<S>(target_.color + queue_.firstSample[i], queue_.passMask[i],
-                          glm::vec4(queue_.red[i], queue_.green[i], queue_.blue[i], queue_.alpha[i]),
-                          writeMask);
+        for (int i = 0; i < queue_.count; ++i) {
+            const glm::vec4 color(queue_.red[i], queue_.green[i], queue_.blue[i], queue_.alpha[i]);
+            const uint32_t first = queue_.firstSample[i], pass = queue_.passMask[i];
+            if (state.alphaMode == AlphaMode::Mask) {
+                if (!(color.a >= state.alphaCutoff)) continue;  // discarded (NaN too)
+                const int pixel = int(first) / S;
+                const int32_t x = target_.originX + pixel % kTileSizePixels, y = target_.originY + pixel / kTileSizePixels;
+                float depth[S] = {};
+                if (state.depthTest || state.depthWrite) sampleDepths<S>(t_, x, y, sampleOffsets_, depth);
+                writeDepthAndCount(x, y, first, pass, depth, nullptr);
+                if (!state.colorWriteMask) continue;
+            }
+            if (state.alphaMode == AlphaMode::Blend)
+                blendColor<S>(target_.color + first, pass, color, state.colorWriteMask);
+            else
+                mergeColor<S>(target_.color + first, pass, color, state.colorWriteMask);
+        }
         queue_.count = 0;
     }
 
@@ -237,10 +266,11 @@ void rasterizeSurface(const TriangleBatch& batch, int tile, const SamplePattern&
                       bool textured) {
     const DirectionalLight& light = target.state->light;
     const Texture* texture = textured ? target.state->baseColorTexture : nullptr;
+    const float alpha = target.state->constantColor.a;
     if (texture)
-        rasterizeBinned<S>(batch, tile, SurfaceShader<true, kLit>{light, texture}, sp, target);
+        rasterizeBinned<S>(batch, tile, SurfaceShader<true, kLit>{light, texture, alpha}, sp, target);
     else
-        rasterizeBinned<S>(batch, tile, SurfaceShader<false, kLit>{light}, sp, target);
+        rasterizeBinned<S>(batch, tile, SurfaceShader<false, kLit>{light, nullptr, alpha}, sp, target);
 }
 
 template <int S>

@@ -439,10 +439,13 @@ private:
                 const tinygltf::Material& mat = model_.materials[prim.material];
                 const auto& f = mat.pbrMetallicRoughness.baseColorFactor;  // linear
                 if (f.size() >= 3) m.color = glm::vec3(f[0], f[1], f[2]);
+                if (f.size() >= 4) m.alpha = float(f[3]);
+                if (mat.alphaMode == "MASK") m.alphaMode = raster::AlphaMode::Mask;
+                if (mat.alphaMode == "BLEND") m.alphaMode = raster::AlphaMode::Blend;
+                m.alphaCutoff = float(mat.alphaCutoff);
                 m.doubleSided = mat.doubleSided;
                 m.unlit = mat.extensions.count("KHR_materials_unlit") > 0;
                 addBaseColorTexture(mat.pbrMetallicRoughness.baseColorTexture, prim, pos.count, where, m);
-                if (mat.alphaMode != "OPAQUE") warnOnce("alpha modes are not supported yet; drawn opaque");
             } else {
                 m.color = glm::vec3(1.0f);  // glTF's default material
             }

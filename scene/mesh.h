@@ -10,6 +10,7 @@
 
 #include <glm/glm.hpp>
 
+#include "raster/draw.h"
 #include "raster/texture.h"
 
 namespace cuberille::scene {
@@ -22,6 +23,9 @@ struct Mesh {
     glm::vec3 color{0.8f};           // linear albedo, multiplied with vertex colours
     bool doubleSided = false;        // never culled, whatever the scene's cull mode
     bool unlit = false;              // colour without lighting (KHR_materials_unlit)
+    float alpha = 1.0f;              // material alpha, times the texture's
+    raster::AlphaMode alphaMode = raster::AlphaMode::Opaque;
+    float alphaCutoff = 0.5f;
     std::vector<glm::vec2> texCoords;  // per position, when the mesh is textured
     std::shared_ptr<const raster::Texture> baseColorTexture;  // multiplies the albedo
 

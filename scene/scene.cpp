@@ -1,5 +1,7 @@
 #include "scene/scene.h"
 
+#include <algorithm>
+
 namespace cuberille::scene {
 
 size_t Scene::triangleCount() const {
@@ -10,7 +12,18 @@ size_t Scene::triangleCount() const {
 
 void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
     const glm::mat4 clipFromWorld = camera.clipFromWorld(aspect);
-    for (const Mesh& m : meshes) {
+    std::vector<size_t> order, blended;
+    for (size_t i = 0; i < meshes.size(); ++i)
+        (meshes[i].alphaMode == raster::AlphaMode::Blend ? blended : order).push_back(i);
+    std::vector<float> distance(meshes.size(), 0.0f);
+    for (size_t i : blended) {
+        const Bounds b = boundsOf({meshes[i]});
+        distance[i] = b.empty() ? 0.0f : glm::distance(camera.position, 0.5f * (b.min + b.max));
+    }
+    std::stable_sort(blended.begin(), blended.end(), [&](size_t a, size_t b) { return distance[a] > distance[b]; });
+    order.insert(order.end(), blended.begin(), blended.end());
+    for (size_t index : order) {
+        const Mesh& m = meshes[index];
         raster::DrawCall d;
         d.space = raster::PositionSpace::Clip;
         d.clipFromObject = clipFromWorld;
@@ -27,7 +40,10 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
             d.state.baseColorTexture = m.baseColorTexture.get();
         }
         d.state.cull = m.doubleSided ? raster::CullMode::None : cull;
-        d.state.constantColor = glm::vec4(m.color, 1.0f);
+        d.state.constantColor = glm::vec4(m.color, m.alpha);
+        d.state.alphaMode = m.alphaMode;
+        d.state.alphaCutoff = m.alphaCutoff;
+        d.state.depthWrite = m.alphaMode != raster::AlphaMode::Blend;
         d.state.light = light;
         pipeline.draw(d);
     }

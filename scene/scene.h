@@ -23,8 +23,10 @@ struct Scene {
     raster::CullMode cull = raster::CullMode::Back;
 
     size_t triangleCount() const;
-    /// Submits every mesh as one depth-tested Lambert draw. The scene must outlive the frame
-    /// (Pipeline::draw records).
+    /// Submits every mesh as one depth-tested draw: opaque and alpha-tested meshes in order,
+    /// then blended ones back to front (by the distance from the camera to their bounds'
+    /// centre, ties by mesh order, so the order is deterministic), without depth writes. The
+    /// scene must outlive the frame (Pipeline::draw records).
     void draw(raster::Pipeline& pipeline, float aspect) const;
 };
 

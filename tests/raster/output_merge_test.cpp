@@ -111,6 +111,43 @@ TEST(ShadingModels, UnlitIgnoresTheLightLambertDoesNot) {
     }
 }
 
+TEST(AlphaModes, MaskDiscardsBelowTheCutoffWithoutWritingDepth) {
+    std::vector<glm::vec3> front, back;
+    addQuad(front, 0, 0, 8, 8, 0.2f);
+    addQuad(back, 0, 0, 8, 8, 0.6f);
+    for (auto [alpha, frontVisible] : {std::pair{0.4f, false}, std::pair{0.6f, true}}) {
+        raster::Pipeline p;
+        p.beginFrame(frame(8, 8, 4));
+        raster::DrawCall d = windowDraw(front, glm::vec4(1, 0, 0, alpha));
+        d.state.shading = raster::ShadingModel::Unlit;
+        d.state.alphaMode = raster::AlphaMode::Mask;
+        d.state.alphaCutoff = 0.5f;
+        p.draw(d);
+        raster::DrawCall behind = windowDraw(back, glm::vec4(0, 1, 0, 1));
+        behind.state.occlusionSlot = 0;
+        p.draw(behind);
+        p.endFrame();
+        // A discarded front quad leaves no depth behind: the back quad then passes everywhere.
+        EXPECT_EQ(sampleColor(p.framebuffer(), 4, 4, 0), frontVisible ? glm::vec4(1, 0, 0, alpha) : glm::vec4(0, 1, 0, 1));
+        EXPECT_EQ(p.stats().occlusionSamplesPassed[0], frontVisible ? 0u : 8u * 8u * 4u);
+    }
+}
+
+TEST(AlphaModes, BlendIsOverCompositing) {
+    std::vector<glm::vec3> quad;
+    addQuad(quad, 0, 0, 8, 8, 0.5f);
+    raster::Pipeline p;
+    raster::FramebufferDesc desc = frame(8, 8, 1);
+    desc.clearColor = {0, 1, 0, 1};
+    p.beginFrame(desc);
+    raster::DrawCall d = windowDraw(quad, glm::vec4(1, 0, 0, 0.25f));
+    d.state.shading = raster::ShadingModel::Unlit;
+    d.state.alphaMode = raster::AlphaMode::Blend;
+    p.draw(d);
+    p.endFrame();
+    EXPECT_EQ(sampleColor(p.framebuffer(), 3, 3, 0), glm::vec4(0.25f, 0.75f, 0.0f, 1.0f));
+}
+
 TEST(Overdraw, RecordsDepthPassingSamplesPerPixel) {
     std::vector<glm::vec3> quads;
     addQuad(quads, 0, 0, 8, 8, 0.9f);

@@ -72,6 +72,7 @@ std::string gltf(const std::string& positionCount = "4") {
     {"attributes": {"POSITION": 0}, "mode": 0}
   ]}],
   "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1, 1]}, "doubleSided": true,
+                 "alphaMode": "MASK", "alphaCutoff": 0.3,
                  "extensions": {"KHR_materials_unlit": {}}}],
   "accessors": [
     {"bufferView": 0, "componentType": 5126, "count": )" + positionCount + R"(, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
@@ -146,6 +147,9 @@ TEST(GltfLoader, HierarchyStripsFansIndicesColoursAndMirroring) {
     EXPECT_TRUE(meshes[1].doubleSided);
     EXPECT_FALSE(meshes[2].doubleSided);
     EXPECT_TRUE(meshes[1].unlit);  // KHR_materials_unlit
+    EXPECT_EQ(meshes[1].alphaMode, raster::AlphaMode::Mask);
+    EXPECT_FLOAT_EQ(meshes[1].alphaCutoff, 0.3f);
+    EXPECT_EQ(meshes[2].alphaMode, raster::AlphaMode::Opaque);
     EXPECT_FALSE(meshes[2].unlit);
 
     // The camera node sits at (10, 0, 5), turned 90 degrees about +y: it looks down world -x.
