@@ -52,7 +52,9 @@ TEST(RealData, EveryGltfSampleLoadsAndRenders) {
                 if (r.sceneTriangles > 0 && !emptyByDesign) {
                     EXPECT_GT(r.stats.counters.samplesPassed, 0u) << name << " drew nothing";
                 }
-                if (emptyByDesign) EXPECT_EQ(r.stats.counters.samplesPassed, 0u) << name;
+                if (emptyByDesign) {
+                    EXPECT_EQ(r.stats.counters.samplesPassed, 0u) << name;
+                }
             } catch (const std::exception& e) {
                 ADD_FAILURE() << name << ": " << e.what();
             }
