@@ -15,6 +15,13 @@ void addQuad(std::vector<glm::vec3>& p, float x0, float y0, float x1, float y1, 
     p.insert(p.end(), {{x0, y0, z}, {x0, y1, z}, {x1, y1, z}, {x0, y0, z}, {x1, y1, z}, {x1, y0, z}});
 }
 
+// One frame holding one draw.
+void renderOne(raster::Pipeline& p, const raster::FramebufferDesc& desc, const raster::DrawCall& draw) {
+    p.beginFrame(desc);
+    p.draw(draw);
+    p.endFrame();
+}
+
 raster::DrawCall windowDraw(const std::vector<glm::vec3>& positions, glm::vec4 color) {
     raster::DrawCall d;
     d.space = raster::PositionSpace::Window;
@@ -41,14 +48,12 @@ TEST(ColorWriteMask, VisibilityOnlyDrawWritesDepthButNoColor) {
 TEST(ColorWriteMask, WritesOnlyTheMaskedChannels) {
     std::vector<glm::vec3> quad;
     addQuad(quad, 0, 0, 8, 8, 0.5f);
-    raster::Pipeline p;
     raster::FramebufferDesc d = frame(8, 8, 1);
     d.clearColor = {0.25f, 0.25f, 0.25f, 0.25f};
-    p.beginFrame(d);
     raster::DrawCall draw = windowDraw(quad, glm::vec4(1.0f));
     draw.state.colorWriteMask = raster::kWriteGreen | raster::kWriteAlpha;
-    p.draw(draw);
-    p.endFrame();
+    raster::Pipeline p;
+    renderOne(p, d, draw);
     EXPECT_EQ(sampleColor(p.framebuffer(), 3, 3, 0), glm::vec4(0.25f, 1.0f, 0.25f, 1.0f));
 }
 
@@ -82,12 +87,10 @@ TEST(Culling, BackAndFrontFacesFollowScreenWinding) {
          {std::tuple{raster::CullMode::Back, ccw, true}, std::tuple{raster::CullMode::Back, cw, false},
           std::tuple{raster::CullMode::Front, ccw, false}, std::tuple{raster::CullMode::Front, cw, true},
           std::tuple{raster::CullMode::None, cw, true}}) {
-        raster::Pipeline p;
-        p.beginFrame(frame(16, 16, 1));
         raster::DrawCall d = windowDraw(positions, glm::vec4(1));
         d.state.cull = cull;
-        p.draw(d);
-        p.endFrame();
+        raster::Pipeline p;
+        renderOne(p, frame(16, 16, 1), d);
         EXPECT_EQ(p.stats().counters.trianglesCulled, drawn ? 0u : 1u);
         EXPECT_EQ(p.stats().counters.samplesPassed > 0, drawn);
     }
@@ -104,9 +107,7 @@ TEST(ShadingModels, UnlitIgnoresTheLightLambertDoesNot) {
         d.state.shading = model;
         d.state.light = {glm::vec3(0, 0, 1), glm::vec3(0.0f), glm::vec3(0.25f)};  // ambient only
         raster::Pipeline p;
-        p.beginFrame(frame(8, 8, 1));
-        p.draw(d);
-        p.endFrame();
+        renderOne(p, frame(8, 8, 1), d);
         EXPECT_FLOAT_EQ(sampleColor(p.framebuffer(), 4, 4, 0).r, expected);
     }
 }
@@ -136,15 +137,13 @@ TEST(AlphaModes, MaskDiscardsBelowTheCutoffWithoutWritingDepth) {
 TEST(AlphaModes, BlendIsOverCompositing) {
     std::vector<glm::vec3> quad;
     addQuad(quad, 0, 0, 8, 8, 0.5f);
-    raster::Pipeline p;
     raster::FramebufferDesc desc = frame(8, 8, 1);
     desc.clearColor = {0, 1, 0, 1};
-    p.beginFrame(desc);
     raster::DrawCall d = windowDraw(quad, glm::vec4(1, 0, 0, 0.25f));
     d.state.shading = raster::ShadingModel::Unlit;
     d.state.alphaMode = raster::AlphaMode::Blend;
-    p.draw(d);
-    p.endFrame();
+    raster::Pipeline p;
+    renderOne(p, desc, d);
     EXPECT_EQ(sampleColor(p.framebuffer(), 3, 3, 0), glm::vec4(0.25f, 0.75f, 0.0f, 1.0f));
 }
 
@@ -153,12 +152,10 @@ TEST(Overdraw, RecordsDepthPassingSamplesPerPixel) {
     addQuad(quads, 0, 0, 8, 8, 0.9f);
     addQuad(quads, 0, 0, 4, 8, 0.5f);  // in front: passes again on the left half
     addQuad(quads, 4, 0, 8, 8, 0.95f); // behind: fails on the right half
-    raster::Pipeline p;
     raster::FramebufferDesc d = frame(8, 8, 2);
     d.recordOverdraw = true;
-    p.beginFrame(d);
-    p.draw(windowDraw(quads, glm::vec4(1)));
-    p.endFrame();
+    raster::Pipeline p;
+    renderOne(p, d, windowDraw(quads, glm::vec4(1)));
     const auto& counts = p.framebuffer().overdrawCounts();
     EXPECT_EQ(counts[2 * 8 + 1], 4u);  // left: two layers x 2 samples
     EXPECT_EQ(counts[2 * 8 + 6], 2u);  // right: one layer
