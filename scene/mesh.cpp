@@ -19,10 +19,18 @@ void computeVertexNormals(Mesh& mesh) {
     }
 }
 
+Bounds boundsOf(const Mesh& mesh) {
+    Bounds b;
+    for (const glm::vec3& p : mesh.positions) b.extend(p);
+    return b;
+}
+
 Bounds boundsOf(const std::vector<Mesh>& meshes) {
     Bounds b;
-    for (const Mesh& m : meshes)
-        for (const glm::vec3& p : m.positions) b.extend(p);
+    for (const Mesh& m : meshes) {
+        const Bounds mb = boundsOf(m);
+        if (!mb.empty()) b.extend(mb.min), b.extend(mb.max);
+    }
     return b;
 }
 

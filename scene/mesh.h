@@ -48,6 +48,7 @@ struct Bounds {
     bool empty() const { return min.x > max.x; }
 };
 
+Bounds boundsOf(const Mesh& mesh);
 Bounds boundsOf(const std::vector<Mesh>& meshes);
 
 /// 8-bit sRGB to linear, for colours stored in files.

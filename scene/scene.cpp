@@ -17,7 +17,7 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
         (meshes[i].alphaMode == raster::AlphaMode::Blend ? blended : order).push_back(i);
     std::vector<float> distance(meshes.size(), 0.0f);
     for (size_t i : blended) {
-        const Bounds b = boundsOf({meshes[i]});
+        const Bounds b = boundsOf(meshes[i]);
         distance[i] = b.empty() ? 0.0f : glm::distance(camera.position, 0.5f * (b.min + b.max));
     }
     std::stable_sort(blended.begin(), blended.end(), [&](size_t a, size_t b) { return distance[a] > distance[b]; });
