@@ -49,14 +49,19 @@ raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) 
     return d;
 }
 
+// Resolves only what the view shows: the colour resolve runs for color and tiles alone.
 void finishView(const raster::Pipeline& p, View view, raster::Image& image, double& resolveMs) {
     const double t0 = nowMs();
-    raster::resolveColor(p.framebuffer(), image);
-    if (view == View::Depth) raster::resolveDepth(p.framebuffer(), image);
-    if (view == View::Overdraw) raster::visualizeOverdraw(p.framebuffer(), image);
-    if (view == View::Tiles) {
-        raster::Image color = image;
-        raster::visualizeBlockClasses(p.framebuffer(), color, image);
+    switch (view) {
+        case View::Color: raster::resolveColor(p.framebuffer(), image); break;
+        case View::Depth: raster::resolveDepth(p.framebuffer(), image); break;
+        case View::Overdraw: raster::visualizeOverdraw(p.framebuffer(), image); break;
+        case View::Tiles: {
+            raster::Image color;
+            raster::resolveColor(p.framebuffer(), color);
+            raster::visualizeBlockClasses(p.framebuffer(), color, image);
+            break;
+        }
     }
     resolveMs = nowMs() - t0;
 }
@@ -97,14 +102,21 @@ scene::Scene load3dScene(const RenderOptions& o) {
                             "or .glb file, or a built-in scene name");
 }
 
-void renderFrame(const scene::Scene& s, const RenderOptions& o, RenderResult& result) {
+// One frame: submit(pipeline) records the draws, whose arrays stay alive until endFrame
+// (Pipeline::draw's contract), then the view is resolved.
+template <class Submit>
+void renderFrame(const RenderOptions& o, glm::vec4 background, Submit&& submit, RenderResult& result) {
     raster::Pipeline pipeline;
-    result.sceneTriangles = s.triangleCount();
-    pipeline.beginFrame(frameDesc(o, s.background));
-    s.draw(pipeline, float(o.width) / float(o.height));
-    pipeline.endFrame();  // while the scene's arrays are alive (Pipeline::draw's contract)
+    pipeline.beginFrame(frameDesc(o, background));
+    submit(pipeline);
+    pipeline.endFrame();
     result.stats = pipeline.stats();
     finishView(pipeline, o.view, result.image, result.stats.times.resolveMs);
+}
+
+void renderFrame(const scene::Scene& s, const RenderOptions& o, RenderResult& result) {
+    result.sceneTriangles = s.triangleCount();
+    renderFrame(o, s.background, [&](raster::Pipeline& p) { s.draw(p, float(o.width) / float(o.height)); }, result);
 }
 
 // The camera turned about the world's up axis through its target.
@@ -148,12 +160,7 @@ RenderResult renderScene(const RenderOptions& o) {
     const scene::TriScene s = scene::loadTriScene(o.scene);
     result.loadMs = nowMs() - t0;
     result.sceneTriangles = s.triangleCount();
-    raster::Pipeline pipeline;
-    pipeline.beginFrame(frameDesc(o, glm::vec4(0.0f)));
-    pipeline.draw(s.drawCall());
-    pipeline.endFrame();
-    result.stats = pipeline.stats();
-    finishView(pipeline, o.view, result.image, result.stats.times.resolveMs);
+    renderFrame(o, glm::vec4(0.0f), [&](raster::Pipeline& p) { p.draw(s.drawCall()); }, result);
     return result;
 }
 
