@@ -54,12 +54,8 @@ void writeImageAtomically(const std::filesystem::path& path, const raster::Image
     const ImageFormat format = imageFormatFor(path);
     const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
     // The temporary keeps the extension, which is how OpenImageIO picks the format.
-    std::string tempName = ".";
-    tempName += path.stem().string();
-    tempName += ".tmp";
-    tempName += std::to_string(::getpid());
-    tempName += path.extension().string();
-    const std::filesystem::path temp = dir / tempName;
+    const std::filesystem::path temp =
+        dir / ("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) + path.extension().string());
     auto out = OIIO::ImageOutput::create(temp.string());
     if (!out) throw std::runtime_error(path.string() + ": cannot create image writer");
     bool ok = false;

@@ -24,8 +24,8 @@
 
 #include "raster/draw.h"
 #include "scene/camera.h"
+#include "scene/input_error.h"
 #include "scene/mesh.h"
-#include "scene/obj_loader.h"  // WarningSink
 
 namespace cuberille::scene {
 

@@ -4,6 +4,7 @@
 
 #include "scene/gltf_loader.h"
 #include "scene/input_error.h"
+#include "scene/obj_loader.h"
 #include "scene/ply_loader.h"
 
 namespace cuberille::scene {

@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "scene/obj_loader.h"
+#include "scene/input_error.h"
 #include "scene/scene.h"
 
 namespace cuberille::scene {

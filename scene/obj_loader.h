@@ -9,15 +9,13 @@
 // MTL file warns (through `warn`) and falls back to the default colour.
 
 #include <filesystem>
-#include <functional>
 #include <string>
 #include <vector>
 
+#include "scene/input_error.h"
 #include "scene/mesh.h"
 
 namespace cuberille::scene {
-
-using WarningSink = std::function<void(const std::string&)>;
 
 std::vector<Mesh> parseObj(const std::string& text, const std::string& fileName,
                            const std::filesystem::path& directory, const WarningSink& warn);

@@ -15,14 +15,6 @@ namespace {
     throw InputError(file + ":" + std::to_string(line) + ": " + problem);
 }
 
-// "'token' problem", built with append: GCC 12 warns falsely (-Wrestrict, bug 105329) on the
-// same message built with operator+ at -O3.
-std::string quoted(std::string_view token, std::string_view problem) {
-    std::string m = "'";
-    m.append(token).append("' ").append(problem);
-    return m;
-}
-
 std::vector<float> parseNumbers(std::string_view text, const std::string& file, size_t line) {
     std::vector<float> numbers;
     for (std::string_view token : splitWords(text)) {
@@ -31,8 +23,8 @@ std::vector<float> parseNumbers(std::string_view text, const std::string& file, 
         if (token[0] == '+') ++first;  // from_chars rejects a leading '+'
         auto [end, ec] = std::from_chars(first, token.data() + token.size(), value);
         if (ec != std::errc() || end != token.data() + token.size())
-            fail(file, line, quoted(token, "is not a number"));
-        if (!std::isfinite(value)) fail(file, line, quoted(token, "is not a finite number"));
+            fail(file, line, "'" + std::string(token) + "' is not a number");
+        if (!std::isfinite(value)) fail(file, line, "'" + std::string(token) + "' is not a finite number");
         numbers.push_back(value);
     }
     return numbers;
