@@ -154,6 +154,7 @@ RenderResult renderScene(const RenderOptions& o) {
     if (!isTriFile(o)) {
         const scene::Scene s = load3dScene(o);
         result.loadMs = nowMs() - t0;
+        result.load = s.loadStats;
         renderFrame(s, o, result);
         return result;
     }
@@ -196,8 +197,16 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
           {"blocksFull", c.blocksFull},
           {"blocksDepthCulled", c.blocksDepthCulled}}},
         {"depth", {{"samplesTested", c.samplesTested}, {"samplesPassed", c.samplesPassed}}},
-        {"shade", {{"pixelsShaded", c.pixelsShaded}}},
+        {"shade",
+         {{"pixelsShaded", c.pixelsShaded},
+          {"varyingsInterpolated", c.varyingsInterpolated},
+          {"textureSamples", c.textureSamples},
+          {"lightEvaluations", c.lightEvaluations}}},
+        {"outputMerge", {{"pixelsAlphaTested", c.pixelsAlphaTested}, {"pixelsBlended", c.pixelsBlended}}},
     };
+    j["load"] = {{"verticesSkinned", r.load.verticesSkinned},
+                 {"verticesMorphed", r.load.verticesMorphed},
+                 {"texturesDecoded", r.load.texturesDecoded}};
     j["timesMs"] = {{"load", r.loadMs},         {"vertex", t.vertexMs},
                     {"frontEnd", t.frontEndMs}, {"backEnd", t.backEndMs},
                     {"resolve", t.resolveMs},   {"frame", t.frameMs}};
@@ -220,6 +229,9 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
                 (unsigned long long)c.blocksFull, (unsigned long long)c.blocksPartial,
                 (unsigned long long)c.blocksDepthCulled, (unsigned long long)c.samplesPassed,
                 (unsigned long long)c.pixelsShaded);
+    std::printf("  effects: %llu texture samples, %llu light evaluations, %llu pixels alpha-tested, %llu blended\n",
+                (unsigned long long)c.textureSamples, (unsigned long long)c.lightEvaluations,
+                (unsigned long long)c.pixelsAlphaTested, (unsigned long long)c.pixelsBlended);
 }
 
 int runTurntable(const RenderOptions& o);
@@ -251,6 +263,7 @@ int runTurntable(const RenderOptions& o) {
         s.camera = orbit(start, 360.0f * float(i) / float(o.turntable));
         RenderResult r;
         r.loadMs = i == 0 ? loadMs : 0.0;
+        r.load = s.loadStats;
         renderFrame(s, o, r);
         const std::filesystem::path file = frameFileName(o.out, i);
         writeImageAtomically(file, r.image);

@@ -9,6 +9,7 @@
 
 #include "raster/resolve.h"
 #include "raster/stats.h"
+#include "scene/load_stats.h"
 
 namespace cuberille::apps {
 
@@ -37,6 +38,7 @@ struct RenderResult {
     raster::PipelineStats stats;
     size_t sceneTriangles = 0;
     double loadMs = 0;
+    scene::LoadStats load;
 };
 
 View parseView(const std::string& name);  // throws scene::InputError

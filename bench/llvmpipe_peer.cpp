@@ -174,9 +174,10 @@ double LlvmpipePeer::renderFrame(const scene::Scene& scene) {
     glClearColor(scene.background.r, scene.background.g, scene.background.b, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     p_glUniformMatrix4fv(p_glGetUniformLocation(m.program, "clipFromWorld"), 1, GL_FALSE, glm::value_ptr(clipFromWorld));
-    p_glUniform3fv(p_glGetUniformLocation(m.program, "lightDir"), 1, glm::value_ptr(scene.light.directionToLight));
-    p_glUniform3fv(p_glGetUniformLocation(m.program, "radiance"), 1, glm::value_ptr(scene.light.radiance));
-    p_glUniform3fv(p_glGetUniformLocation(m.program, "ambient"), 1, glm::value_ptr(scene.light.ambient));
+    const glm::vec3 towardsLight = -scene.lighting.lights[0].direction;  // the bench scenes' one directional light
+    p_glUniform3fv(p_glGetUniformLocation(m.program, "lightDir"), 1, glm::value_ptr(towardsLight));
+    p_glUniform3fv(p_glGetUniformLocation(m.program, "radiance"), 1, glm::value_ptr(scene.lighting.lights[0].intensity));
+    p_glUniform3fv(p_glGetUniformLocation(m.program, "ambient"), 1, glm::value_ptr(scene.lighting.ambient));
     const GLint albedo = p_glGetUniformLocation(m.program, "albedo");
     p_glEnableVertexAttribArray(0);
     p_glEnableVertexAttribArray(1);

@@ -15,6 +15,7 @@
 #include "raster/sample_pattern.h"
 #include "raster/setup.h"
 #include "raster/stats.h"
+#include "raster/vertex.h"
 
 namespace cuberille::raster {
 
@@ -26,7 +27,8 @@ struct TileGrid {
 /// One fixed-size run of a draw's triangles, after set-up and binning.
 struct TriangleBatch {
     int drawIndex = 0;
-    int varyingCount = 0;
+    int varyingCount = 0;   // floats per vertex in `varyings`
+    VaryingLayout layout;   // what they are (the draw's)
     std::vector<TriangleSetup> triangles;
     std::vector<float> varyings;
     std::vector<uint32_t> tileOffsets;    // tileCount + 1 entries

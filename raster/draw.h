@@ -23,22 +23,73 @@ enum class PositionSpace : uint8_t {
 
 enum class CullMode : uint8_t { None, Back, Front };
 
-/// Compile-time specialised shading models: the back end is instantiated once per model, so
-/// a draw pays only for what its model reads (no varyings at all for ConstantColor).
+/// Lighting models, each a compile-time specialisation of the shade stage (raster/shade.h), so a
+/// draw pays only for what its model reads: ConstantColor interpolates nothing, Unlit no normal,
+/// Lambert no position or view vector. Textures multiply in whenever they are bound.
 enum class ShadingModel : uint8_t {
-    ConstantColor,  // one colour per triangle (or per draw); no interpolation
-    Lambert,        // interpolated normal and colour, one directional light plus ambient
-    TexturedLambert,  // Lambert with albedo x baseColorTexture(uv), trilinear filtering
-    Unlit,            // the interpolated colour alone, no lighting (KHR_materials_unlit)
-    TexturedUnlit,    // Unlit with albedo x baseColorTexture(uv)
+    ConstantColor,      // one colour per triangle (or per draw); no interpolation
+    Unlit,              // the interpolated colour alone (KHR_materials_unlit)
+    Lambert,            // albedo x (ambient + sum of lights' irradiance x max(0, n.l))
+    MetallicRoughness,  // glTF's metallic-roughness BRDF (raster/shade.h, docs/conventions.md)
 };
 
 class Texture;
 
-struct DirectionalLight {
-    glm::vec3 directionToLight{0.0f, 1.0f, 0.0f};  // world space, normalised
-    glm::vec3 radiance{1.0f};                       // linear RGB
-    glm::vec3 ambient{0.0f};                        // linear RGB, added unshadowed
+enum class LightType : uint8_t { Directional, Point, Spot };
+
+/// A punctual light (KHR_lights_punctual). Units: `intensity` is what a white Lambertian
+/// surface facing the light shows (for point and spot lights, at distance 1), i.e. pi times
+/// the irradiance of glTF's convention — so Lambert needs no 1/pi and the BRDF scales by pi.
+struct Light {
+    LightType type = LightType::Directional;
+    glm::vec3 position{0.0f};                 // world space; Point and Spot
+    glm::vec3 direction{0.0f, -1.0f, 0.0f};   // world space, normalised, the way light travels
+    glm::vec3 intensity{1.0f};                // linear RGB
+    float range = 0.0f;                       // Point and Spot; 0: unlimited
+    float cosInnerCone = 1.0f, cosOuterCone = 0.70710678f;  // Spot
+};
+
+inline constexpr int kMaxLights = 8;
+
+struct Lighting {
+    glm::vec3 ambient{0.0f};  // linear RGB, added unshadowed (times occlusion)
+    Light lights[kMaxLights];
+    int lightCount = 0;
+
+    static Lighting directional(const glm::vec3& directionToLight, const glm::vec3& intensity,
+                                const glm::vec3& ambient) {
+        Lighting l;
+        l.ambient = ambient;
+        l.lights[0].direction = -directionToLight;
+        l.lights[0].intensity = intensity;
+        l.lightCount = 1;
+        return l;
+    }
+};
+
+/// An affine map applied to texture coordinates before sampling (KHR_texture_transform):
+/// uv' = linear * uv + offset.
+struct UvTransform {
+    glm::mat2 linear{1.0f};
+    glm::vec2 offset{0.0f};
+    glm::vec2 apply(const glm::vec2& uv) const { return linear * uv + offset; }
+    bool isIdentity() const { return linear == glm::mat2(1.0f) && offset == glm::vec2(0.0f); }
+};
+
+struct TextureBinding {
+    const Texture* texture = nullptr;  // must outlive the frame; null: unbound
+    UvTransform transform;
+    explicit operator bool() const { return texture != nullptr; }
+};
+
+/// glTF's material texture slots. All read the draw's one set of texture coordinates.
+struct MaterialTextures {
+    TextureBinding baseColor;          // linear RGBA (decoded from sRGB at load), x albedo
+    TextureBinding metallicRoughness;  // B: metallic, G: roughness, x the factors
+    TextureBinding normal;             // tangent space, needs tangents
+    TextureBinding occlusion;          // R: ambient occlusion
+    TextureBinding emissive;           // linear RGB, x the emissive factor
+    bool any() const { return baseColor || metallicRoughness || normal || occlusion || emissive; }
 };
 
 /// Per-channel colour write mask; a visibility-only draw (occlusion test) writes none.
@@ -66,9 +117,13 @@ struct DrawState {
     /// Per-draw counter of samples that passed the depth test (an occlusion query slot);
     /// -1 for none. Slots are indices into PipelineStats::occlusionSamplesPassed.
     int occlusionSlot = -1;
-    glm::vec4 constantColor{1.0f};  // used when there are no per-triangle or per-vertex colours
-    DirectionalLight light;
-    const Texture* baseColorTexture = nullptr;  // TexturedLambert; must outlive the frame
+    glm::vec4 constantColor{1.0f};  // base colour factor; times per-vertex colours when present
+    Lighting lighting;              // Lambert and MetallicRoughness
+    MaterialTextures textures;      // bound slots need texCoords (normal also tangents)
+    float metallic = 1.0f, roughness = 1.0f;  // MetallicRoughness factors
+    glm::vec3 emissive{0.0f};                 // linear RGB factor; Lambert and MetallicRoughness
+    float normalScale = 1.0f, occlusionStrength = 1.0f;
+    glm::vec3 cameraPosition{0.0f};  // world space: the view vector of MetallicRoughness
     AlphaMode alphaMode = AlphaMode::Opaque;
     float alphaCutoff = 0.5f;  // Mask
 };
@@ -76,14 +131,17 @@ struct DrawState {
 struct DrawCall {
     PositionSpace space = PositionSpace::Clip;
     glm::mat4 clipFromObject{1.0f};
-    glm::mat3 worldFromObjectNormals{1.0f};  // for Lambert: normals to world (light) space
+    glm::mat4 worldFromObject{1.0f};         // positions to world (light) space, for lighting
+    glm::mat3 worldFromObjectNormals{1.0f};  // normals (and tangents' xyz) to world space
 
     std::span<const glm::vec3> positions;
     std::span<const uint32_t> indices;          // empty: non-indexed, three vertices a triangle
     std::span<const glm::vec3> normals;         // per vertex; Lambert needs them
     std::span<const glm::vec3> vertexColors;    // per vertex, linear RGB; optional
+    std::span<const float> vertexAlphas;        // per vertex; optional
     std::span<const glm::vec4> triangleColors;  // per triangle, linear RGBA; ConstantColor only
-    std::span<const glm::vec2> texCoords;       // per vertex; TexturedLambert
+    std::span<const glm::vec2> texCoords;       // per vertex; needed by bound textures
+    std::span<const glm::vec4> tangents;        // per vertex, xyz + handedness w; normal maps
 
     DrawState state;
 

@@ -30,7 +30,7 @@ ClipVolume clipVolumeFor(const DrawCall& draw, const Framebuffer& fb) {
 SetupContext setupContextFor(const DrawCall& draw, const Framebuffer& fb) {
     return SetupContext::forDraw(draw.space, fb.width(), fb.height(),
                                  standardSamplePattern(fb.samples()), draw.state.cull,
-                                 varyingCountFor(draw.state.shading));
+                                 varyingLayoutFor(draw).count);
 }
 
 ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {
@@ -130,7 +130,7 @@ void Pipeline::shadeVertices() {
     std::vector<std::pair<uint32_t, size_t>> tasks;  // (draw, first vertex)
     for (size_t d = drawsShaded_; d < draws_.size(); ++d) {
         const DrawCall& call = draws_[d];
-        vertexOutputs_[d].resize(call.positions.size(), varyingCountFor(call.state.shading));
+        vertexOutputs_[d].resize(call.positions.size(), varyingLayoutFor(call).count);
         stats_.counters.verticesShaded += call.positions.size();
         for (size_t v = 0; v < call.positions.size(); v += kVerticesPerTask)
             tasks.emplace_back(uint32_t(d), v);
@@ -151,6 +151,7 @@ void Pipeline::frontEnd(const BatchRef& ref, TriangleBatch& batch) const {
     batch.clear();
     batch.drawIndex = int(ref.draw);
     batch.varyingCount = vertices.varyingCount;
+    batch.layout = varyingLayoutFor(call);
     const TriangleInput in{vertices, clipVolumeFor(call, framebuffer_),
                            setupContextFor(call, framebuffer_)};
     const size_t vertexCount = vertices.clipPositions.size();

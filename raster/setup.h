@@ -30,6 +30,7 @@ struct TriangleSetup {
     int32_t edgeB[3];
     int64_t edgeC[3];  // subpixels², fill-rule bias included
     int8_t fillBias[3];
+    bool backFacing;  // clockwise on screen as submitted; double-sided lighting flips the normal
 
     // Inclusive pixel range whose samples can be covered, already clamped to the scissor.
     int32_t pixelMinX, pixelMinY, pixelMaxX, pixelMaxY;

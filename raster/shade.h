@@ -7,10 +7,11 @@
 // so extrapolation cannot blow up with extreme w ratios and the weights always form a convex
 // combination (no NaN or Inf can come out of finite vertex data).
 //
-// Each shading model is a small struct the back end is instantiated with, so a model's
-// cost is only what it reads.
+// Each shading model is a small class the back end is instantiated with, so a model's cost is
+// only what it reads.
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include <glm/glm.hpp>
@@ -19,6 +20,8 @@
 #include "raster/texture.h"
 #include "raster/limits.h"
 #include "raster/setup.h"
+#include "raster/stats.h"
+#include "raster/vertex.h"
 
 namespace cuberille::raster {
 
@@ -36,7 +39,7 @@ struct ShadeQueue {
 };
 
 struct ConstantColorShader {
-    void shade(const TriangleSetup& t, const float*, ShadeQueue& q) const {
+    void shade(const TriangleSetup& t, const float*, ShadeQueue& q, StageCounters&) const {
         for (int i = 0; i < q.count; ++i) {
             q.red[i] = t.flatColor.r;
             q.green[i] = t.flatColor.g;
@@ -46,85 +49,358 @@ struct ConstantColorShader {
     }
 };
 
-/// The surface shading models, specialised at compile time so a draw pays only for what its
-/// material uses: kTextured multiplies the albedo by the base colour texture (trilinear, with
-/// exact per-pixel UV derivatives); kLit applies Lambert with one directional light plus
-/// ambient, otherwise the colour is the albedo alone (KHR_materials_unlit).
-/// Varyings per vertex: normal (3), linear colour (3), and uv (2) when textured. Per pixel:
-/// perspective-correct weights (screen weights clamped to the triangle, times 1/w,
-/// renormalised), interpolated attributes, then albedo * (ambient + radiance * max(0, n.l)).
-template <bool kTextured, bool kLit>
-struct SurfaceShader {
-    DirectionalLight light;
-    const Texture* texture = nullptr;
-    float alpha = 1.0f;  // the material's; times the texture's when textured
+/// The surface shading models (Unlit, Lambert, MetallicRoughness), specialised at compile
+/// time on the lighting model. Within a model the shader runs as passes over the whole queue
+/// — weights, attributes, texture fetches, normal, lights — each a loop across pixels that
+/// the compiler vectorises; a pass the draw does not need (no texture bound, no normal map,
+/// no emissive) is skipped once per queue, the way a GPU's uniform branch skips a warp, never
+/// tested per pixel. StageCounters records how often each effect ran.
+///
+/// The BRDF (MetallicRoughness, glTF 2.0 appendix B): c_diff = albedo (1 - metallic),
+/// F0 = mix(0.04, albedo, metallic), alpha = roughness²; per light, with light intensity E
+/// (pi x irradiance, see Light), E n.l ((1 - F) c_diff + pi F D V) with Schlick's F, the GGX
+/// D and the height-correlated Smith V. Ambient: ambient x occlusion x (c_diff + F0), a
+/// uniform environment without image-based lighting. Emissive is added last.
+template <ShadingModel kModel>
+class SurfaceShader {
+public:
+    static_assert(kModel != ShadingModel::ConstantColor);
+    static constexpr bool kLit = kModel != ShadingModel::Unlit;
 
-    void shade(const TriangleSetup& t, const float* v, ShadeQueue& q) const {
-        constexpr int n = kTextured ? 8 : 6;  // varyings per vertex
+    SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
+        hasEmissive_ = state.emissive != glm::vec3(0.0f);
+        fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 &&
+                        state.lighting.lights[0].type == LightType::Directional && layout.texCoord < 0 &&
+                        layout.alpha < 0 && !hasEmissive_;
+    }
+
+    void shade(const TriangleSetup& t, const float* v, ShadeQueue& q, StageCounters& counters) const {
+        if constexpr (kModel == ShadingModel::Lambert) {
+            if (fusedLambert_) return lambertOneDirectionalLight(t, v, q, counters);
+        }
+        PixelAttributes a;
+        perspectiveWeights(t, q, a);
+        interpolate<3>(v, layout_.color, q.count, a.w, a.albedo);
+        if (layout_.alpha >= 0)
+            interpolate<1>(v, layout_.alpha, q.count, a.w, a.alpha);
+        else
+            std::fill_n(a.alpha[0], q.count, s_.constantColor.a);
+        counters.varyingsInterpolated += uint64_t(q.count) * layout_.count;
+        const bool textured = layout_.texCoord >= 0;
+        if (textured) {
+            texCoordsAndDerivatives(t, v, q, a);
+            if (s_.textures.baseColor) applyBaseColorTexture(q.count, a, counters);
+        }
+        if constexpr (!kLit) {
+            writeOut(q, a.albedo, a.alpha);
+        } else {
+            shadingNormals(t, v, q.count, a, counters);
+            float occlusion[ShadeQueue::kCapacity];
+            std::fill_n(occlusion, q.count, 1.0f);
+            if (textured && s_.textures.occlusion) occlusionFromTexture(q.count, a, occlusion, counters);
+            if constexpr (kModel == ShadingModel::Lambert)
+                lambert(q.count, a, occlusion, counters);
+            else
+                metallicRoughness(q.count, a, occlusion, counters);
+            if (hasEmissive_) addEmissive(q.count, a, counters);
+            writeOut(q, a.radiance, a.alpha);
+        }
+    }
+
+private:
+    static constexpr int N = ShadeQueue::kCapacity;
+    using Channels3 = float[3][N];
+
+    /// Per-pixel values of the queue, structure-of-arrays.
+    struct PixelAttributes {
+        float w[3][N];           // perspective-correct barycentrics
+        float albedo[3][N];      // linear RGB
+        float alpha[1][N];
+        float uv[2][N], dUVdx[2][N], dUVdy[2][N];
+        float normal[3][N];      // world space, unit length
+        float position[3][N];    // world space
+        float radiance[3][N];    // the result
+    };
+
+    // Perspective-correct weights: screen weights clamped onto the triangle (so the result is
+    // always a convex combination), times 1/w, renormalised.
+    static void perspectiveWeights(const TriangleSetup& t, const ShadeQueue& q, PixelAttributes& a) {
         const float invArea = float(t.invDoubleArea);
         const float bias0 = t.fillBias[0], bias1 = t.fillBias[1], bias2 = t.fillBias[2];
         const float invW0 = t.invW[0], invW1 = t.invW[1], invW2 = t.invW[2];
-        const glm::vec3 l = light.directionToLight, rad = light.radiance, amb = light.ambient;
+        for (int i = 0; i < q.count; ++i) {
+            const float q0 = std::max(0.0f, float(q.edge0[i] - int64_t(bias0)) * invArea) * invW0;
+            const float q1 = std::max(0.0f, float(q.edge1[i] - int64_t(bias1)) * invArea) * invW1;
+            const float q2 = std::max(0.0f, float(q.edge2[i] - int64_t(bias2)) * invArea) * invW2;
+            const float norm = 1.0f / (q0 + q1 + q2);
+            a.w[0][i] = q0 * norm, a.w[1][i] = q1 * norm, a.w[2][i] = q2 * norm;
+        }
+    }
+
+    template <int kComponents>
+    [[gnu::always_inline]] void interpolate(const float* v, int offset, int count, const float (&w)[3][N], float (*out)[N]) const {
+        const int n = layout_.count;
+        for (int k = 0; k < kComponents; ++k) {
+            const float v0 = v[offset + k], v1 = v[n + offset + k], v2 = v[2 * n + offset + k];
+            for (int i = 0; i < count; ++i) out[k][i] = w[0][i] * v0 + w[1][i] * v1 + w[2][i] * v2;
+        }
+    }
+
+    // Texture coordinates and their exact derivatives: the perspective-correct UV is also
+    // evaluated one pixel right and one pixel down, from the same edge functions stepped by
+    // A·256 and B·256, and differenced (per pixel, where a GPU differences across a 2x2 quad).
+    // Those neighbours use unclamped weights, which like a GPU's helper pixels extrapolate the
+    // attribute plane past the triangle's edges (clamping would bend it there); a degenerate
+    // extrapolation gives NaN, which the level of detail treats as level 0.
+    void texCoordsAndDerivatives(const TriangleSetup& t, const float* v, const ShadeQueue& q,
+                                 PixelAttributes& a) const {
+        interpolate<2>(v, layout_.texCoord, q.count, a.w, a.uv);
+        const int n = layout_.count, o = layout_.texCoord;
+        const float invArea = float(t.invDoubleArea);
+        auto uvAt = [&](int64_t e0, int64_t e1, int64_t e2) {
+            const float q0 = float(e0 - t.fillBias[0]) * invArea * t.invW[0];
+            const float q1 = float(e1 - t.fillBias[1]) * invArea * t.invW[1];
+            const float q2 = float(e2 - t.fillBias[2]) * invArea * t.invW[2];
+            const float sum = q0 + q1 + q2;
+            const float norm = sum > 0.0f ? 1.0f / sum : NAN;
+            return glm::vec2(q0 * v[o] + q1 * v[n + o] + q2 * v[2 * n + o],
+                             q0 * v[o + 1] + q1 * v[n + o + 1] + q2 * v[2 * n + o + 1]) * norm;
+        };
+        auto step = [](const int32_t* coefficient, int k) { return int64_t{coefficient[k]} * kSubpixelsPerPixel; };
+        for (int i = 0; i < q.count; ++i) {
+            const glm::vec2 plane = uvAt(q.edge0[i], q.edge1[i], q.edge2[i]);
+            const glm::vec2 right = uvAt(q.edge0[i] + step(t.edgeA, 0), q.edge1[i] + step(t.edgeA, 1),
+                                         q.edge2[i] + step(t.edgeA, 2));
+            const glm::vec2 down = uvAt(q.edge0[i] + step(t.edgeB, 0), q.edge1[i] + step(t.edgeB, 1),
+                                        q.edge2[i] + step(t.edgeB, 2));
+            a.dUVdx[0][i] = right.x - plane.x, a.dUVdx[1][i] = right.y - plane.y;
+            a.dUVdy[0][i] = down.x - plane.x, a.dUVdy[1][i] = down.y - plane.y;
+        }
+    }
+
+    // One filtered fetch per pixel through the binding's UV transform (applied to the
+    // derivatives too, so the level of detail follows the transformed coordinates).
+    static glm::vec4 fetch(const TextureBinding& b, const PixelAttributes& a, int i) {
+        const glm::mat2& m = b.transform.linear;
+        const glm::vec2 uv = b.transform.apply({a.uv[0][i], a.uv[1][i]});
+        const glm::vec2 dx = m * glm::vec2(a.dUVdx[0][i], a.dUVdx[1][i]);
+        const glm::vec2 dy = m * glm::vec2(a.dUVdy[0][i], a.dUVdy[1][i]);
+        return b.texture->sample(uv, b.texture->levelOfDetail(dx, dy));
+    }
+
+    void applyBaseColorTexture(int count, PixelAttributes& a, StageCounters& counters) const {
+        for (int i = 0; i < count; ++i) {
+            const glm::vec4 texel = fetch(s_.textures.baseColor, a, i);
+            a.albedo[0][i] *= texel.r, a.albedo[1][i] *= texel.g, a.albedo[2][i] *= texel.b;
+            a.alpha[0][i] *= texel.a;
+        }
+        counters.textureSamples += uint64_t(count);
+    }
+
+    // Unit world-space normals: interpolated, perturbed by the normal map when there is one,
+    // and reversed on back faces (glTF 2.0 §3.9.3, double-sided materials).
+    void shadingNormals(const TriangleSetup& t, const float* v, int count, PixelAttributes& a,
+                        StageCounters& counters) const {
+        interpolate<3>(v, layout_.normal, count, a.w, a.normal);
+        if (layout_.position >= 0) interpolate<3>(v, layout_.position, count, a.w, a.position);
+        if (layout_.tangent >= 0) {
+            float tangent[4][N];
+            interpolate<4>(v, layout_.tangent, count, a.w, tangent);
+            const float scale = s_.normalScale;
+            for (int i = 0; i < count; ++i) {
+                const glm::vec3 nrm = safeNormalize({a.normal[0][i], a.normal[1][i], a.normal[2][i]});
+                glm::vec3 tan(tangent[0][i], tangent[1][i], tangent[2][i]);
+                tan = safeNormalize(tan - nrm * glm::dot(nrm, tan));  // Gram-Schmidt
+                const glm::vec3 bitangent = glm::cross(nrm, tan) * (tangent[3][i] < 0.0f ? -1.0f : 1.0f);
+                const glm::vec4 texel = fetch(s_.textures.normal, a, i);
+                const glm::vec3 m(scale * (2.0f * texel.r - 1.0f), scale * (2.0f * texel.g - 1.0f), 2.0f * texel.b - 1.0f);
+                const glm::vec3 n = tan * m.x + bitangent * m.y + nrm * m.z;
+                a.normal[0][i] = n.x, a.normal[1][i] = n.y, a.normal[2][i] = n.z;
+            }
+            counters.textureSamples += uint64_t(count);
+        }
+        const float facing = t.backFacing ? -1.0f : 1.0f;
+        for (int i = 0; i < count; ++i) {
+            const float x = a.normal[0][i], y = a.normal[1][i], z = a.normal[2][i];
+            const float len2 = x * x + y * y + z * z;
+            const float inv = len2 > 0.0f ? facing / std::sqrt(len2) : 0.0f;
+            a.normal[0][i] = x * inv, a.normal[1][i] = y * inv, a.normal[2][i] = z * inv;
+        }
+    }
+
+    void occlusionFromTexture(int count, const PixelAttributes& a, float* occlusion, StageCounters& counters) const {
+        const float strength = s_.occlusionStrength;
+        for (int i = 0; i < count; ++i) occlusion[i] = 1.0f + strength * (fetch(s_.textures.occlusion, a, i).r - 1.0f);
+        counters.textureSamples += uint64_t(count);
+    }
+
+    // Direction to the light and the intensity arriving, at one pixel.
+    struct Incident {
+        glm::vec3 toLight;
+        glm::vec3 intensity;
+    };
+    static Incident incident(const Light& light, const PixelAttributes& a, int i) {
+        if (light.type == LightType::Directional) return {-light.direction, light.intensity};
+        const glm::vec3 d = light.position - glm::vec3(a.position[0][i], a.position[1][i], a.position[2][i]);
+        const float distance2 = std::max(glm::dot(d, d), 1e-12f);
+        const glm::vec3 l = d / std::sqrt(distance2);
+        float attenuation = 1.0f / distance2;
+        if (light.range > 0.0f) {  // KHR_lights_punctual's recommended smooth cut-off
+            const float r = distance2 / (light.range * light.range);
+            const float window = std::clamp(1.0f - r * r, 0.0f, 1.0f);
+            attenuation *= window * window;
+        }
+        if (light.type == LightType::Spot) {
+            const float scale = 1.0f / std::max(0.001f, light.cosInnerCone - light.cosOuterCone);
+            const float cone = std::clamp((glm::dot(light.direction, -l) - light.cosOuterCone) * scale, 0.0f, 1.0f);
+            attenuation *= cone * cone;
+        }
+        return {l, light.intensity * attenuation};
+    }
+
+    // The common case (scans, PLY and OBJ models, the built-in scenes: one directional light,
+    // no textures, no vertex alpha, no emissive) fused into one loop that never leaves
+    // registers. The same arithmetic as the passes (weights, interpolation, normalised n.l), so
+    // the result agrees with them up to rounding.
+    void lambertOneDirectionalLight(const TriangleSetup& t, const float* v, ShadeQueue& q,
+                                    StageCounters& counters) const {
+        const int n = layout_.count, on = layout_.normal, oc = layout_.color;
+        const float invArea = float(t.invDoubleArea);
+        const float bias0 = t.fillBias[0], bias1 = t.fillBias[1], bias2 = t.fillBias[2];
+        const float invW0 = t.invW[0], invW1 = t.invW[1], invW2 = t.invW[2];
+        const Light& light = s_.lighting.lights[0];
+        const glm::vec3 l = -light.direction * (t.backFacing ? -1.0f : 1.0f), e = light.intensity;
+        const glm::vec3 amb = s_.lighting.ambient;
+        const float alpha = s_.constantColor.a;
+        // Per-vertex values in locals: the queue's stores could alias `v` as far as the
+        // compiler knows, and would force a reload of all 18 every pixel.
+        float normal[3][3], color[3][3];  // [vertex][component]
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c) normal[k][c] = v[k * n + on + c], color[k][c] = v[k * n + oc + c];
         for (int i = 0; i < q.count; ++i) {
             const float q0 = std::max(0.0f, float(q.edge0[i] - int64_t(bias0)) * invArea) * invW0;
             const float q1 = std::max(0.0f, float(q.edge1[i] - int64_t(bias1)) * invArea) * invW1;
             const float q2 = std::max(0.0f, float(q.edge2[i] - int64_t(bias2)) * invArea) * invW2;
             const float norm = 1.0f / (q0 + q1 + q2);
             const float w0 = q0 * norm, w1 = q1 * norm, w2 = q2 * norm;
-            float ax = w0 * v[3] + w1 * v[n + 3] + w2 * v[2 * n + 3];
-            float ay = w0 * v[4] + w1 * v[n + 4] + w2 * v[2 * n + 4];
-            float az = w0 * v[5] + w1 * v[n + 5] + w2 * v[2 * n + 5];
-            float a = alpha;
-            if constexpr (kTextured) {
-                const glm::vec4 texel = sampleTexture(t, v, q, i, glm::vec3(w0, w1, w2));
-                ax *= texel.r, ay *= texel.g, az *= texel.b, a *= texel.a;
-            }
-            if constexpr (kLit) {
-                const float nx = w0 * v[0] + w1 * v[n] + w2 * v[2 * n];
-                const float ny = w0 * v[1] + w1 * v[n + 1] + w2 * v[2 * n + 1];
-                const float nz = w0 * v[2] + w1 * v[n + 2] + w2 * v[2 * n + 2];
-                const float len2 = nx * nx + ny * ny + nz * nz;
-                const float nDotL = nx * l.x + ny * l.y + nz * l.z;
-                const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
-                q.red[i] = ax * (amb.x + rad.x * cosine);
-                q.green[i] = ay * (amb.y + rad.y * cosine);
-                q.blue[i] = az * (amb.z + rad.z * cosine);
+            auto lerp = [&](const float(&x)[3][3], int c) { return w0 * x[0][c] + w1 * x[1][c] + w2 * x[2][c]; };
+            const float nx = lerp(normal, 0), ny = lerp(normal, 1), nz = lerp(normal, 2);
+            const float len2 = nx * nx + ny * ny + nz * nz;
+            const float nDotL = nx * l.x + ny * l.y + nz * l.z;
+            const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
+            q.red[i] = lerp(color, 0) * (amb.x + e.x * cosine);
+            q.green[i] = lerp(color, 1) * (amb.y + e.y * cosine);
+            q.blue[i] = lerp(color, 2) * (amb.z + e.z * cosine);
+            q.alpha[i] = alpha;
+        }
+        counters.varyingsInterpolated += uint64_t(q.count) * layout_.count;
+        counters.lightEvaluations += uint64_t(q.count);
+    }
+
+    void lambert(int count, PixelAttributes& a, const float* occlusion, StageCounters& counters) const {
+        const Lighting& lighting = s_.lighting;
+        float irradiance[3][N];
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < count; ++i) irradiance[k][i] = lighting.ambient[k] * occlusion[i];
+        for (int l = 0; l < lighting.lightCount; ++l) {
+            const Light& light = lighting.lights[l];
+            if (light.type == LightType::Directional) {  // the common case, vectorised
+                const glm::vec3 d = -light.direction, e = light.intensity;
+                for (int i = 0; i < count; ++i) {
+                    const float c = std::max(0.0f, a.normal[0][i] * d.x + a.normal[1][i] * d.y + a.normal[2][i] * d.z);
+                    irradiance[0][i] += e.x * c, irradiance[1][i] += e.y * c, irradiance[2][i] += e.z * c;
+                }
             } else {
-                q.red[i] = ax, q.green[i] = ay, q.blue[i] = az;
+                for (int i = 0; i < count; ++i) {
+                    const Incident in = incident(light, a, i);
+                    const float c = std::max(0.0f, glm::dot(glm::vec3(a.normal[0][i], a.normal[1][i], a.normal[2][i]), in.toLight));
+                    for (int k = 0; k < 3; ++k) irradiance[k][i] += in.intensity[k] * c;
+                }
             }
-            q.alpha[i] = a;
+        }
+        counters.lightEvaluations += uint64_t(count) * lighting.lightCount;
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < count; ++i) a.radiance[k][i] = a.albedo[k][i] * irradiance[k][i];
+    }
+
+    void metallicRoughness(int count, PixelAttributes& a, const float* occlusion,
+                           StageCounters& counters) const {
+        const Lighting& lighting = s_.lighting;
+        const bool textured = layout_.texCoord >= 0 && s_.textures.metallicRoughness;
+        for (int i = 0; i < count; ++i) {
+            float metallic = s_.metallic, roughness = s_.roughness;
+            if (textured) {
+                const glm::vec4 texel = fetch(s_.textures.metallicRoughness, a, i);
+                metallic *= texel.b, roughness *= texel.g;
+            }
+            metallic = std::clamp(metallic, 0.0f, 1.0f);
+            // A floor on roughness: a perfect mirror's highlight is a delta no sample can hit.
+            const float r = std::max(0.03f, std::clamp(roughness, 0.0f, 1.0f));
+            const float alpha2 = r * r * r * r;  // (roughness²)²
+            const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
+            const glm::vec3 diffuse = albedo * (1.0f - metallic);
+            const glm::vec3 f0 = glm::mix(glm::vec3(0.04f), albedo, metallic);
+            const glm::vec3 n(a.normal[0][i], a.normal[1][i], a.normal[2][i]);
+            const glm::vec3 p(a.position[0][i], a.position[1][i], a.position[2][i]);
+            const glm::vec3 view = safeNormalize(s_.cameraPosition - p);
+            const float nDotV = std::max(glm::dot(n, view), 1e-4f);
+            glm::vec3 color = lighting.ambient * occlusion[i] * (diffuse + f0);
+            for (int l = 0; l < lighting.lightCount; ++l) {
+                const Incident in = incident(lighting.lights[l], a, i);
+                const float nDotL = glm::dot(n, in.toLight);
+                if (!(nDotL > 0.0f)) continue;
+                const glm::vec3 h = safeNormalize(in.toLight + view);
+                const float nDotH = std::max(glm::dot(n, h), 0.0f), vDotH = std::max(glm::dot(view, h), 0.0f);
+                const float schlick = std::pow(1.0f - vDotH, 5.0f);
+                const glm::vec3 fresnel = f0 + (glm::vec3(1.0f) - f0) * schlick;
+                // n.h² (a² - 1) + 1 written as a² n.h² + |n x h|²: near the highlight's peak,
+                // 1 - n.h² cancels in float, the cross product does not (Filament's form).
+                const glm::vec3 nCrossH = glm::cross(n, h);
+                const float dDenominator = alpha2 * nDotH * nDotH + glm::dot(nCrossH, nCrossH);
+                const float distribution = alpha2 / (float(M_PI) * dDenominator * dDenominator);
+                const float visibility =
+                    0.5f / (nDotL * std::sqrt(nDotV * nDotV * (1.0f - alpha2) + alpha2) +
+                            nDotV * std::sqrt(nDotL * nDotL * (1.0f - alpha2) + alpha2));
+                const glm::vec3 brdf = (glm::vec3(1.0f) - fresnel) * diffuse +
+                                       float(M_PI) * distribution * visibility * fresnel;
+                color += in.intensity * nDotL * brdf;
+            }
+            a.radiance[0][i] = color.r, a.radiance[1][i] = color.g, a.radiance[2][i] = color.b;
+        }
+        counters.lightEvaluations += uint64_t(count) * lighting.lightCount;
+        if (textured) counters.textureSamples += uint64_t(count);
+    }
+
+    void addEmissive(int count, PixelAttributes& a, StageCounters& counters) const {
+        const glm::vec3 e = s_.emissive;
+        if (layout_.texCoord >= 0 && s_.textures.emissive) {
+            for (int i = 0; i < count; ++i) {
+                const glm::vec4 texel = fetch(s_.textures.emissive, a, i);
+                for (int k = 0; k < 3; ++k) a.radiance[k][i] += e[k] * texel[k];
+            }
+            counters.textureSamples += uint64_t(count);
+            return;
+        }
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < count; ++i) a.radiance[k][i] += e[k];
+    }
+
+    static void writeOut(ShadeQueue& q, const float (*rgb)[N], const float (*alpha)[N]) {
+        for (int i = 0; i < q.count; ++i) {
+            q.red[i] = rgb[0][i], q.green[i] = rgb[1][i], q.blue[i] = rgb[2][i];
+            q.alpha[i] = alpha[0][i];
         }
     }
 
-private:
-    // The level of detail comes from exact UV derivatives: the perspective-correct UV is also
-    // evaluated one pixel right and one pixel down, from the same edge functions stepped by
-    // A·256 and B·256, and differenced (per pixel, where a GPU differences across a 2x2 quad).
-    // Those neighbours use unclamped weights, which like a GPU's helper pixels extrapolate the
-    // attribute plane past the triangle's edges (clamping would bend it there); a degenerate
-    // extrapolation gives NaN, which the level of detail treats as level 0.
-    glm::vec4 sampleTexture(const TriangleSetup& t, const float* v, const ShadeQueue& q, int i,
-                            const glm::vec3& w) const {
-        const float invArea = float(t.invDoubleArea);
-        auto extrapolatedWeights = [&](int64_t e0, int64_t e1, int64_t e2) {
-            const float q0 = float(e0 - t.fillBias[0]) * invArea * t.invW[0];
-            const float q1 = float(e1 - t.fillBias[1]) * invArea * t.invW[1];
-            const float q2 = float(e2 - t.fillBias[2]) * invArea * t.invW[2];
-            const float sum = q0 + q1 + q2;
-            const float norm = sum > 0.0f ? 1.0f / sum : NAN;
-            return glm::vec3(q0 * norm, q1 * norm, q2 * norm);
-        };
-        auto uvAt = [&](const glm::vec3& b) {
-            return glm::vec2(b.x * v[6] + b.y * v[14] + b.z * v[22], b.x * v[7] + b.y * v[15] + b.z * v[23]);
-        };
-        auto step = [&](const int32_t* coefficient, int k) { return int64_t{coefficient[k]} * kSubpixelsPerPixel; };
-        const glm::vec2 uvPlane = uvAt(extrapolatedWeights(q.edge0[i], q.edge1[i], q.edge2[i]));
-        const glm::vec2 uvRight = uvAt(extrapolatedWeights(q.edge0[i] + step(t.edgeA, 0), q.edge1[i] + step(t.edgeA, 1),
-                                                           q.edge2[i] + step(t.edgeA, 2)));
-        const glm::vec2 uvDown = uvAt(extrapolatedWeights(q.edge0[i] + step(t.edgeB, 0), q.edge1[i] + step(t.edgeB, 1),
-                                                          q.edge2[i] + step(t.edgeB, 2)));
-        return texture->sampleTrilinear(uvAt(w), texture->levelOfDetail(uvRight - uvPlane, uvDown - uvPlane));
+    static glm::vec3 safeNormalize(const glm::vec3& x) {
+        const float len2 = glm::dot(x, x);
+        return len2 > 0.0f ? x / std::sqrt(len2) : glm::vec3(0.0f, 0.0f, 1.0f);
     }
+
+    const DrawState& s_;
+    VaryingLayout layout_;
+    bool hasEmissive_ = false;
+    bool fusedLambert_ = false;
 };
 
 }  // namespace cuberille::raster

@@ -22,6 +22,11 @@ StageCounters& StageCounters::operator+=(const StageCounters& o) {
     samplesTested += o.samplesTested;
     samplesPassed += o.samplesPassed;
     pixelsShaded += o.pixelsShaded;
+    varyingsInterpolated += o.varyingsInterpolated;
+    textureSamples += o.textureSamples;
+    lightEvaluations += o.lightEvaluations;
+    pixelsAlphaTested += o.pixelsAlphaTested;
+    pixelsBlended += o.pixelsBlended;
     return *this;
 }
 

@@ -33,6 +33,12 @@ struct StageCounters {
     uint64_t samplesTested = 0;  // covered samples that met the depth test
     uint64_t samplesPassed = 0;
     uint64_t pixelsShaded = 0;
+    // shade and output merge, per effect: how often each ran (zero when a scene lacks it)
+    uint64_t varyingsInterpolated = 0;  // floats interpolated, summed over shaded pixels
+    uint64_t textureSamples = 0;        // filtered texture fetches
+    uint64_t lightEvaluations = 0;      // (pixel, light) pairs lit
+    uint64_t pixelsAlphaTested = 0;     // alpha-mask pixels tested against the cutoff
+    uint64_t pixelsBlended = 0;         // pixels over-blended onto the target
 
     StageCounters& operator+=(const StageCounters& o);
 };

@@ -6,8 +6,9 @@
 
 namespace cuberille::raster {
 
-Texture::Texture(int width, int height, std::vector<glm::vec4> rgba, WrapMode wrapU, WrapMode wrapV)
-    : wrapU_(wrapU), wrapV_(wrapV) {
+Texture::Texture(int width, int height, std::vector<glm::vec4> rgba, WrapMode wrapU, WrapMode wrapV,
+                 TextureFilter filter)
+    : wrapU_(wrapU), wrapV_(wrapV), filter_(filter) {
     if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height))
         throw std::invalid_argument("texture: size does not match its texels");
     levels_.push_back({width, height, std::move(rgba)});
@@ -39,6 +40,39 @@ int Texture::wrap(int i, int size, WrapMode mode) const {
         }
     }
     return 0;
+}
+
+glm::vec4 Texture::sample(glm::vec2 uv, float lod) const {
+    if (!(lod > 0.0f))  // magnification (also NaN)
+        return filter_.magnifyNearest ? sampleNearest(0, uv) : sampleBilinear(0, uv);
+    const int last = levelCount() - 1;
+    switch (filter_.minify) {
+        case MinFilter::Nearest: return sampleNearest(0, uv);
+        case MinFilter::Linear: return sampleBilinear(0, uv);
+        case MinFilter::NearestMipmapNearest:
+        case MinFilter::LinearMipmapNearest: {
+            // OpenGL's nearest level: ceil(lod + 0.5) - 1, i.e. lod rounded with ties down.
+            const int level = std::min(last, int(std::ceil(lod + 0.5f)) - 1);
+            return filter_.minify == MinFilter::NearestMipmapNearest ? sampleNearest(level, uv)
+                                                                     : sampleBilinear(level, uv);
+        }
+        case MinFilter::NearestMipmapLinear: {
+            lod = std::min(lod, float(last));
+            const int l0 = int(lod), l1 = std::min(l0 + 1, last);
+            return glm::mix(sampleNearest(l0, uv), sampleNearest(l1, uv), lod - float(l0));
+        }
+        case MinFilter::LinearMipmapLinear: break;
+    }
+    return sampleTrilinear(uv, lod);
+}
+
+glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const {
+    const Level& l = levels_[level];
+    float x = uv.x * float(l.width), y = uv.y * float(l.height);
+    if (!std::isfinite(x) || !std::isfinite(y)) x = y = 0.0f;
+    x = std::clamp(x, -1e6f, 1e6f);
+    y = std::clamp(y, -1e6f, 1e6f);
+    return texel(level, wrap(int(std::floor(x)), l.width, wrapU_), wrap(int(std::floor(y)), l.height, wrapV_));
 }
 
 glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const {

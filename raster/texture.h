@@ -1,7 +1,7 @@
 #pragma once
-// Textures: a linear-RGBA float mip chain with glTF's wrap modes, sampled bilinearly within a
-// level and trilinearly across levels (OpenGL's LINEAR_MIPMAP_LINEAR).
+// Textures: a linear-RGBA float mip chain with glTF's wrap modes and filters.
 //
+// Filtering follows the texture's sampler (glTF magFilter / minFilter; trilinear by default).
 // Conventions: texture coordinates (u, v) in [0, 1] span the image, v down the rows (glTF's);
 // texel (i, j) is centred at ((i + 0.5) / width, (j + 0.5) / height). Level of detail is
 // log2 of the texels a pixel step covers, from the UV derivatives the shader computes; level 0
@@ -18,11 +18,26 @@ namespace cuberille::raster {
 
 enum class WrapMode : uint8_t { Repeat, ClampToEdge, MirroredRepeat };
 
+/// glTF's (OpenGL's) minification filters: within a level, and between levels.
+enum class MinFilter : uint8_t {
+    Nearest,
+    Linear,
+    NearestMipmapNearest,
+    LinearMipmapNearest,
+    NearestMipmapLinear,
+    LinearMipmapLinear,
+};
+
+struct TextureFilter {
+    bool magnifyNearest = false;  // magFilter NEAREST; LINEAR otherwise
+    MinFilter minify = MinFilter::LinearMipmapLinear;
+};
+
 class Texture {
 public:
     /// `rgba` is width x height linear RGBA, row-major, top row first.
     Texture(int width, int height, std::vector<glm::vec4> rgba, WrapMode wrapU = WrapMode::Repeat,
-            WrapMode wrapV = WrapMode::Repeat);
+            WrapMode wrapV = WrapMode::Repeat, TextureFilter filter = {});
 
     int width(int level = 0) const { return levels_[level].width; }
     int height(int level = 0) const { return levels_[level].height; }
@@ -32,6 +47,11 @@ public:
         return l.texels[size_t(y) * l.width + x];
     }
 
+    /// With the texture's filters: lod <= 0 magnifies (level 0), lod > 0 minifies. This is
+    /// what the shade stage calls.
+    glm::vec4 sample(glm::vec2 uv, float lod) const;
+
+    glm::vec4 sampleNearest(int level, glm::vec2 uv) const;
     glm::vec4 sampleBilinear(int level, glm::vec2 uv) const;
     /// lod <= 0 samples level 0; fractional lods blend the two nearest levels.
     glm::vec4 sampleTrilinear(glm::vec2 uv, float lod) const;
@@ -47,6 +67,7 @@ private:
 
     std::vector<Level> levels_;
     WrapMode wrapU_, wrapV_;
+    TextureFilter filter_;
 };
 
 }  // namespace cuberille::raster

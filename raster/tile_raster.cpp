@@ -215,8 +215,10 @@ private:
     void shadeAndMerge() {
         if (queue_.count == 0) return;
         const DrawState& state = *target_.state;
-        shader_.shade(t_, varyings_, queue_);
-        target_.counters->pixelsShaded += queue_.count;
+        StageCounters& counters = *target_.counters;
+        shader_.shade(t_, varyings_, queue_, counters);
+        counters.pixelsShaded += queue_.count;
+        if (state.alphaMode == AlphaMode::Mask) counters.pixelsAlphaTested += queue_.count;
         for (int i = 0; i < queue_.count; ++i) {
             const glm::vec4 color(queue_.red[i], queue_.green[i], queue_.blue[i], queue_.alpha[i]);
             const uint32_t first = queue_.firstSample[i], pass = queue_.passMask[i];
@@ -229,10 +231,12 @@ private:
                 writeDepthAndCount(x, y, first, pass, depth, nullptr);
                 if (!state.colorWriteMask) continue;
             }
-            if (state.alphaMode == AlphaMode::Blend)
+            if (state.alphaMode == AlphaMode::Blend) {
                 blendColor<S>(target_.color + first, pass, color, state.colorWriteMask);
-            else
+                ++counters.pixelsBlended;
+            } else {
                 mergeColor<S>(target_.color + first, pass, color, state.colorWriteMask);
+            }
         }
         queue_.count = 0;
     }
@@ -262,30 +266,24 @@ void rasterizeBinned(const TriangleBatch& batch, int tile, const Shader& shader,
     }
 }
 
-// A textured model without a texture shades as its untextured twin.
-template <int S, bool kLit>
-void rasterizeSurface(const TriangleBatch& batch, int tile, const SamplePattern& sp, const TileTarget& target,
-                      bool textured) {
-    const DirectionalLight& light = target.state->light;
-    const Texture* texture = textured ? target.state->baseColorTexture : nullptr;
-    const float alpha = target.state->constantColor.a;
-    if (texture)
-        rasterizeBinned<S>(batch, tile, SurfaceShader<true, kLit>{light, texture, alpha}, sp, target);
-    else
-        rasterizeBinned<S>(batch, tile, SurfaceShader<false, kLit>{light, nullptr, alpha}, sp, target);
-}
-
 template <int S>
 void dispatchShader(const TriangleBatch& batch, int tile, const SamplePattern& sp,
-                    const TileTarget& target) {
-    switch (target.state->shading) {
+                    const TileTarget& target, const VaryingLayout& layout) {
+    const DrawState& state = *target.state;
+    switch (state.shading) {
         case ShadingModel::ConstantColor:
             rasterizeBinned<S>(batch, tile, ConstantColorShader{}, sp, target);
             break;
-        case ShadingModel::Lambert: rasterizeSurface<S, true>(batch, tile, sp, target, false); break;
-        case ShadingModel::TexturedLambert: rasterizeSurface<S, true>(batch, tile, sp, target, true); break;
-        case ShadingModel::Unlit: rasterizeSurface<S, false>(batch, tile, sp, target, false); break;
-        case ShadingModel::TexturedUnlit: rasterizeSurface<S, false>(batch, tile, sp, target, true); break;
+        case ShadingModel::Unlit:
+            rasterizeBinned<S>(batch, tile, SurfaceShader<ShadingModel::Unlit>(state, layout), sp, target);
+            break;
+        case ShadingModel::Lambert:
+            rasterizeBinned<S>(batch, tile, SurfaceShader<ShadingModel::Lambert>(state, layout), sp, target);
+            break;
+        case ShadingModel::MetallicRoughness:
+            rasterizeBinned<S>(batch, tile, SurfaceShader<ShadingModel::MetallicRoughness>(state, layout), sp,
+                               target);
+            break;
     }
 }
 
@@ -316,11 +314,11 @@ void rasterizeBatchInTile(const TriangleBatch& batch, const DrawState& state, in
     };
     const SamplePattern& sp = standardSamplePattern(fb.samples());
     switch (fb.samples()) {
-        case 1: dispatchShader<1>(batch, tile, sp, target); break;
-        case 2: dispatchShader<2>(batch, tile, sp, target); break;
-        case 4: dispatchShader<4>(batch, tile, sp, target); break;
-        case 8: dispatchShader<8>(batch, tile, sp, target); break;
-        case 16: dispatchShader<16>(batch, tile, sp, target); break;
+        case 1: dispatchShader<1>(batch, tile, sp, target, batch.layout); break;
+        case 2: dispatchShader<2>(batch, tile, sp, target, batch.layout); break;
+        case 4: dispatchShader<4>(batch, tile, sp, target, batch.layout); break;
+        case 8: dispatchShader<8>(batch, tile, sp, target, batch.layout); break;
+        case 16: dispatchShader<16>(batch, tile, sp, target, batch.layout); break;
     }
 }
 

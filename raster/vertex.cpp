@@ -14,20 +14,31 @@ void transformPositions(const DrawCall& draw, size_t begin, size_t end, glm::vec
     for (size_t i = begin; i < end; ++i) out[i] = m * glm::vec4(draw.positions[i], 1.0f);
 }
 
-// Lambert varyings: world-space normal (3) then linear colour (3); TexturedLambert adds the
-// texture coordinates (2).
-void lambertVaryings(const DrawCall& draw, size_t begin, size_t end, int stride, float* out) {
+void writeVaryings(const DrawCall& draw, const VaryingLayout& layout, size_t begin, size_t end, float* out) {
     const glm::vec3 base(draw.state.constantColor);
     for (size_t i = begin; i < end; ++i) {
-        glm::vec3 n = draw.normals.size() <= i ? glm::vec3(0.0f, 0.0f, 1.0f)
-                                               : draw.worldFromObjectNormals * draw.normals[i];
-        glm::vec3 c = draw.vertexColors.size() <= i ? base : base * draw.vertexColors[i];
-        float* v = out + i * stride;
-        v[0] = n.x, v[1] = n.y, v[2] = n.z;
-        v[3] = c.x, v[4] = c.y, v[5] = c.z;
-        if (stride == 8) {
-            const glm::vec2 uv = draw.texCoords.size() > i ? draw.texCoords[i] : glm::vec2(0.0f);
-            v[6] = uv.x, v[7] = uv.y;
+        float* v = out + i * layout.count;
+        if (layout.normal >= 0) {
+            const glm::vec3 n = draw.normals.size() <= i ? glm::vec3(0.0f, 0.0f, 1.0f)
+                                                         : draw.worldFromObjectNormals * draw.normals[i];
+            v[layout.normal] = n.x, v[layout.normal + 1] = n.y, v[layout.normal + 2] = n.z;
+        }
+        if (layout.color >= 0) {
+            const glm::vec3 c = draw.vertexColors.size() <= i ? base : base * draw.vertexColors[i];
+            v[layout.color] = c.x, v[layout.color + 1] = c.y, v[layout.color + 2] = c.z;
+        }
+        if (layout.alpha >= 0) v[layout.alpha] = draw.state.constantColor.a * draw.vertexAlphas[i];
+        if (layout.texCoord >= 0) v[layout.texCoord] = draw.texCoords[i].x, v[layout.texCoord + 1] = draw.texCoords[i].y;
+        if (layout.position >= 0) {
+            const glm::vec3 p = draw.space == PositionSpace::Window
+                                    ? draw.positions[i]
+                                    : glm::vec3(draw.worldFromObject * glm::vec4(draw.positions[i], 1.0f));
+            v[layout.position] = p.x, v[layout.position + 1] = p.y, v[layout.position + 2] = p.z;
+        }
+        if (layout.tangent >= 0) {
+            const glm::vec3 t = draw.worldFromObjectNormals * glm::vec3(draw.tangents[i]);
+            v[layout.tangent] = t.x, v[layout.tangent + 1] = t.y, v[layout.tangent + 2] = t.z;
+            v[layout.tangent + 3] = draw.tangents[i].w;
         }
     }
 }
@@ -57,22 +68,35 @@ void VertexStageOutput::resize(size_t vertices, int varyingsPerVertex) {
     varyings.resize(vertices * varyingsPerVertex);
 }
 
-int varyingCountFor(ShadingModel model) {
-    switch (model) {
-        case ShadingModel::ConstantColor: return 0;
-        case ShadingModel::Lambert: return 6;
-        case ShadingModel::TexturedLambert: return 8;
-        case ShadingModel::Unlit: return 6;
-        case ShadingModel::TexturedUnlit: return 8;
-    }
-    return 0;
+VaryingLayout varyingLayoutFor(const DrawCall& draw) {
+    const DrawState& state = draw.state;
+    VaryingLayout l;
+    if (state.shading == ShadingModel::ConstantColor) return l;
+    auto take = [&](int floats) {
+        const int at = l.count;
+        l.count += floats;
+        return at;
+    };
+    const size_t vertices = draw.positions.size();
+    const bool lit = state.shading != ShadingModel::Unlit;
+    bool pointOrSpot = false;
+    for (int i = 0; i < state.lighting.lightCount; ++i)
+        pointOrSpot = pointOrSpot || state.lighting.lights[i].type != LightType::Directional;
+    const bool textured = state.textures.any() && draw.texCoords.size() == vertices;
+    if (lit) l.normal = take(3);
+    l.color = take(3);
+    if (draw.vertexAlphas.size() == vertices && vertices > 0) l.alpha = take(1);
+    if (textured) l.texCoord = take(2);
+    if (state.shading == ShadingModel::MetallicRoughness || (lit && pointOrSpot)) l.position = take(3);
+    if (lit && textured && state.textures.normal && draw.tangents.size() == vertices) l.tangent = take(4);
+    return l;
 }
 
 void runVertexStage(const DrawCall& draw, const ClipVolume& volume, const SetupContext& viewport,
                     size_t begin, size_t end, VertexStageOutput& out) {
     transformPositions(draw, begin, end, out.clipPositions.data());
-    if (draw.state.shading != ShadingModel::ConstantColor)
-        lambertVaryings(draw, begin, end, out.varyingCount, out.varyings.data());
+    const VaryingLayout layout = varyingLayoutFor(draw);
+    if (layout.count > 0) writeVaryings(draw, layout, begin, end, out.varyings.data());
     postTransform(volume, viewport, begin, end, out);
 }
 

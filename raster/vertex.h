@@ -1,8 +1,7 @@
 #pragma once
 // Vertex stage: object-space vertices in; per vertex out:
-// - the clip-space position and the varyings the shading model reads (none for
-//   ConstantColor; world normal and colour for Lambert), so nothing is computed that no later
-//   stage consumes;
+// - the clip-space position and the varyings the draw's shading reads (VaryingLayout: none
+//   for ConstantColor), so nothing is computed or interpolated that no later stage consumes;
 // - the post-transform data every triangle sharing the vertex would otherwise recompute: its
 //   clip outcode and, when it lies inside the clip volume, its snapped window position.
 // Thread-safety: runs in parallel over fixed vertex ranges; output depends on input alone.
@@ -33,8 +32,20 @@ struct VertexStageOutput {
     void resize(size_t vertices, int varyingsPerVertex);
 };
 
-/// Floats a shading model interpolates per vertex.
-int varyingCountFor(ShadingModel model);
+/// Where each attribute sits among a vertex's varyings, derived from what the draw's shading
+/// reads and what its mesh carries; -1 for an attribute that is not interpolated at all.
+struct VaryingLayout {
+    int normal = -1;    // 3: world-space normal; Lambert, MetallicRoughness
+    int color = -1;     // 3: linear albedo, base colour factor x vertex colour; all but ConstantColor
+    int alpha = -1;     // 1: factor alpha x vertex alpha; only when the mesh has vertex alphas
+    int texCoord = -1;  // 2: only when a texture is bound and the mesh has texture coordinates
+    int position = -1;  // 3: world position; MetallicRoughness, and Lambert with point or spot lights
+    int tangent = -1;   // 4: world tangent and handedness; only for a usable normal map
+    int count = 0;
+};
+static_assert(3 + 3 + 1 + 2 + 3 + 4 <= kMaxVaryings);
+
+VaryingLayout varyingLayoutFor(const DrawCall& draw);
 
 /// Vertices are processed in tasks of this many.
 inline constexpr size_t kVerticesPerTask = 16384;

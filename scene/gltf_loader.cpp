@@ -1,5 +1,6 @@
 #include "scene/gltf_loader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -43,7 +44,9 @@ public:
             for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f), -1, -1);
         }
         if (meshes_.empty()) warn_(file_ + ": no triangles to draw");
-        return {std::move(meshes_), std::move(cameras_), std::move(lights_)};
+        stats_.texturesDecoded = 0;
+        for (const auto& [key, texture] : textures_) stats_.texturesDecoded += texture != nullptr;
+        return {std::move(meshes_), std::move(cameras_), std::move(lights_), stats_};
     }
 
 private:
@@ -56,13 +59,9 @@ private:
     }
 
     void warnAboutUnsupported() {
-        for (const auto& m : model_.materials)
-            if (m.normalTexture.index >= 0 || m.occlusionTexture.index >= 0 || m.emissiveTexture.index >= 0 ||
-                m.pbrMetallicRoughness.metallicRoughnessTexture.index >= 0)
-                warnOnce("normal, occlusion, emissive and metallic-roughness textures are not used yet");
         if (model_.animations.size() > 1) warnOnce("only the first of " + std::to_string(model_.animations.size()) + " animations is played");
         for (const auto& ext : model_.extensionsUsed)
-            if (ext != "KHR_lights_punctual" && ext != "KHR_materials_unlit")
+            if (ext != "KHR_lights_punctual" && ext != "KHR_materials_unlit" && ext != "KHR_texture_transform")
                 warnOnce("extension " + ext + " is not supported yet and was ignored");
     }
 
@@ -102,23 +101,35 @@ private:
         for (int child : n.children) visit(child, world, depth + 1);
     }
 
-    // KHR_lights_punctual: a light shines down its node's -z, so the direction towards it is +z.
+    // KHR_lights_punctual: a light sits at its node's origin and shines down its -z. glTF gives
+    // lux (directional) or candela (point, spot) for a BRDF with diffuse albedo / pi; ours
+    // folds the pi into the light (raster::Light), hence the division.
     void addLight(const tinygltf::Node& n, const glm::mat4& world, const std::string& where) {
         const auto ext = n.extensions.find("KHR_lights_punctual");
         if (ext == n.extensions.end() || !ext->second.Has("light")) return;
         const int index = ext->second.Get("light").GetNumberAsInt();
         if (index < 0 || index >= int(model_.lights.size())) fail(where, "light " + std::to_string(index) + " does not exist");
         const tinygltf::Light& l = model_.lights[index];
-        if (l.type != "directional") {
-            warnOnce(l.type + " lights are not supported yet; only directional lights are used");
+        raster::Light light;
+        if (l.type == "directional") {
+            light.type = raster::LightType::Directional;
+        } else if (l.type == "point") {
+            light.type = raster::LightType::Point;
+        } else if (l.type == "spot") {
+            light.type = raster::LightType::Spot;
+            light.cosInnerCone = float(std::cos(l.spot.innerConeAngle));
+            light.cosOuterCone = float(std::cos(l.spot.outerConeAngle));
+        } else {
+            warnOnce("light " + std::to_string(index) + " has unknown type \"" + l.type + "\"; ignored");
             return;
         }
-        raster::DirectionalLight d;
-        d.directionToLight = glm::normalize(glm::vec3(world[2]));
+        light.position = glm::vec3(world[3]);
+        const glm::vec3 axis(world[2]);
+        light.direction = glm::length(axis) > 0.0f ? -glm::normalize(axis) : glm::vec3(0.0f, 0.0f, -1.0f);
         const glm::vec3 color = l.color.size() >= 3 ? glm::vec3(l.color[0], l.color[1], l.color[2]) : glm::vec3(1.0f);
-        d.radiance = color * float(l.intensity);
-        d.ambient = glm::vec3(0.12f);
-        lights_.push_back(d);
+        light.intensity = color * float(l.intensity / M_PI);
+        light.range = float(std::max(0.0, l.range));
+        lights_.push_back(light);
     }
 
     // A camera looks down its node's -z with +y up (glTF 2.0 §3.10).
@@ -390,6 +401,9 @@ private:
             Mesh m;
             const std::vector<glm::mat4> skinned = skinMatrices(skinIndex, prim, pos.count, where);
             const std::vector<double> weights = morphWeights(node, mesh);
+            if (!skinned.empty()) stats_.verticesSkinned += pos.count;
+            if (std::any_of(weights.begin(), weights.end(), [](double w) { return w != 0.0; }) && !prim.targets.empty())
+                stats_.verticesMorphed += pos.count;
             const std::vector<glm::vec3> objectPositions = morphed(prim, pos, "POSITION", weights, where);
             m.positions.resize(pos.count);
             for (size_t i = 0; i < pos.count; ++i) {
@@ -415,6 +429,10 @@ private:
                     fail(where, "COLOR_0 does not match POSITION");
                 m.colors.resize(cv.count);
                 for (size_t i = 0; i < cv.count; ++i) m.colors[i] = glm::vec3(cv.get(i, 0), cv.get(i, 1), cv.get(i, 2));
+                if (cv.components == 4) {
+                    m.alphas.resize(cv.count);
+                    for (size_t i = 0; i < cv.count; ++i) m.alphas[i] = cv.get(i, 3);
+                }
             }
 
             std::vector<uint32_t> order;  // vertex indices in primitive order
@@ -435,41 +453,128 @@ private:
             if (m.indices.empty()) continue;
             if (m.normals.empty()) computeVertexNormals(m);
 
-            if (prim.material >= 0 && prim.material < int(model_.materials.size())) {
-                const tinygltf::Material& mat = model_.materials[prim.material];
-                const auto& f = mat.pbrMetallicRoughness.baseColorFactor;  // linear
-                if (f.size() >= 3) m.color = glm::vec3(f[0], f[1], f[2]);
-                if (f.size() >= 4) m.alpha = float(f[3]);
-                if (mat.alphaMode == "MASK") m.alphaMode = raster::AlphaMode::Mask;
-                if (mat.alphaMode == "BLEND") m.alphaMode = raster::AlphaMode::Blend;
-                m.alphaCutoff = float(mat.alphaCutoff);
-                m.doubleSided = mat.doubleSided;
-                m.unlit = mat.extensions.count("KHR_materials_unlit") > 0;
-                addBaseColorTexture(mat.pbrMetallicRoughness.baseColorTexture, prim, pos.count, where, m);
-            } else {
-                m.color = glm::vec3(1.0f);  // glTF's default material
+            m.metallicRoughness = true;  // glTF's default material too: metallic 1, roughness 1
+            m.color = glm::vec3(1.0f);
+            if (prim.material >= 0 && prim.material < int(model_.materials.size()))
+                addMaterial(model_.materials[prim.material], prim, pos.count, where, m);
+            if (m.textures.normal && m.tangents.empty()) {
+                if (const auto it = prim.attributes.find("TANGENT"); it != prim.attributes.end()) {
+                    const AccessorView tv = view(it->second, where);
+                    if (tv.components != 4 || tv.count != pos.count) fail(where, "TANGENT does not match POSITION");
+                    m.tangents.resize(tv.count);
+                    for (size_t i = 0; i < tv.count; ++i) {
+                        const glm::vec3 t(tv.get(i, 0), tv.get(i, 1), tv.get(i, 2));
+                        const glm::vec3 w = skinned.empty() ? glm::mat3(world) * t : glm::mat3(skinned[i]) * t;
+                        const float len = glm::length(w);
+                        m.tangents[i] = glm::vec4(len > 0.0f ? w / len : glm::vec3(1, 0, 0), tv.get(i, 3) < 0.0f ? -1.0f : 1.0f);
+                    }
+                } else {
+                    computeVertexTangents(m);
+                }
             }
             meshes_.push_back(std::move(m));
         }
     }
 
-    // baseColorTexture with its sampler's wrap modes and its TEXCOORD set; a texture that cannot
-    // be used warns and the primitive falls back to its colour factor.
-    void addBaseColorTexture(const tinygltf::TextureInfo& info, const tinygltf::Primitive& prim, size_t vertexCount,
-                             const std::string& where, Mesh& m) {
-        if (info.index < 0) return;
-        const auto uvs = prim.attributes.find("TEXCOORD_" + std::to_string(info.texCoord));
-        if (uvs == prim.attributes.end()) {
-            warnOnce(where + ": base colour texture without TEXCOORD_" + std::to_string(info.texCoord) + "; ignored");
-            return;
+    // glTF 2.0 §3.9: factors, alpha, sidedness, unlit, and the five texture slots. All slots of
+    // a primitive must read the same TEXCOORD set (a slot on another set warns and is dropped).
+    void addMaterial(const tinygltf::Material& mat, const tinygltf::Primitive& prim, size_t vertexCount,
+                     const std::string& where, Mesh& m) {
+        const auto& pbr = mat.pbrMetallicRoughness;
+        const auto& f = pbr.baseColorFactor;  // linear
+        if (f.size() >= 3) m.color = glm::vec3(f[0], f[1], f[2]);
+        if (f.size() >= 4) m.alpha = float(f[3]);
+        if (mat.alphaMode == "MASK") m.alphaMode = raster::AlphaMode::Mask;
+        if (mat.alphaMode == "BLEND") m.alphaMode = raster::AlphaMode::Blend;
+        m.alphaCutoff = float(mat.alphaCutoff);
+        m.doubleSided = mat.doubleSided;
+        m.unlit = mat.extensions.count("KHR_materials_unlit") > 0;
+        m.metallic = float(pbr.metallicFactor);
+        m.roughness = float(pbr.roughnessFactor);
+        if (mat.emissiveFactor.size() >= 3)
+            m.emissive = glm::vec3(mat.emissiveFactor[0], mat.emissiveFactor[1], mat.emissiveFactor[2]);
+        m.normalScale = float(mat.normalTexture.scale);
+        m.occlusionStrength = float(mat.occlusionTexture.strength);
+        TexCoordSet uvs;
+        m.textures.baseColor = bindTexture(pbr.baseColorTexture, "base colour", true, prim, vertexCount, where, uvs, m);
+        if (m.unlit) return;  // KHR_materials_unlit reads nothing else
+        m.textures.metallicRoughness =
+            bindTexture(pbr.metallicRoughnessTexture, "metallic-roughness", false, prim, vertexCount, where, uvs, m);
+        m.textures.normal = bindTexture(mat.normalTexture, "normal", false, prim, vertexCount, where, uvs, m);
+        m.textures.occlusion = bindTexture(mat.occlusionTexture, "occlusion", false, prim, vertexCount, where, uvs, m);
+        m.textures.emissive = bindTexture(mat.emissiveTexture, "emissive", true, prim, vertexCount, where, uvs, m);
+    }
+
+    struct TexCoordSet {
+        int index = -1;  // the TEXCOORD set the mesh's texCoords hold; -1 before the first
+    };
+
+    // One texture slot: its image (decoded once per glTF texture and colour space), its sampler,
+    // its KHR_texture_transform, and the TEXCOORD set it reads, loaded into the mesh on first use.
+    // A texture that cannot be used warns and the slot stays empty (the factors alone apply).
+    template <class Info>
+    MeshTexture bindTexture(const Info& info, const char* slot, bool srgb, const tinygltf::Primitive& prim,
+                            size_t vertexCount, const std::string& where, TexCoordSet& uvs, Mesh& m) {
+        if (info.index < 0) return {};
+        MeshTexture bound;
+        int texCoord = info.texCoord;
+        bound.transform = uvTransform(info.extensions, texCoord);
+        if (uvs.index >= 0 && texCoord != uvs.index) {
+            warnOnce(where + ": " + slot + " texture reads TEXCOORD_" + std::to_string(texCoord) + " but another slot reads TEXCOORD_" +
+                     std::to_string(uvs.index) + "; one set per primitive is supported, so it is ignored");
+            return {};
         }
-        const AccessorView uv = view(uvs->second, where);
-        if (uv.components != 2 || uv.count != vertexCount) fail(where, "TEXCOORD does not match POSITION");
-        std::shared_ptr<const raster::Texture> texture = textureFor(info.index, where);
-        if (!texture) return;
-        m.texCoords.resize(uv.count);
-        for (size_t i = 0; i < uv.count; ++i) m.texCoords[i] = glm::vec2(uv.get(i, 0), uv.get(i, 1));
-        m.baseColorTexture = std::move(texture);
+        const auto attribute = prim.attributes.find("TEXCOORD_" + std::to_string(texCoord));
+        if (attribute == prim.attributes.end()) {
+            warnOnce(where + ": " + slot + " texture without TEXCOORD_" + std::to_string(texCoord) + "; ignored");
+            return {};
+        }
+        bound.texture = textureFor(info.index, srgb, where);
+        if (!bound.texture) return {};
+        if (uvs.index < 0) {
+            const AccessorView uv = view(attribute->second, where);
+            if (uv.components != 2 || uv.count != vertexCount) fail(where, "TEXCOORD does not match POSITION");
+            m.texCoords.resize(uv.count);
+            for (size_t i = 0; i < uv.count; ++i) m.texCoords[i] = glm::vec2(uv.get(i, 0), uv.get(i, 1));
+            uvs.index = texCoord;
+        }
+        return bound;
+    }
+
+    // KHR_texture_transform: uv' = T(offset) R(rotation) S(scale) uv, and an optional texCoord
+    // override.
+    raster::UvTransform uvTransform(const tinygltf::ExtensionMap& extensions, int& texCoord) const {
+        raster::UvTransform t;
+        const auto it = extensions.find("KHR_texture_transform");
+        if (it == extensions.end() || !it->second.IsObject()) return t;
+        const tinygltf::Value& v = it->second;
+        auto pair = [&](const char* key, glm::vec2 fallback) {
+            if (!v.Has(key) || !v.Get(key).IsArray() || v.Get(key).ArrayLen() < 2) return fallback;
+            return glm::vec2(float(v.Get(key).Get(0).GetNumberAsDouble()), float(v.Get(key).Get(1).GetNumberAsDouble()));
+        };
+        const glm::vec2 offset = pair("offset", glm::vec2(0.0f)), scale = pair("scale", glm::vec2(1.0f));
+        const float rotation = v.Has("rotation") ? float(v.Get("rotation").GetNumberAsDouble()) : 0.0f;
+        const float c = std::cos(rotation), s = std::sin(rotation);
+        const glm::mat2 rotate(c, -s, s, c);  // columns: the spec's [[c, s], [-s, c]] (rows)
+        t.linear = rotate * glm::mat2(scale.x, 0.0f, 0.0f, scale.y);
+        t.offset = offset;
+        if (v.Has("texCoord")) texCoord = v.Get("texCoord").GetNumberAsInt();
+        return t;
+    }
+
+    // Undefined filters (glTF leaves them to the implementation) are trilinear.
+    static raster::TextureFilter textureFilter(const tinygltf::Sampler& s) {
+        raster::TextureFilter f;
+        f.magnifyNearest = s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
+        switch (s.minFilter) {
+            case TINYGLTF_TEXTURE_FILTER_NEAREST: f.minify = raster::MinFilter::Nearest; break;
+            case TINYGLTF_TEXTURE_FILTER_LINEAR: f.minify = raster::MinFilter::Linear; break;
+            case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_NEAREST: f.minify = raster::MinFilter::NearestMipmapNearest; break;
+            case TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_NEAREST: f.minify = raster::MinFilter::LinearMipmapNearest; break;
+            case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_LINEAR: f.minify = raster::MinFilter::NearestMipmapLinear; break;
+            default: f.minify = raster::MinFilter::LinearMipmapLinear; break;
+        }
+        return f;
     }
 
     static raster::WrapMode wrapMode(int glWrap) {
@@ -480,10 +585,12 @@ private:
         }
     }
 
-    // Decoded once per glTF texture and shared by every primitive using it. Base colour is
-    // sRGB-encoded (glTF 2.0 §3.9.2) and decoded to linear here.
-    std::shared_ptr<const raster::Texture> textureFor(int index, const std::string& where) {
-        if (auto it = textures_.find(index); it != textures_.end()) return it->second;
+    // Decoded once per glTF texture and colour space, shared by every primitive using it. Base
+    // colour and emissive are sRGB-encoded (glTF 2.0 §3.9.2) and decoded to linear here; the
+    // other slots hold linear data.
+    std::shared_ptr<const raster::Texture> textureFor(int index, bool srgb, const std::string& where) {
+        const auto key = std::make_pair(index, srgb);
+        if (auto it = textures_.find(key); it != textures_.end()) return it->second;
         std::shared_ptr<const raster::Texture> result;
         if (index >= int(model_.textures.size())) fail(where, "texture " + std::to_string(index) + " does not exist");
         const tinygltf::Texture& tex = model_.textures[index];
@@ -508,18 +615,23 @@ private:
                         v[k] = x / 65535.0f;
                     }
                 }
+                const float alpha = c == 2 ? v[1] : v[3];
                 if (c <= 2) v[1] = v[2] = v[0];  // grey (+ alpha)
-                texels[i] = glm::vec4(srgbToLinear(v[0]), srgbToLinear(v[1]), srgbToLinear(v[2]), c == 2 ? v[1] : v[3]);
-                if (c == 2) texels[i].a = image->bits == 8 ? image->image[i * 2 + 1] / 255.0f : texels[i].a;
+                texels[i] = srgb ? glm::vec4(srgbToLinear(v[0]), srgbToLinear(v[1]), srgbToLinear(v[2]), alpha)
+                                 : glm::vec4(v[0], v[1], v[2], alpha);
             }
             raster::WrapMode wrapU = raster::WrapMode::Repeat, wrapV = raster::WrapMode::Repeat;
+            raster::TextureFilter filter;
             if (tex.sampler >= 0 && tex.sampler < int(model_.samplers.size())) {
-                wrapU = wrapMode(model_.samplers[tex.sampler].wrapS);
-                wrapV = wrapMode(model_.samplers[tex.sampler].wrapT);
+                const tinygltf::Sampler& sampler = model_.samplers[tex.sampler];
+                wrapU = wrapMode(sampler.wrapS);
+                wrapV = wrapMode(sampler.wrapT);
+                filter = textureFilter(sampler);
             }
-            result = std::make_shared<raster::Texture>(image->width, image->height, std::move(texels), wrapU, wrapV);
+            result = std::make_shared<raster::Texture>(image->width, image->height, std::move(texels), wrapU, wrapV,
+                                                       filter);
         }
-        textures_[index] = result;
+        textures_[key] = result;
         return result;
     }
 
@@ -545,8 +657,9 @@ private:
     std::set<std::string> warned_;
     std::vector<Mesh> meshes_;
     std::vector<Camera> cameras_;
-    std::vector<raster::DirectionalLight> lights_;
-    std::map<int, std::shared_ptr<const raster::Texture>> textures_;
+    std::vector<raster::Light> lights_;
+    LoadStats stats_;
+    std::map<std::pair<int, bool>, std::shared_ptr<const raster::Texture>> textures_;  // (index, sRGB)
     float timeSeconds_;
     std::map<int, NodePose> pose_;  // animated nodes
     std::map<int, std::vector<float>> poseWeights_;  // animated morph weights per node

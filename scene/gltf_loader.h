@@ -3,16 +3,16 @@
 // matrix; mirrored transforms flip the winding back), posed by the first animation at a time,
 // every mesh primitive of mode TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN (POINTS and LINES are
 // skipped with one warning), indexed or not, with POSITION, NORMAL (computed when absent),
-// COLOR_0 (float or normalised integers), the material's baseColorFactor, alphaMode and
-// alphaCutoff, baseColorTexture
-// (with its sampler's wrap modes; trilinear filtering) and doubleSided flag. Cameras
-// (perspective and orthographic) come from the nodes that carry them. Skins and morph targets
-// (POSITION and NORMAL deltas; weights animated, per node or per mesh) deform the meshes on the
-// CPU at load.
-// KHR_lights_punctual directional lights are collected (the renderer uses the first);
-// KHR_materials_unlit materials are drawn without lighting.
-// Not yet (issue 3): other texture slots, KHR_texture_transform, point and spot
-// lights, other extensions; a file that uses them loads with a warning naming what was ignored.
+// TANGENT (computed when a normal map needs it), COLOR_0 (RGB or RGBA, float or normalised
+// integers) and one TEXCOORD set.
+// Materials: metallic-roughness factors and the five texture slots (base colour, metallic-
+// roughness, normal, occlusion, emissive) with their samplers' wrap modes and filters and
+// KHR_texture_transform; alphaMode and alphaCutoff; doubleSided; KHR_materials_unlit.
+// Cameras (perspective and orthographic) and KHR_lights_punctual lights (directional, point,
+// spot) come from the nodes that carry them. Skins and morph targets (POSITION and NORMAL
+// deltas; weights animated, per node or per mesh) deform the meshes on the CPU at load.
+// Unsupported (each warns once, naming it): other extensions, texture slots on a second
+// TEXCOORD set.
 //
 // What we do with tinygltf's answer is checked: every accessor's range against its buffer
 // view and buffer, every index against the vertex count, the node depth (at most 256) and
@@ -25,6 +25,7 @@
 #include "raster/draw.h"
 #include "scene/camera.h"
 #include "scene/input_error.h"
+#include "scene/load_stats.h"
 #include "scene/mesh.h"
 
 namespace cuberille::scene {
@@ -32,7 +33,8 @@ namespace cuberille::scene {
 struct GltfScene {
     std::vector<Mesh> meshes;
     std::vector<Camera> cameras;  // the scene's camera nodes, in traversal order
-    std::vector<raster::DirectionalLight> directionalLights;  // KHR_lights_punctual, node order
+    std::vector<raster::Light> lights;  // KHR_lights_punctual, in node order
+    LoadStats stats;
 };
 
 /// timeSeconds poses the first animation's node channels (translation, rotation, scale) at that

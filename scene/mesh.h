@@ -1,7 +1,7 @@
 #pragma once
 // A triangle mesh as scenes hand it to the rasterizer: world-space positions, per-vertex
-// normals (computed when a file has none), optional per-vertex linear colours, and one
-// material colour for the whole mesh.
+// normals (computed when a file has none), optional per-vertex linear colours, alphas, texture
+// coordinates and tangents, and one material for the whole mesh.
 
 #include <cstdint>
 #include <limits>
@@ -15,6 +15,22 @@
 
 namespace cuberille::scene {
 
+/// A texture and the UV transform it is read through (KHR_texture_transform).
+struct MeshTexture {
+    std::shared_ptr<const raster::Texture> texture;
+    raster::UvTransform transform;
+    explicit operator bool() const { return texture != nullptr; }
+};
+
+/// glTF's material texture slots; all read the mesh's texCoords.
+struct MeshTextures {
+    MeshTexture baseColor;          // multiplies the albedo and alpha
+    MeshTexture metallicRoughness;  // B: metallic, G: roughness
+    MeshTexture normal;             // tangent space; needs tangents
+    MeshTexture occlusion;          // R
+    MeshTexture emissive;           // multiplies the emissive factor
+};
+
 struct Mesh {
     std::vector<glm::vec3> positions;
     std::vector<glm::vec3> normals;  // one per position
@@ -23,11 +39,17 @@ struct Mesh {
     glm::vec3 color{0.8f};           // linear albedo, multiplied with vertex colours
     bool doubleSided = false;        // never culled, whatever the scene's cull mode
     bool unlit = false;              // colour without lighting (KHR_materials_unlit)
-    float alpha = 1.0f;              // material alpha, times the texture's
+    bool metallicRoughness = false;  // glTF's BRDF with the factors below; Lambert otherwise
+    float alpha = 1.0f;              // material alpha, times vertex and texture alpha
     raster::AlphaMode alphaMode = raster::AlphaMode::Opaque;
     float alphaCutoff = 0.5f;
+    float metallic = 1.0f, roughness = 1.0f;
+    glm::vec3 emissive{0.0f};  // linear RGB factor
+    float normalScale = 1.0f, occlusionStrength = 1.0f;
+    std::vector<float> alphas;         // per position, when vertex colours carry alpha
     std::vector<glm::vec2> texCoords;  // per position, when the mesh is textured
-    std::shared_ptr<const raster::Texture> baseColorTexture;  // multiplies the albedo
+    std::vector<glm::vec4> tangents;   // per position (xyz, handedness w), with a normal map
+    MeshTextures textures;
 
     size_t triangleCount() const { return indices.size() / 3; }
 };
@@ -36,6 +58,11 @@ struct Mesh {
 /// area, so summing unnormalised face normals weights them by area). Vertices no triangle
 /// uses get (0, 0, 1).
 void computeVertexNormals(Mesh& mesh);
+
+/// Per-vertex tangents from the texture coordinates (area-weighted sums of each triangle's
+/// dP/du, handedness from dP/dv), for normal maps on meshes that carry none. Vertices whose
+/// UVs are degenerate get a tangent perpendicular to their normal.
+void computeVertexTangents(Mesh& mesh);
 
 struct Bounds {
     glm::vec3 min{std::numeric_limits<float>::max()};

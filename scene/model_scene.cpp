@@ -33,14 +33,15 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     s.name = path.filename().string();
     const std::string n = lowerName(path);
     std::vector<Camera> cameras;
-    std::vector<raster::DirectionalLight> lights;
+    std::vector<raster::Light> lights;
     if (endsWith(n, ".obj")) {
         s.meshes = loadObj(path, warn);
     } else if (endsWith(n, ".gltf") || endsWith(n, ".glb")) {
         GltfScene g = loadGltf(path, warn, view.timeSeconds);
         s.meshes = std::move(g.meshes);
         cameras = std::move(g.cameras);
-        lights = std::move(g.directionalLights);
+        lights = std::move(g.lights);
+        s.loadStats = g.stats;
     } else {
         s.meshes.push_back(loadPly(path));
     }
@@ -55,12 +56,16 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
         s.camera = frameBounds(b.min, b.max, view.azimuthDegrees, view.elevationDegrees);
     }
     const glm::vec3 toCamera = glm::normalize(s.camera.position - s.camera.target);
-    s.light.directionToLight = glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f));
-    s.light.radiance = glm::vec3(0.85f);
-    s.light.ambient = glm::vec3(0.12f);
+    // Without lights of its own a model is lit from above the camera (a key light that follows
+    // the view, so every side of a turntable is readable).
+    s.lighting = raster::Lighting::directional(glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f)), glm::vec3(0.85f),
+                                               glm::vec3(0.12f));
     if (!lights.empty()) {
-        if (lights.size() > 1) warn(path.string() + ": " + std::to_string(lights.size()) + " directional lights; the first is used");
-        s.light = lights[0];
+        if (lights.size() > size_t(raster::kMaxLights))
+            warn(path.string() + ": " + std::to_string(lights.size()) + " lights; the first " +
+                 std::to_string(raster::kMaxLights) + " are used");
+        s.lighting.lightCount = int(std::min(lights.size(), size_t(raster::kMaxLights)));
+        std::copy_n(lights.begin(), s.lighting.lightCount, s.lighting.lights);
     }
     s.background = {0.05f, 0.06f, 0.08f, 1.0f};
     // glTF says which materials are double-sided; PLY and OBJ scans promise no winding.

@@ -44,9 +44,8 @@ Scene makeField(float detail) {
     s.camera.verticalFovDegrees = 50.0f;
     s.camera.nearPlane = 0.5f;
     s.camera.farPlane = 100.0f;
-    s.light.directionToLight = glm::normalize(glm::vec3(0.4f, 1.0f, 0.3f));
-    s.light.radiance = glm::vec3(0.9f);
-    s.light.ambient = glm::vec3(0.12f, 0.13f, 0.16f);
+    s.lighting = raster::Lighting::directional(glm::normalize(glm::vec3(0.4f, 1.0f, 0.3f)), glm::vec3(0.9f),
+                                               glm::vec3(0.12f, 0.13f, 0.16f));
     s.background = {0.05f, 0.06f, 0.08f, 1.0f};
     return s;
 }
@@ -79,9 +78,8 @@ Scene makeSubpixel(float detail) {
     s.camera.verticalFovDegrees = 60.0f;
     s.camera.nearPlane = 0.5f;
     s.camera.farPlane = 50.0f;
-    s.light.directionToLight = glm::normalize(glm::vec3(-0.5f, 1.0f, 0.2f));
-    s.light.radiance = glm::vec3(0.95f);
-    s.light.ambient = glm::vec3(0.1f);
+    s.lighting = raster::Lighting::directional(glm::normalize(glm::vec3(-0.5f, 1.0f, 0.2f)), glm::vec3(0.95f),
+                                               glm::vec3(0.1f));
     return s;
 }
 
@@ -116,8 +114,8 @@ Scene makeFill(float detail) {
     s.camera.position = {0.0f, 0.0f, 6.0f};
     s.camera.target = {0.0f, 0.0f, -2.0f};
     s.camera.verticalFovDegrees = 60.0f;
-    s.light.directionToLight = glm::normalize(glm::vec3(0.2f, 0.3f, 1.0f));
-    s.light.ambient = glm::vec3(0.15f);
+    s.lighting = raster::Lighting::directional(glm::normalize(glm::vec3(0.2f, 0.3f, 1.0f)), glm::vec3(1.0f),
+                                               glm::vec3(0.15f));
     return s;
 }
 

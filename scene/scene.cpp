@@ -30,21 +30,28 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
         d.positions = m.positions;
         d.normals = m.normals;
         d.vertexColors = m.colors;
+        d.vertexAlphas = m.alphas;
         d.indices = m.indices;
-        const bool textured = m.baseColorTexture && m.texCoords.size() == m.positions.size();
         using raster::ShadingModel;
-        d.state.shading = m.unlit ? (textured ? ShadingModel::TexturedUnlit : ShadingModel::Unlit)
-                                  : (textured ? ShadingModel::TexturedLambert : ShadingModel::Lambert);
-        if (textured) {
-            d.texCoords = m.texCoords;
-            d.state.baseColorTexture = m.baseColorTexture.get();
-        }
+        d.state.shading = m.unlit ? ShadingModel::Unlit
+                                  : (m.metallicRoughness ? ShadingModel::MetallicRoughness : ShadingModel::Lambert);
+        d.texCoords = m.texCoords;
+        d.tangents = m.tangents;
+        auto bind = [](const MeshTexture& t) { return raster::TextureBinding{t.texture.get(), t.transform}; };
+        d.state.textures = {bind(m.textures.baseColor), bind(m.textures.metallicRoughness), bind(m.textures.normal),
+                            bind(m.textures.occlusion), bind(m.textures.emissive)};
         d.state.cull = m.doubleSided ? raster::CullMode::None : cull;
         d.state.constantColor = glm::vec4(m.color, m.alpha);
         d.state.alphaMode = m.alphaMode;
         d.state.alphaCutoff = m.alphaCutoff;
         d.state.depthWrite = m.alphaMode != raster::AlphaMode::Blend;
-        d.state.light = light;
+        d.state.lighting = lighting;
+        d.state.metallic = m.metallic;
+        d.state.roughness = m.roughness;
+        d.state.emissive = m.emissive;
+        d.state.normalScale = m.normalScale;
+        d.state.occlusionStrength = m.occlusionStrength;
+        d.state.cameraPosition = camera.position;
         pipeline.draw(d);
     }
 }

@@ -1,6 +1,6 @@
 #pragma once
-// A renderable scene: meshes, a camera, one directional light and a background, whatever
-// produced it (a built-in procedural scene, a PLY or OBJ file).
+// A renderable scene: meshes, a camera, lights and a background, whatever produced it (a
+// built-in procedural scene, a glTF, PLY or OBJ file).
 
 #include <string>
 #include <vector>
@@ -10,6 +10,7 @@
 #include "raster/draw.h"
 #include "raster/pipeline.h"
 #include "scene/camera.h"
+#include "scene/load_stats.h"
 #include "scene/mesh.h"
 
 namespace cuberille::scene {
@@ -18,9 +19,10 @@ struct Scene {
     std::string name;
     std::vector<Mesh> meshes;
     Camera camera;
-    raster::DirectionalLight light;
+    raster::Lighting lighting;  // the scene's lights and ambient term
     glm::vec4 background{0.0f, 0.0f, 0.0f, 1.0f};
     raster::CullMode cull = raster::CullMode::Back;
+    LoadStats loadStats;
 
     size_t triangleCount() const;
     /// Submits every mesh as one depth-tested draw: opaque and alpha-tested meshes in order,

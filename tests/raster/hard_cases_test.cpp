@@ -42,7 +42,7 @@ struct ViewSpaceDraw {
         d.normals = normals;
         d.vertexColors = colors;
         d.state.shading = raster::ShadingModel::Lambert;
-        d.state.light.directionToLight = {0, 0, 1};
+        d.state.lighting = raster::Lighting::directional({0, 0, 1}, glm::vec3(1.0f), glm::vec3(0.0f));
         return d;
     }
 };

@@ -105,7 +105,7 @@ TEST(ShadingModels, UnlitIgnoresTheLightLambertDoesNot) {
         raster::DrawCall d = windowDraw(quad, glm::vec4(0.6f, 0.6f, 0.6f, 1.0f));
         d.normals = normals;
         d.state.shading = model;
-        d.state.light = {glm::vec3(0, 0, 1), glm::vec3(0.0f), glm::vec3(0.25f)};  // ambient only
+        d.state.lighting = raster::Lighting::directional(glm::vec3(0, 0, 1), glm::vec3(0.0f), glm::vec3(0.25f));  // ambient only
         raster::Pipeline p;
         renderOne(p, frame(8, 8, 1), d);
         EXPECT_FLOAT_EQ(sampleColor(p.framebuffer(), 4, 4, 0).r, expected);

@@ -73,9 +73,9 @@ TEST(TexturedDraw, OneTexelPerPixelReproducesTheTexture) {
     d.positions = positions;
     d.normals = normals;
     d.texCoords = uvs;
-    d.state.shading = raster::ShadingModel::TexturedLambert;
-    d.state.light = {glm::vec3(0, 0, 1), glm::vec3(1), glm::vec3(0)};
-    d.state.baseColorTexture = &t;
+    d.state.shading = raster::ShadingModel::Lambert;
+    d.state.lighting = raster::Lighting::directional(glm::vec3(0, 0, 1), glm::vec3(1), glm::vec3(0));
+    d.state.textures.baseColor.texture = &t;
     raster::Pipeline p;
     p.beginFrame(frame(kSize, kSize, 1));
     p.draw(d);

@@ -161,9 +161,10 @@ TEST(GltfLoader, HierarchyStripsFansIndicesColoursAndMirroring) {
     EXPECT_EQ(c.farPlane, 100.0f);
 }
 
-TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
-    // A 2x1 PNG (sRGB 255 and 128 in red), written with OpenImageIO beside the .gltf.
-    const fs::path dir = fs::temp_directory_path() / "cuberille-gltf-texture";
+// The fixture with a 2x1 PNG (sRGB 255 and 128 in red) beside it as texture 0 (its sampler:
+// clamp in u, mirrored in v, nearest magnification), and TEXCOORD_0 on the fan (the positions'
+// x and y). `materialJson` replaces the fan's material's baseColorFactor entry.
+std::string texturedGltf(const fs::path& dir, const std::string& materialJson) {
     fs::create_directories(dir);
     raster::Image png;
     png.width = 2;
@@ -172,10 +173,9 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     apps::writeImageAtomically(dir / "tex.png", png);
     std::string text = gltf();
     replaceOnce(text, R"("materials": [{)", R"("textures": [{"source": 0, "sampler": 0}], "images": [{"uri": "tex.png"}],
-  "samplers": [{"wrapS": 33071, "wrapT": 33648}],
+  "samplers": [{"wrapS": 33071, "wrapT": 33648, "magFilter": 9728}],
   "materials": [{)");
-    replaceOnce(text, R"("baseColorFactor": [0.5, 0.25, 1, 1]})",
-         R"("baseColorFactor": [0.5, 0.25, 1, 1], "baseColorTexture": {"index": 0}})");
+    replaceOnce(text, R"("baseColorFactor": [0.5, 0.25, 1, 1]})", materialJson);
     replaceOnce(text, R"({"attributes": {"POSITION": 0}, "indices": 3)",
          R"({"attributes": {"POSITION": 0, "TEXCOORD_0": 8}, "indices": 3)");
     replaceOnce(text, R"({"bufferView": 3, "byteOffset": 64, "componentType": 5126, "count": 2, "type": "VEC3"})",
@@ -183,20 +183,65 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC2"})");
     replaceOnce(text, R"({"buffer": 0, "byteOffset": 0, "byteLength": 48})",
          R"({"buffer": 0, "byteOffset": 0, "byteLength": 48, "byteStride": 12})");
+    return text;
+}
+
+TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
+    const fs::path dir = fs::temp_directory_path() / "cuberille-gltf-texture";
+    const std::string text = texturedGltf(dir,
+        R"("baseColorFactor": [0.5, 0.25, 1, 1], "baseColorTexture": {"index": 0}})");
     std::ofstream(dir / "t.gltf") << text;
     const GltfScene scene = loadGltf(dir / "t.gltf", [](const std::string&) {});
     fs::remove_all(dir);
     const Mesh& fan = scene.meshes[1];
-    ASSERT_TRUE(fan.baseColorTexture);
+    ASSERT_TRUE(fan.textures.baseColor);
     ASSERT_EQ(fan.texCoords.size(), 4u);
     EXPECT_EQ(fan.texCoords[3], glm::vec2(1, 1));  // x, y of position 3 read as u, v
-    const raster::Texture& t = *fan.baseColorTexture;
+    const raster::Texture& t = *fan.textures.baseColor.texture;
     ASSERT_EQ(t.width(), 2);
     EXPECT_FLOAT_EQ(t.texel(0, 0, 0).r, 1.0f);
     EXPECT_NEAR(t.texel(0, 1, 0).r, 0.2158f, 1e-3f);  // sRGB 128 decoded
     // Clamp in u: far right samples the last texel; mirrored in v (one row: always that row).
     EXPECT_EQ(t.sampleBilinear(0, glm::vec2(7.0f, 0.5f)), t.texel(0, 1, 0));
-    EXPECT_FALSE(scene.meshes[0].baseColorTexture) << "untextured primitives stay untextured";
+    EXPECT_FALSE(scene.meshes[0].textures.baseColor) << "untextured primitives stay untextured";
+}
+
+TEST(GltfLoader, MaterialFactorsTextureSlotsAndTextureTransform) {
+    const fs::path dir = fs::temp_directory_path() / "cuberille-gltf-material";
+    std::string text = texturedGltf(dir, R"("metallicFactor": 0.25, "roughnessFactor": 0.75},
+      "normalTexture": {"index": 0, "scale": 0.5},
+      "emissiveFactor": [1, 0.5, 0],
+      "emissiveTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [2, 2]}}})");
+    replaceOnce(text, R"("extensions": {"KHR_materials_unlit": {}})", R"("extensions": {})");  // unlit reads no other slot
+    std::ofstream(dir / "t.gltf") << text;
+    std::vector<std::string> warnings;
+    const GltfScene scene = loadGltf(dir / "t.gltf", [&](const std::string& w) { warnings.push_back(w); });
+    fs::remove_all(dir);
+    const Mesh& fan = scene.meshes[1];
+    EXPECT_TRUE(fan.metallicRoughness);
+    EXPECT_FLOAT_EQ(fan.metallic, 0.25f);
+    EXPECT_FLOAT_EQ(fan.roughness, 0.75f);
+    EXPECT_EQ(fan.emissive, glm::vec3(1, 0.5f, 0));
+    EXPECT_FLOAT_EQ(fan.normalScale, 0.5f);
+    // The same image twice: linear for the normal map, sRGB-decoded for emission.
+    ASSERT_TRUE(fan.textures.normal);
+    ASSERT_TRUE(fan.textures.emissive);
+    EXPECT_NEAR(fan.textures.normal.texture->texel(0, 1, 0).r, 128.0f / 255.0f, 1e-6f);
+    EXPECT_NEAR(fan.textures.emissive.texture->texel(0, 1, 0).r, 0.2158f, 1e-3f);
+    EXPECT_EQ(scene.stats.texturesDecoded, 2u);
+    // Nearest magnification from the sampler: no blend between the two texels.
+    EXPECT_EQ(fan.textures.normal.texture->sample(glm::vec2(0.45f, 0.5f), -1.0f), fan.textures.normal.texture->texel(0, 0, 0));
+    // KHR_texture_transform: uv' = offset + scale * uv.
+    EXPECT_EQ(fan.textures.emissive.transform.apply(glm::vec2(0.25f, 0.5f)), glm::vec2(1.0f, 1.0f));
+    EXPECT_TRUE(fan.textures.normal.transform.isIdentity());
+    // No TANGENT in the file: computed from the UVs, unit length, perpendicular to the normal,
+    // along +u (the positions' x).
+    ASSERT_EQ(fan.tangents.size(), fan.positions.size());
+    for (size_t i = 0; i < fan.tangents.size(); ++i) {
+        EXPECT_NEAR(glm::dot(glm::vec3(fan.tangents[i]), fan.normals[i]), 0.0f, 1e-6f);
+        EXPECT_NEAR(glm::distance(glm::vec3(fan.tangents[i]), glm::vec3(1, 0, 0)), 0.0f, 1e-6f);
+    }
+    for (const auto& w : warnings) EXPECT_EQ(w.find("texture"), std::string::npos) << w;
 }
 
 TEST(GltfLoader, AnimationPosesNodesAtTheRequestedTime) {
@@ -272,26 +317,35 @@ TEST(GltfLoader, MorphTargetsBlendByMeshNodeAndAnimatedWeights) {
     EXPECT_EQ(at25.meshes[2].positions[1], glm::vec3(1.25f, 0, 0.25f)); // animated, a quarter in
 }
 
-TEST(GltfLoader, DirectionalLightsFromKhrLightsPunctual) {
+TEST(GltfLoader, PunctualLightsFromKhrLightsPunctual) {
     std::string text = gltf();
     replaceOnce(text, R"("asset": {"version": "2.0"},)", R"("asset": {"version": "2.0"},
   "extensionsUsed": ["KHR_lights_punctual"],
   "extensions": {"KHR_lights_punctual": {"lights": [
-    {"type": "directional", "color": [1, 0.5, 0.25], "intensity": 2}, {"type": "point"}]}},)");
+    {"type": "directional", "color": [1, 0.5, 0.25], "intensity": 2},
+    {"type": "spot", "range": 5, "spot": {"innerConeAngle": 0.25, "outerConeAngle": 0.5}}]}},)");
     // Node 3 (the camera node, turned 90 degrees about +y) also carries light 0; node 2 light 1.
     replaceOnce(text, R"({"camera": 0,)", R"({"camera": 0, "extensions": {"KHR_lights_punctual": {"light": 0}},)");
     replaceOnce(text, R"({"mesh": 0, "scale": [-1, 1, 1]})",
                 R"({"mesh": 0, "scale": [-1, 1, 1], "extensions": {"KHR_lights_punctual": {"light": 1}}})");
     std::vector<std::string> warnings;
     const GltfScene scene = loadGltf(write("cuberille-lights.gltf", text), [&](const std::string& w) { warnings.push_back(w); });
-    ASSERT_EQ(scene.directionalLights.size(), 1u);
-    const raster::DirectionalLight& l = scene.directionalLights[0];
-    // The node's +z, turned 90 degrees about +y, is world +x: the light comes from +x.
-    EXPECT_NEAR(glm::distance(l.directionToLight, glm::vec3(1, 0, 0)), 0.0f, 1e-5f);
-    EXPECT_EQ(l.radiance, glm::vec3(2, 1, 0.5f));
-    bool warnedPoint = false;
-    for (const auto& w : warnings) warnedPoint = warnedPoint || w.find("point lights are not supported") != std::string::npos;
-    EXPECT_TRUE(warnedPoint);
+    ASSERT_EQ(scene.lights.size(), 2u);
+    for (const auto& w : warnings)
+        EXPECT_EQ(w.find(" light"), std::string::npos) << "unexpected warning: " << w;
+    // Node order: node 2 (the spot) comes before node 3 (the camera node with the sun).
+    const raster::Light& spot = scene.lights[0];
+    EXPECT_EQ(spot.type, raster::LightType::Spot);
+    EXPECT_FLOAT_EQ(spot.range, 5.0f);
+    EXPECT_FLOAT_EQ(spot.cosInnerCone, std::cos(0.25f));
+    EXPECT_FLOAT_EQ(spot.cosOuterCone, std::cos(0.5f));
+    EXPECT_NEAR(glm::length(spot.intensity), glm::length(glm::vec3(1.0f / float(M_PI))), 1e-6f);
+    const raster::Light& sun = scene.lights[1];
+    EXPECT_EQ(sun.type, raster::LightType::Directional);
+    // The node's -z, turned 90 degrees about +y, is world -x: the light travels towards -x.
+    EXPECT_NEAR(glm::distance(sun.direction, glm::vec3(-1, 0, 0)), 0.0f, 1e-5f);
+    // glTF's lux for a BRDF with albedo / pi; ours folds the pi into the light.
+    EXPECT_NEAR(glm::distance(sun.intensity, glm::vec3(2, 1, 0.5f) / float(M_PI)), 0.0f, 1e-6f);
 }
 
 TEST(GltfLoader, AccessorPastItsBufferIsAnInputError) {

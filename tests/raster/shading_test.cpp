@@ -1,0 +1,288 @@
+// The shade stage's models against slow references written out here in double precision:
+// the metallic-roughness BRDF, point and spot light fall-off, normal maps, texture transforms
+// and filters, double-sided normals, and the per-effect counters that prove a stage a draw
+// does not need never ran.
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "raster/pipeline.h"
+#include "raster/resolve.h"
+#include "raster/texture.h"
+#include "tests/raster/test_support.h"
+
+namespace cuberille::testing {
+namespace {
+
+using raster::DrawCall;
+using raster::Light;
+using raster::LightType;
+using raster::ShadingModel;
+using raster::Texture;
+
+constexpr int kSize = 16;
+
+/// A window-space quad over the whole 16x16 frame at depth 0.5, counter-clockwise on screen
+/// (front-facing), normal towards the viewer (-z: window z grows away from the eye), with a
+/// UV over [0, 1]².
+struct Quad {
+    std::vector<glm::vec3> positions = {{0, 0, 0.5f},         {0, kSize, 0.5f}, {kSize, kSize, 0.5f},
+                                        {0, 0, 0.5f},         {kSize, kSize, 0.5f}, {kSize, 0, 0.5f}};
+    std::vector<glm::vec2> uvs = {{0, 0}, {0, 1}, {1, 1}, {0, 0}, {1, 1}, {1, 0}};
+    std::vector<glm::vec3> normals = std::vector<glm::vec3>(6, glm::vec3(0, 0, -1));
+    std::vector<glm::vec4> tangents = std::vector<glm::vec4>(6, glm::vec4(1, 0, 0, 1));
+
+    DrawCall call(ShadingModel model) const {
+        DrawCall d;
+        d.space = raster::PositionSpace::Window;
+        d.positions = positions;
+        d.normals = normals;
+        d.texCoords = uvs;
+        d.tangents = tangents;
+        d.state.shading = model;
+        d.state.cull = raster::CullMode::None;
+        return d;
+    }
+};
+
+struct Rendered {
+    raster::Image image;
+    raster::StageCounters counters;
+};
+
+Rendered render(const DrawCall& d) {
+    raster::Pipeline p;
+    p.beginFrame(frame(kSize, kSize, 1));
+    p.draw(d);
+    p.endFrame();
+    Rendered r;
+    raster::resolveColor(p.framebuffer(), r.image);
+    r.counters = p.stats().counters;
+    return r;
+}
+
+glm::vec4 at(const raster::Image& image, int x, int y) {
+    const float* p = image.pixel(x, y);
+    return {p[0], p[1], p[2], p[3]};
+}
+
+Light directionalLight(const glm::vec3& travelling, const glm::vec3& intensity) {
+    Light l;
+    l.direction = glm::normalize(travelling);
+    l.intensity = intensity;
+    return l;
+}
+
+// glTF 2.0 appendix B, in double, with our light units (intensity = pi x irradiance). The
+// shader is float and writes the GGX denominator without cancellation, so even a sharp
+// highlight (roughness 0.1) agrees to 2 parts in 10^4.
+glm::dvec3 referenceBrdf(glm::dvec3 albedo, double metallic, double roughness, glm::dvec3 n, glm::dvec3 v,
+                         glm::dvec3 l, glm::dvec3 intensity) {
+    const glm::dvec3 diffuse = albedo * (1.0 - metallic);
+    const glm::dvec3 f0 = glm::mix(glm::dvec3(0.04), albedo, metallic);
+    const double a = roughness * roughness, a2 = a * a;
+    const glm::dvec3 h = glm::normalize(l + v);
+    const double nl = glm::dot(n, l), nv = glm::dot(n, v), nh = glm::dot(n, h), vh = glm::dot(v, h);
+    if (nl <= 0.0) return glm::dvec3(0.0);
+    const glm::dvec3 f = f0 + (1.0 - f0) * std::pow(1.0 - vh, 5.0);
+    const double d = a2 / (M_PI * std::pow(nh * nh * (a2 - 1.0) + 1.0, 2.0));
+    const double vis = 0.5 / (nl * std::sqrt(nv * nv * (1 - a2) + a2) + nv * std::sqrt(nl * nl * (1 - a2) + a2));
+    return intensity * nl * ((1.0 - f) * diffuse + M_PI * f * d * vis);
+}
+
+TEST(MetallicRoughness, MatchesTheReferenceBrdfAtEveryPixel) {
+    const Quad quad;
+    const glm::dvec3 camera(8.0, 8.0, -20.0);
+    for (const auto& [metallic, roughness] : {std::pair{0.0f, 0.5f}, {1.0f, 0.3f}, {0.5f, 1.0f}, {0.0f, 0.1f}}) {
+        DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+        d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
+        d.state.metallic = metallic;
+        d.state.roughness = roughness;
+        d.state.cameraPosition = glm::vec3(camera);
+        d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
+        d.state.lighting.lightCount = 1;
+        const raster::Image img = render(d).image;
+        for (int y = 0; y < kSize; ++y)
+            for (int x = 0; x < kSize; ++x) {
+                const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
+                const glm::dvec3 expected = referenceBrdf(glm::dvec3(0.8, 0.5, 0.2), metallic, roughness,
+                                                          glm::dvec3(0, 0, -1), glm::normalize(camera - p),
+                                                          -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0));
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_NEAR(at(img, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
+                        << "metallic " << metallic << " roughness " << roughness << " at " << x << "," << y;
+            }
+    }
+}
+
+TEST(MetallicRoughness, AmbientAndEmissiveAddWithoutLights) {
+    const Quad quad;
+    DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+    d.state.constantColor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
+    d.state.metallic = 0.0f;
+    d.state.lighting.ambient = glm::vec3(0.2f);
+    d.state.emissive = glm::vec3(0.1f, 0.0f, 0.3f);
+    const Rendered r = render(d);
+    // ambient x (c_diff + F0) + emissive
+    const glm::vec3 expected = 0.2f * (0.5f + 0.04f) + glm::vec3(0.1f, 0.0f, 0.3f);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(at(r.image, 3, 5)[c], expected[c], 1e-6f);
+    EXPECT_EQ(r.counters.lightEvaluations, 0u);
+}
+
+TEST(PunctualLights, PointLightFallsOffWithTheSquareOfDistance) {
+    const Quad quad;
+    auto brightnessAtCentre = [&](float height) {
+        DrawCall d = quad.call(ShadingModel::Lambert);
+        Light& l = d.state.lighting.lights[0];
+        l.type = LightType::Point;
+        l.position = glm::vec3(8.0f, 8.0f, 0.5f - height);  // straight above the pixel corner (8, 8)
+        l.intensity = glm::vec3(100.0f);
+        d.state.lighting.lightCount = 1;
+        const raster::Image img = render(d).image;
+        // Pixel (8, 8)'s centre is (0.5, 0.5) away sideways.
+        const double r2 = double(height) * height + 0.5;
+        const double expected = 100.0 / r2 * (height / std::sqrt(r2));
+        EXPECT_NEAR(at(img, 8, 8).r, expected, 1e-4 * expected) << height;
+        return at(img, 8, 8).r;
+    };
+    EXPECT_GT(brightnessAtCentre(5.0f), 3.5f * brightnessAtCentre(10.0f));
+}
+
+TEST(PunctualLights, RangeCutsThePointLightOffSmoothly) {
+    const Quad quad;
+    DrawCall d = quad.call(ShadingModel::Lambert);
+    Light& l = d.state.lighting.lights[0];
+    l.type = LightType::Point;
+    l.position = glm::vec3(0.0f, 0.0f, 0.0f);
+    l.intensity = glm::vec3(1.0f);
+    l.range = 8.0f;
+    d.state.lighting.lightCount = 1;
+    const raster::Image img = render(d).image;
+    EXPECT_GT(at(img, 1, 1).r, 0.0f);
+    EXPECT_EQ(at(img, 12, 12).r, 0.0f) << "beyond the range";
+}
+
+TEST(PunctualLights, SpotLightIsDarkOutsideItsOuterConeAndFullInsideItsInnerCone) {
+    const Quad quad;
+    DrawCall d = quad.call(ShadingModel::Lambert);
+    Light& l = d.state.lighting.lights[0];
+    l.type = LightType::Spot;
+    l.position = glm::vec3(8.0f, 8.0f, -4.5f);  // 5 above the surface
+    l.direction = glm::vec3(0, 0, 1);
+    l.intensity = glm::vec3(25.0f);
+    l.cosInnerCone = std::cos(0.3f);
+    l.cosOuterCone = std::cos(0.6f);
+    d.state.lighting.lightCount = 1;
+    const raster::Image img = render(d).image;
+    // (8, 8) is 0.14 rad off axis (inside the inner cone): the point light's value.
+    const double r2 = 25.0 + 0.5;
+    EXPECT_NEAR(at(img, 8, 8).r, 25.0 / r2 * (5.0 / std::sqrt(r2)), 1e-4);
+    // (15, 15) is atan(7.8 / 5) = 1.0 rad off axis: outside the outer cone.
+    EXPECT_EQ(at(img, 15, 15).r, 0.0f);
+}
+
+TEST(NormalMap, FlatTexelKeepsTheNormalAndATiltedOneTiltsTheLighting) {
+    const Quad quad;
+    auto shadeWith = [&](glm::vec3 encodedNormal) {
+        const Texture map(1, 1, {glm::vec4(encodedNormal, 1.0f)});
+        DrawCall d = quad.call(ShadingModel::Lambert);
+        d.state.textures.normal.texture = &map;
+        d.state.lighting.lights[0] = directionalLight({0, 0, 1}, glm::vec3(1.0f));  // from the viewer
+        d.state.lighting.lightCount = 1;
+        const Rendered r = render(d);
+        EXPECT_EQ(r.counters.textureSamples, r.counters.pixelsShaded);
+        return at(r.image, 4, 4).r;
+    };
+    EXPECT_NEAR(shadeWith({0.5f, 0.5f, 1.0f}), 1.0f, 1e-6f);
+    // Tangent-space (sin 60°, 0, cos 60°): lit at cos 60° = 0.5.
+    const float s = std::sin(float(M_PI) / 3), c = std::cos(float(M_PI) / 3);
+    EXPECT_NEAR(shadeWith({0.5f * s + 0.5f, 0.5f, 0.5f * c + 0.5f}), 0.5f, 1e-5f);
+}
+
+TEST(DoubleSided, BackFacesAreLitWithTheirNormalReversed) {
+    Quad quad;
+    std::swap(quad.positions[1], quad.positions[2]);  // both triangles clockwise: back-facing
+    std::swap(quad.positions[4], quad.positions[5]);
+    std::swap(quad.uvs[1], quad.uvs[2]);
+    std::swap(quad.uvs[4], quad.uvs[5]);
+    quad.normals.assign(6, glm::vec3(0, 0, 1));  // the front side faces away from the viewer
+    DrawCall d = quad.call(ShadingModel::Lambert);
+    d.state.lighting.lights[0] = directionalLight({0, 0, 1}, glm::vec3(1.0f));
+    d.state.lighting.lightCount = 1;
+    EXPECT_NEAR(at(render(d).image, 7, 7).r, 1.0f, 1e-6f);
+}
+
+TEST(TextureTransform, OffsetAndRotationMoveTheTexels) {
+    // Two texels: red on the left half, green on the right; nearest filtering.
+    raster::TextureFilter nearest;
+    nearest.magnifyNearest = true;
+    nearest.minify = raster::MinFilter::Nearest;
+    const Texture t(2, 1, {glm::vec4(1, 0, 0, 1), glm::vec4(0, 1, 0, 1)}, raster::WrapMode::Repeat,
+                    raster::WrapMode::Repeat, nearest);
+    const Quad quad;
+    DrawCall d = quad.call(ShadingModel::Unlit);
+    d.state.textures.baseColor.texture = &t;
+    EXPECT_EQ(at(render(d).image, 2, 8), glm::vec4(1, 0, 0, 1));
+    d.state.textures.baseColor.transform.offset = glm::vec2(0.5f, 0.0f);
+    EXPECT_EQ(at(render(d).image, 2, 8), glm::vec4(0, 1, 0, 1)) << "offset by half the width";
+    // KHR_texture_transform's rotation by +90°: (u, v) -> (v, -u); the left column reads v.
+    const float angle = float(M_PI) / 2;
+    d.state.textures.baseColor.transform = {glm::mat2(std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle)),
+                                            glm::vec2(0.0f)};
+    EXPECT_EQ(at(render(d).image, 2, 2), glm::vec4(1, 0, 0, 1)) << "v < 0.5 lands on u < 0.5";
+    EXPECT_EQ(at(render(d).image, 2, 13), glm::vec4(0, 1, 0, 1)) << "v > 0.5 lands on u > 0.5";
+}
+
+TEST(TextureFilter, MagnificationAndMinificationFollowTheSampler) {
+    const std::vector<glm::vec4> texels = {glm::vec4(0), glm::vec4(1), glm::vec4(1), glm::vec4(0)};  // 2x2
+    raster::TextureFilter f;
+    const Texture linear(2, 2, texels, raster::WrapMode::ClampToEdge, raster::WrapMode::ClampToEdge, f);
+    f.magnifyNearest = true;
+    f.minify = raster::MinFilter::NearestMipmapNearest;
+    const Texture nearest(2, 2, texels, raster::WrapMode::ClampToEdge, raster::WrapMode::ClampToEdge, f);
+    const glm::vec2 between(0.5f, 0.3f);
+    EXPECT_EQ(nearest.sample(between, -1.0f), glm::vec4(1)) << "texel (1, 0)";
+    EXPECT_NE(linear.sample(between, -1.0f), glm::vec4(1));
+    // Minified past level 0 (lod 1, the 1x1 level holds the average).
+    EXPECT_EQ(nearest.sample(between, 1.0f), glm::vec4(0.5f));
+    EXPECT_EQ(nearest.sample(between, 0.4f), glm::vec4(1)) << "lod 0.4 rounds to level 0";
+}
+
+TEST(Effects, AbsentEffectsRunZeroTimes) {
+    const Quad quad;
+    // Constant colour: nothing interpolated, nothing fetched, nothing lit.
+    DrawCall flat = quad.call(ShadingModel::ConstantColor);
+    Rendered r = render(flat);
+    EXPECT_EQ(r.counters.pixelsShaded, uint64_t(kSize) * kSize);
+    EXPECT_EQ(r.counters.varyingsInterpolated, 0u);
+    EXPECT_EQ(r.counters.textureSamples, 0u);
+    EXPECT_EQ(r.counters.lightEvaluations, 0u);
+    EXPECT_EQ(r.counters.pixelsBlended, 0u);
+    EXPECT_EQ(r.counters.pixelsAlphaTested, 0u);
+    // Unlit without texture: the colour alone (3 floats a pixel), no lights even if some are set.
+    DrawCall unlit = quad.call(ShadingModel::Unlit);
+    unlit.state.lighting.lightCount = 1;
+    r = render(unlit);
+    EXPECT_EQ(r.counters.varyingsInterpolated, 3u * kSize * kSize);
+    EXPECT_EQ(r.counters.lightEvaluations, 0u);
+    EXPECT_EQ(r.counters.textureSamples, 0u);
+    // Lambert with one directional light: normal and colour (6 a pixel), one light each.
+    DrawCall lit = quad.call(ShadingModel::Lambert);
+    lit.state.lighting.lightCount = 1;
+    r = render(lit);
+    EXPECT_EQ(r.counters.varyingsInterpolated, 6u * kSize * kSize);
+    EXPECT_EQ(r.counters.lightEvaluations, uint64_t(kSize) * kSize);
+    EXPECT_EQ(r.counters.textureSamples, 0u);
+    // Present effects are counted: a base colour texture once a pixel, blending once a pixel.
+    const Texture white(1, 1, {glm::vec4(1)});
+    lit.state.textures.baseColor.texture = &white;
+    lit.state.alphaMode = raster::AlphaMode::Blend;
+    r = render(lit);
+    EXPECT_EQ(r.counters.textureSamples, uint64_t(kSize) * kSize);
+    EXPECT_EQ(r.counters.pixelsBlended, uint64_t(kSize) * kSize);
+    EXPECT_EQ(r.counters.varyingsInterpolated, 8u * kSize * kSize) << "uv joins normal and colour";
+}
+
+}  // namespace
+}  // namespace cuberille::testing
