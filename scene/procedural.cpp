@@ -50,6 +50,93 @@ Scene makeField(float detail) {
     return s;
 }
 
+// A texture made in code: a two-tone checkerboard (linear RGB), `cells` squares a side.
+std::shared_ptr<const raster::Texture> checkerTexture(int size, int cells, glm::vec3 a, glm::vec3 b) {
+    std::vector<glm::vec4> texels(size_t(size) * size);
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x)
+            texels[size_t(y) * size + x] = glm::vec4(((x * cells / size) + (y * cells / size)) % 2 ? a : b, 1.0f);
+    return std::make_shared<raster::Texture>(size, size, std::move(texels));
+}
+
+// A cut-out made in code: opaque discs on a transparent ground, for alpha MASK.
+std::shared_ptr<const raster::Texture> discTexture(int size, int discs) {
+    std::vector<glm::vec4> texels(size_t(size) * size);
+    const float cell = float(size) / discs;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const float dx = std::fmod(x + 0.5f, cell) - cell / 2, dy = std::fmod(y + 0.5f, cell) - cell / 2;
+            const bool inside = dx * dx + dy * dy < 0.16f * cell * cell;
+            texels[size_t(y) * size + x] = glm::vec4(0.95f, 0.85f, 0.3f, inside ? 1.0f : 0.0f);
+        }
+    return std::make_shared<raster::Texture>(size, size, std::move(texels));
+}
+
+// The default scene (`make demo`): everything the renderer does, and no file needed. A
+// checkerboard ground (a texture generated here, mip-mapped and filtered), spheres sweeping
+// metallic and roughness, tori, a glass-like sphere blended over them, a cut-out screen (alpha
+// MASK, double-sided), a sun and a warm point light.
+Scene makeDemo(float detail) {
+    Scene s;
+    s.name = "demo";
+    const int rings = std::max(6, int(40 * std::sqrt(detail)));
+    const int segments = std::max(8, int(64 * std::sqrt(detail)));
+    Mesh ground = makeGround(12.0f, 0.0f);
+    for (const glm::vec3& p : ground.positions) ground.texCoords.emplace_back(p.x / 4.0f, p.z / 4.0f);
+    ground.textures.baseColor.texture = checkerTexture(256, 8, glm::vec3(0.6f), glm::vec3(0.15f, 0.18f, 0.22f));
+    ground.metallicRoughness = true;
+    ground.metallic = 0.0f;
+    ground.roughness = 0.7f;
+    ground.color = glm::vec3(1.0f);
+    s.meshes.push_back(std::move(ground));
+    const glm::vec3 gold(1.0f, 0.71f, 0.29f), red(0.8f, 0.15f, 0.1f);
+    for (int i = 0; i < 5; ++i) {
+        const float angle = 2.0f * kPi * i / 5.0f;
+        Mesh ball = makeSphere(glm::vec3(5.0f * std::cos(angle), 1.0f, 5.0f * std::sin(angle)), 1.0f, rings, segments);
+        ball.metallicRoughness = true;
+        ball.color = i % 2 ? gold : red;
+        ball.metallic = i % 2 ? 1.0f : 0.0f;
+        ball.roughness = 0.15f + 0.2f * i;
+        s.meshes.push_back(std::move(ball));
+        Mesh ring = makeTorus(glm::vec3(5.0f * std::cos(angle + 0.63f), 0.35f, 5.0f * std::sin(angle + 0.63f)), 0.6f,
+                              0.3f, segments, rings);
+        ring.color = glm::vec3(0.2f, 0.5f + 0.1f * i, 0.8f);  // Lambert
+        s.meshes.push_back(std::move(ring));
+    }
+    Mesh glass = makeSphere(glm::vec3(0.0f, 2.0f, 0.0f), 2.0f, rings, segments);
+    glass.metallicRoughness = true;
+    glass.color = glm::vec3(0.25f, 0.55f, 1.0f);
+    glass.metallic = 0.0f;
+    glass.roughness = 0.05f;
+    glass.alpha = 0.45f;
+    glass.alphaMode = raster::AlphaMode::Blend;
+    s.meshes.push_back(std::move(glass));
+    Mesh screen;
+    screen.positions = {{-3.0f, 0.0f, -7.0f}, {3.0f, 0.0f, -7.0f}, {3.0f, 4.0f, -7.0f}, {-3.0f, 4.0f, -7.0f}};
+    screen.normals.assign(4, glm::vec3(0.0f, 0.0f, 1.0f));
+    screen.texCoords = {{0.0f, 1.0f}, {1.5f, 1.0f}, {1.5f, 0.0f}, {0.0f, 0.0f}};
+    screen.indices = {0, 1, 2, 0, 2, 3};
+    screen.textures.baseColor.texture = discTexture(128, 4);
+    screen.color = glm::vec3(1.0f);
+    screen.alphaMode = raster::AlphaMode::Mask;
+    screen.doubleSided = true;
+    s.meshes.push_back(std::move(screen));
+    s.camera.position = {9.0f, 6.5f, 11.0f};
+    s.camera.target = {0.0f, 1.2f, 0.0f};
+    s.camera.verticalFovDegrees = 50.0f;
+    s.camera.nearPlane = 0.5f;
+    s.camera.farPlane = 100.0f;
+    s.lighting = raster::Lighting::directional(glm::normalize(glm::vec3(0.5f, 1.0f, 0.2f)), glm::vec3(1.4f),
+                                               glm::vec3(0.1f, 0.11f, 0.14f));
+    raster::Light& lamp = s.lighting.lights[s.lighting.lightCount++];
+    lamp.type = raster::LightType::Point;
+    lamp.position = {-4.0f, 3.0f, 4.0f};
+    lamp.intensity = glm::vec3(12.0f, 7.0f, 3.0f);
+    lamp.range = 20.0f;
+    s.background = {0.05f, 0.06f, 0.08f, 1.0f};
+    return s;
+}
+
 // A rolling terrain of about 10M triangles: a (n x n) height field seen from above at an angle.
 Scene makeSubpixel(float detail) {
     Scene s;
@@ -173,11 +260,8 @@ bool isProceduralScene(const std::string& name) {
 }
 
 Scene makeProceduralScene(const std::string& name, float detail) {
-    if (name == "demo" || name == "field") {
-        Scene s = makeField(detail);
-        s.name = name;
-        return s;
-    }
+    if (name == "demo") return makeDemo(detail);
+    if (name == "field") return makeField(detail);
     if (name == "subpixel") return makeSubpixel(detail);
     if (name == "fill") return makeFill(detail);
     throw std::invalid_argument("unknown built-in scene '" + name + "'");

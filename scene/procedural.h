@@ -1,7 +1,8 @@
 #pragma once
 // Built-in scenes generated in code, so demos, tests and benchmarks need no files.
 //
-//   demo      the default scene: the sphere/torus field below
+//   demo      the default scene: a generated checker texture, metallic-roughness spheres,
+//             Lambert tori, a blended glass sphere, an alpha-masked screen, sun + point light
 //   field     about 1M triangles: a 12x12 field of spheres and tori on a ground plane, one
 //             directional light, Lambert shading
 //   subpixel  about 10M triangles, most smaller than a pixel at 1920x1080: a finely

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/imageio.h>
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -13,6 +16,7 @@
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
 #include "scene/tri_scene.h"
+#include "tests/scene/gltf_builder.h"
 
 namespace cuberille::testing {
 namespace {
@@ -112,6 +116,116 @@ TEST(Golden, FieldSceneLambertAt4Samples) {
 }
 TEST(Golden, FieldSceneDepthView) {
     compareWithGolden("field_depth", renderField(1, apps::View::Depth));
+}
+
+// The default scene: a generated texture, metallic-roughness and Lambert materials, blending,
+// alpha masking, a sun and a point light.
+TEST(Golden, DemoSceneAt4Samples) {
+    apps::RenderOptions o;
+    o.scene = "demo";
+    o.width = 192;
+    o.height = 108;
+    o.msaa = 4;
+    o.detail = 0.2f;
+    compareWithGolden("demo_msaa4", apps::renderScene(o).image);
+}
+
+// A glTF file the test writes itself, seen through its own camera: a node hierarchy, a textured
+// metallic-roughness ground (texture image beside the file, REPEAT and a KHR_texture_transform
+// scale), a BLEND quad over an alpha-MASK cut-out (double-sided), a two-joint skin bent at
+// its joint, a morph target at weight 0.75, and a KHR_lights_punctual spot light.
+fs::path writeGoldenGltf(const fs::path& dir) {
+    fs::create_directories(dir);
+    // An 8x8 RGBA checker whose alpha cuts out every other 2x2 block (PNG, sRGB bytes).
+    std::vector<uint8_t> checker;
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+            const uint8_t v = (x + y) % 2 ? 230 : 110;
+            checker.insert(checker.end(), {v, uint8_t(v * 0.9f), uint8_t(v * 0.7f), uint8_t((x / 2 + y / 2) % 2 ? 255 : 0)});
+        }
+    auto png = OIIO::ImageOutput::create((dir / "checker.png").string());
+    const OIIO::ImageSpec spec(8, 8, 4, OIIO::TypeDesc::UINT8);
+    EXPECT_TRUE(png && png->open((dir / "checker.png").string(), spec) &&
+                png->write_image(OIIO::TypeDesc::UINT8, checker.data()) && png->close());
+
+    GltfBuilder b;
+    auto& j = b.json();
+    j["extensionsUsed"] = {"KHR_lights_punctual", "KHR_texture_transform"};
+    j["extensions"]["KHR_lights_punctual"]["lights"] = {
+        {{"type", "spot"}, {"intensity", 60}, {"color", {1.0, 0.9, 0.8}}, {"spot", {{"outerConeAngle", 0.9}}}}};
+    b.push("images", {{"uri", "checker.png"}});
+    b.push("samplers", {{"magFilter", 9728}, {"minFilter", 9987}});
+    b.push("textures", {{"source", 0}, {"sampler", 0}});
+    const std::vector<glm::vec3> quadNormals(4, glm::vec3(0, 1, 0));
+    const std::vector<glm::vec2> quadUvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    const int quadIndices = b.indices({0, 3, 2, 0, 2, 1});  // counter-clockwise from +y
+    auto quad = [&](float half) {
+        return b.positions({{-half, 0, -half}, {half, 0, -half}, {half, 0, half}, {-half, 0, half}});
+    };
+    const int normals = b.vec3s(quadNormals), uvs = b.vec2s(quadUvs);
+    // Materials: 0 textured ground, 1 blended red, 2 masked cut-out, 3 plain.
+    b.push("materials", {{"pbrMetallicRoughness",
+                          {{"baseColorTexture", {{"index", 0}, {"extensions", {{"KHR_texture_transform", {{"scale", {3, 3}}}}}}}},
+                           {"metallicFactor", 0.0}, {"roughnessFactor", 0.6}}}});
+    b.push("materials", {{"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 0.1, 0.1, 0.5}}, {"metallicFactor", 0.0}}},
+                         {"alphaMode", "BLEND"}});
+    b.push("materials", {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0.0}}},
+                         {"alphaMode", "MASK"}, {"doubleSided", true}});
+    b.push("materials", {{"pbrMetallicRoughness", {{"baseColorFactor", {0.2, 0.5, 0.9, 1.0}}, {"metallicFactor", 0.3},
+                                                  {"roughnessFactor", 0.4}}}});
+    auto primitive = [&](int position, int material) {
+        return nlohmann::json{{"attributes", {{"POSITION", position}, {"NORMAL", normals}, {"TEXCOORD_0", uvs}}},
+                              {"indices", quadIndices}, {"material", material}};
+    };
+    b.push("meshes", {{"primitives", {primitive(quad(3.0f), 0)}}});  // 0 ground
+    b.push("meshes", {{"primitives", {primitive(quad(0.8f), 1)}}});  // 1 blended
+    b.push("meshes", {{"primitives", {primitive(quad(0.8f), 2)}}});  // 2 cut-out
+    // 3: a strip of two cells up +y, the upper row bound to joint 1.
+    const int stripPositions = b.positions({{-0.2f, 0, 0}, {0.2f, 0, 0}, {-0.2f, 1, 0}, {0.2f, 1, 0}, {-0.2f, 2, 0}, {0.2f, 2, 0}});
+    const int stripJoints = b.joints(std::vector<glm::u8vec4>(6, glm::u8vec4(0, 1, 0, 0)));
+    const int stripWeights = b.vec4s({{1, 0, 0, 0}, {1, 0, 0, 0}, {0.5f, 0.5f, 0, 0}, {0.5f, 0.5f, 0, 0}, {0, 1, 0, 0}, {0, 1, 0, 0}});
+    b.push("meshes", {{"primitives", {{{"attributes", {{"POSITION", stripPositions}, {"JOINTS_0", stripJoints}, {"WEIGHTS_0", stripWeights}}},
+                                       {"mode", 5}, {"material", 3}}}}});
+    const int inverseBinds = b.mat4s({glm::mat4(1.0f), glm::translate(glm::mat4(1.0f), glm::vec3(0, -1, 0))});
+    // 4: a triangle whose morph target lifts its apex.
+    const int morphBase = b.positions({{-0.5f, 0, 0}, {0.5f, 0, 0}, {0, 0.5f, 0}});
+    const int morphDelta = b.positions({{0, 0, 0}, {0, 0, 0}, {0, 1, 0}});
+    b.push("meshes", {{"primitives", {{{"attributes", {{"POSITION", morphBase}}}, {"targets", {{{"POSITION", morphDelta}}}},
+                                       {"material", 3}}}},
+                      {"weights", {0.75}}});
+    // Nodes: 0 root (rotated 20° about y), children ground, blended, cut-out, skin root, morph.
+    const float s = std::sin(glm::radians(10.0f)), c = std::cos(glm::radians(10.0f));
+    b.push("nodes", {{"rotation", {0, s, 0, c}}, {"children", {1, 2, 3, 4, 7, 8}}});
+    b.push("nodes", {{"mesh", 0}});
+    b.push("nodes", {{"mesh", 1}, {"translation", {0.5, 0.8, 1.2}}, {"rotation", {0.5, 0, 0, 0.8660254}}});
+    b.push("nodes", {{"mesh", 2}, {"translation", {-1.2, 1.0, -1.0}}, {"rotation", {0.7071068, 0, 0, 0.7071068}}});
+    b.push("nodes", {{"mesh", 3}, {"skin", 0}});
+    b.push("nodes", {{"translation", {1.5, 0, -0.5}}, {"children", {6}}});  // 5 joint 0
+    b.push("nodes", {{"translation", {0, 1, 0}}, {"rotation", {0, 0, -0.3826834, 0.9238795}}});  // 6 joint 1, bent 45°
+    b.push("nodes", {{"mesh", 4}, {"translation", {-1.5, 0.01, 1.0}}});
+    b.push("nodes", {{"translation", {0, 4, 0}}, {"rotation", {-0.7071068, 0, 0, 0.7071068}},
+                     {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});  // 8 spot, pointing down
+    b.push("skins", {{"joints", {5, 6}}, {"inverseBindMatrices", inverseBinds}});
+    j["nodes"][0]["children"].push_back(5);
+    b.push("cameras", {{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}, {"zfar", 50}}}});
+    b.push("nodes", {{"camera", 0}, {"translation", {0, 3.5, 6}}, {"rotation", {-0.2588190, 0, 0, 0.9659258}}});  // 9
+    j["scenes"] = {{{"nodes", {0, 9}}}};
+    j["scene"] = 0;
+    b.write(dir / "golden.gltf");
+    return dir / "golden.gltf";
+}
+
+TEST(Golden, ProceduralGltfThroughItsCamera) {
+    const fs::path dir = fs::temp_directory_path() / "cuberille-golden-gltf";
+    apps::RenderOptions o;
+    o.scene = writeGoldenGltf(dir).string();
+    o.width = 160;
+    o.height = 120;
+    o.msaa = 4;
+    o.cameraIndex = 0;
+    const raster::Image image = apps::renderScene(o).image;
+    fs::remove_all(dir);
+    compareWithGolden("gltf_procedural", image);
 }
 
 }  // namespace
