@@ -31,6 +31,7 @@ public:
             const int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : 0;
             if (sceneIndex >= int(model_.scenes.size())) fail("scene " + std::to_string(sceneIndex), "does not exist");
             globals_.assign(model_.nodes.size(), glm::mat4(1.0f));
+            inScene_.assign(model_.nodes.size(), false);
             for (int node : model_.scenes[sceneIndex].nodes) visit(node, glm::mat4(1.0f), 0);
             // Meshes after every global transform is known: a skin's joints may come later.
             for (int node : visited_) {
@@ -97,8 +98,28 @@ private:
         const tinygltf::Node& n = model_.nodes[index];
         const glm::mat4 world = parent * localTransform(index, n);
         globals_[index] = world;
+        inScene_[index] = true;
         visited_.push_back(index);
         for (int child : n.children) visit(child, world, depth + 1);
+    }
+
+    // A node's world transform; joints need not be in the scene (glTF 2.0 §3.7.3), and then
+    // it comes from their own ancestry.
+    glm::mat4 globalOf(int node, const std::string& where) const {
+        if (node < int(inScene_.size()) && inScene_[node]) return globals_[node];
+        glm::mat4 world = localTransform(node, model_.nodes[node]);
+        int child = node;
+        for (int depth = 0;; ++depth) {
+            int parent = -1;
+            for (size_t p = 0; p < model_.nodes.size() && parent < 0; ++p)
+                for (int c : model_.nodes[p].children)
+                    if (c == child) parent = int(p);
+            if (parent < 0) return world;
+            if (depth > kMaxNodeDepth) fail(where, "joint " + std::to_string(node) + "'s ancestry is deeper than " + std::to_string(kMaxNodeDepth));
+            if (parent < int(inScene_.size()) && inScene_[parent]) return globals_[parent] * world;
+            world = localTransform(parent, model_.nodes[parent]) * world;
+            child = parent;
+        }
     }
 
     // KHR_lights_punctual: a light sits at its node's origin and shines down its -z. glTF gives
@@ -334,7 +355,7 @@ private:
             glm::mat4 inverse(1.0f);
             if (inverseBind)
                 for (int k = 0; k < 16; ++k) glm::value_ptr(inverse)[k] = inverseBind->get(j, k);
-            jointMatrices[j] = globals_[node] * inverse;
+            jointMatrices[j] = globalOf(node, where) * inverse;
         }
         const AccessorView jv = view(joints->second, where), wv = view(weights->second, where);
         if (jv.components != 4 || wv.components != 4 || jv.count != vertexCount || wv.count != vertexCount)
@@ -665,6 +686,7 @@ private:
     std::map<int, std::vector<float>> poseWeights_;  // animated morph weights per node
     std::vector<glm::mat4> globals_;  // node → world, for the scene's nodes
     std::vector<int> visited_;        // the scene's nodes in traversal order
+    std::vector<bool> inScene_;       // whether globals_ holds the node's transform
 };
 
 }  // namespace

@@ -106,6 +106,57 @@ TEST_F(Cli, RendersMeshFilesAndRejectsBrokenOnes) {
     EXPECT_EQ(run("render " + write("x.stl", "solid").string() + " --out " + (dir_ / "x.png").string()).exitCode, 2);
 }
 
+// A one-triangle .glb: 12-byte header, a JSON chunk (space-padded) and a BIN chunk.
+std::string triangleGlb() {
+    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const std::string bin(reinterpret_cast<const char*>(p), sizeof p);
+    std::string json = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)"
+                       R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+                       R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
+                       R"("bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36}]})";
+    while (json.size() % 4) json += ' ';
+    auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+    return "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size() + 8 + bin.size())) + u32(uint32_t(json.size())) + "JSON" +
+           json + u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+}
+
+TEST_F(Cli, TruncatedAndCorruptedModelsGiveExitTwoNamingTheFileAndWriteNothing) {
+    const std::string glb = triangleGlb();
+    const std::string gltf = R"({"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+                             R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}],)"
+                             R"("bufferViews":[{"buffer":0,"byteLength":36}],)"
+                             R"("buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]})";
+    ASSERT_EQ(run("render " + write("good.glb", glb).string() + " --width 16 --height 16 --out " + (dir_ / "good.png").string()).exitCode, 0);
+    ASSERT_EQ(run("render " + write("good.gltf", gltf).string() + " --width 16 --height 16 --out " + (dir_ / "good.png").string()).exitCode, 0);
+    std::string badMagic = glb, longChunk = glb, shortBuffer = gltf;
+    badMagic[0] = 'X';
+    longChunk[12] = '\x7f';  // the JSON chunk claims more bytes than the file has
+    shortBuffer.replace(shortBuffer.find("\"count\":3"), 9, "\"count\":30");
+    const std::vector<std::pair<std::string, std::string>> broken = {
+        {"cut-header.glb", glb.substr(0, 10)},
+        {"cut-json.glb", glb.substr(0, 40)},
+        {"cut-bin.glb", glb.substr(0, glb.size() - 7)},
+        {"bad-magic.glb", badMagic},
+        {"long-chunk.glb", longChunk},
+        {"cut.gltf", gltf.substr(0, gltf.size() / 2)},
+        {"accessor-past-buffer.gltf", shortBuffer},
+        {"not-json.gltf", "\x89PNG\r\n"},
+        {"index-out-of-range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"},
+        {"garbage.obj", "v 0 0 0\nv 1 0 zero\nf 1 2 3\n"},
+        {"cut-ascii.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                          "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0"},
+    };
+    for (const auto& [name, bytes] : broken) {
+        const fs::path file = write(name, bytes);
+        const fs::path out = dir_ / (name + ".png");
+        const CommandRun r = run("render " + file.string() + " --width 16 --height 16 --out " + out.string());
+        EXPECT_EQ(r.exitCode, 2) << name << ": " << r.output;
+        // "FILE: problem" or, for line-based formats, "FILE:LINE: problem".
+        EXPECT_NE(r.output.find(file.string() + ":"), std::string::npos) << name << ": " << r.output;
+        EXPECT_FALSE(fs::exists(out)) << name;
+    }
+}
+
 TEST_F(Cli, TurntableWritesNumberedFramesThatDiffer) {
     const fs::path obj = write("wedge.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
     const CommandRun r = run("render " + obj.string() + " --turntable 3 --width 32 --height 24 --out " +
