@@ -10,6 +10,9 @@
 // --frames frames, from clear to a resolved image in memory (no file I/O, no readback).
 
 #include <algorithm>
+#include <filesystem>
+#include <functional>
+#include <memory>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -24,6 +27,7 @@
 #include "raster/parallel.h"
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
+#include "scene/model_scene.h"
 #include "scene/procedural.h"
 
 namespace {
@@ -56,6 +60,113 @@ OurFrame renderOurs(raster::Pipeline& p, const scene::Scene& s, int w, int h, in
     return f;
 }
 
+// --- What each effect costs: the field scene's geometry drawn with one effect added at a time.
+
+std::shared_ptr<const raster::Texture> benchChecker() {
+    std::vector<glm::vec4> t(256 * 256);
+    for (int y = 0; y < 256; ++y)
+        for (int x = 0; x < 256; ++x) t[y * 256 + x] = glm::vec4(glm::vec3((x / 32 + y / 32) % 2 ? 0.9f : 0.3f), 1.0f);
+    return std::make_shared<raster::Texture>(256, 256, std::move(t));
+}
+
+std::shared_ptr<const raster::Texture> benchBumps() {  // tangent-space normals of a bumpy grid
+    std::vector<glm::vec4> t(128 * 128);
+    for (int y = 0; y < 128; ++y)
+        for (int x = 0; x < 128; ++x) {
+            const glm::vec3 n = glm::normalize(glm::vec3(0.3f * std::sin(x * 0.4f), 0.3f * std::cos(y * 0.4f), 1.0f));
+            t[y * 128 + x] = glm::vec4(n * 0.5f + 0.5f, 1.0f);
+        }
+    return std::make_shared<raster::Texture>(128, 128, std::move(t));
+}
+
+struct EffectVariant {
+    const char* name;
+    std::function<void(scene::Scene&)> apply;  // empty: the bare pipeline (ConstantColor draws)
+};
+
+// The bare pipeline: every mesh as one ConstantColor draw, nothing interpolated or lit.
+void drawBare(raster::Pipeline& p, const scene::Scene& s, float aspect) {
+    for (const scene::Mesh& m : s.meshes) {
+        raster::DrawCall d;
+        d.clipFromObject = s.camera.clipFromWorld(aspect);
+        d.positions = m.positions;
+        d.indices = m.indices;
+        d.state.cull = s.cull;
+        d.state.constantColor = glm::vec4(m.color, 1.0f);
+        p.draw(d);
+    }
+}
+
+void runEffectTable(int width, int height, int frames, int warmup) {
+    const auto checker = benchChecker(), bumps = benchBumps();
+    auto textured = [&](scene::Scene& s) {
+        for (scene::Mesh& m : s.meshes) {
+            m.texCoords.clear();
+            for (const glm::vec3& p : m.positions) m.texCoords.emplace_back(p.x * 0.5f, p.z * 0.5f + p.y * 0.5f);
+            m.textures.baseColor.texture = checker;
+        }
+    };
+    auto pbr = [](scene::Scene& s) {
+        for (scene::Mesh& m : s.meshes) m.metallicRoughness = true, m.metallic = 0.3f, m.roughness = 0.5f;
+    };
+    const std::vector<EffectVariant> variants = {
+        {"bare pipeline (ConstantColor)", {}},
+        {"flat unlit colour (Unlit)", [](scene::Scene& s) { for (auto& m : s.meshes) m.unlit = true; }},
+        {"Lambert, 1 directional light", [](scene::Scene&) {}},
+        {"Lambert + base colour texture", textured},
+        {"Lambert + 3 point lights", [](scene::Scene& s) {
+             for (int i = 0; i < 3; ++i) {
+                 raster::Light& l = s.lighting.lights[s.lighting.lightCount++];
+                 l.type = raster::LightType::Point;
+                 l.position = glm::vec3(-8.0f + 8.0f * i, 3.0f, 0.0f);
+                 l.intensity = glm::vec3(10.0f);
+             }
+         }},
+        {"metallic-roughness", pbr},
+        {"metallic-roughness + texture + normal map", [&](scene::Scene& s) {
+             pbr(s);
+             textured(s);
+             for (scene::Mesh& m : s.meshes) {
+                 m.textures.normal.texture = bumps;
+                 scene::computeVertexTangents(m);
+             }
+         }},
+        {"Lambert, alpha blended", [](scene::Scene& s) {
+             for (auto& m : s.meshes) m.alpha = 0.5f, m.alphaMode = raster::AlphaMode::Blend;
+         }},
+    };
+    std::printf("\n# what each effect costs: field geometry, %dx%d, 1 sample, median of %d frames\n", width, height,
+                frames);
+    std::printf("%-44s %10s %8s %14s %14s\n", "variant", "ms", "x bare", "tex samples", "light evals");
+    double bareMs = 0.0;
+    for (const EffectVariant& v : variants) {
+        scene::Scene s = scene::makeProceduralScene("field");
+        if (v.apply) v.apply(s);
+        raster::Pipeline p;
+        raster::Image image;
+        std::vector<double> times;
+        for (int i = 0; i < warmup + frames; ++i) {
+            const auto t0 = std::chrono::steady_clock::now();
+            raster::FramebufferDesc d;
+            d.widthPixels = width, d.heightPixels = height, d.samples = 1, d.clearColor = s.background;
+            p.beginFrame(d);
+            if (v.apply)
+                s.draw(p, float(width) / height);
+            else
+                drawBare(p, s, float(width) / height);
+            p.endFrame();
+            raster::resolveColor(p.framebuffer(), image);
+            if (i >= warmup) times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        }
+        const double ms = median(times);
+        if (!v.apply) bareMs = ms;
+        const raster::StageCounters& c = p.stats().counters;
+        std::printf("%-44s %10.1f %7.2fx %14llu %14llu\n", v.name, ms, ms / bareMs, (unsigned long long)c.textureSamples,
+                    (unsigned long long)c.lightEvaluations);
+        std::fflush(stdout);
+    }
+}
+
 std::vector<std::string> split(const std::string& s) {
     std::vector<std::string> out;
     std::stringstream in(s);
@@ -68,7 +179,7 @@ std::vector<std::string> split(const std::string& s) {
 int main(int argc, char** argv) {
     CLI::App app{"Frame time against llvmpipe, side by side"};
     int threads = 0, frames = 7, warmup = 3, width = 1920, height = 1080;
-    bool verbose = false, noPeer = false;
+    bool verbose = false, noPeer = false, effects = false;
     std::string scenes = "field,subpixel,fill", msaaList = "1,4";
     app.add_option("--threads", threads, "Threads for both renderers (0 = all cores)");
     app.add_option("--frames", frames, "Timed frames per measurement (median reported)");
@@ -77,7 +188,8 @@ int main(int argc, char** argv) {
     app.add_flag("--no-peer", noPeer, "Time Cuberille alone (for profiling); no ratio");
     app.add_option("--width", width);
     app.add_option("--height", height);
-    app.add_option("--scenes", scenes, "Comma-separated built-in scenes");
+    app.add_option("--scenes", scenes, "Comma-separated built-in scenes or model files (.gltf .glb .ply .obj)");
+    app.add_flag("--effects", effects, "Also print what each shading effect costs (field geometry)");
     app.add_option("--msaa", msaaList, "Comma-separated sample counts");
     CLI11_PARSE(app, argc, argv);
 
@@ -97,8 +209,16 @@ int main(int argc, char** argv) {
                 effectiveThreads, effectiveThreads > 1 ? "s" : "", frames);
     std::printf("%-9s %4s %10s | %8s %8s %8s %8s %10s | %10s | %7s\n", "scene", "msaa", "triangles",
                 "vertex", "front", "back", "resolve", "cuberille", "llvmpipe", "ratio");
-    for (const std::string& name : split(scenes)) {
-        const scene::Scene s = scene::makeProceduralScene(name);
+    for (const std::string& entry : split(scenes)) {
+        // Model files: load time first (parse, decode, pose), then the same frame comparison.
+        const auto loadStart = std::chrono::steady_clock::now();
+        const bool isFile = scene::isModelFile(entry);
+        const scene::Scene s = isFile ? scene::loadModelScene(entry, {}, [](const std::string&) {})
+                                      : scene::makeProceduralScene(entry);
+        const std::string name = isFile ? std::filesystem::path(entry).filename().string() : entry;
+        if (isFile)
+            std::printf("# %s: loaded in %.1f ms\n", name.c_str(),
+                        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - loadStart).count());
         for (const std::string& m : split(msaaList)) {
             const int msaa = std::stoi(m);
             raster::Pipeline pipeline;
@@ -140,5 +260,6 @@ int main(int argc, char** argv) {
             std::fflush(stdout);
         }
     }
+    if (effects) runEffectTable(width, height, frames, warmup);
     return 0;
 }

@@ -80,7 +80,10 @@ public:
         }
         PixelAttributes a;
         perspectiveWeights(t, q, a);
-        interpolate<3>(v, layout_.color, q.count, a.w, a.albedo);
+        if (layout_.color >= 0)
+            interpolate<3>(v, layout_.color, q.count, a.w, a.albedo);
+        else
+            for (int k = 0; k < 3; ++k) std::fill_n(a.albedo[k], q.count, s_.constantColor[k]);
         if (layout_.alpha >= 0)
             interpolate<1>(v, layout_.alpha, q.count, a.w, a.alpha);
         else
@@ -274,9 +277,10 @@ private:
         const float alpha = s_.constantColor.a;
         // Per-vertex values in locals: the queue's stores could alias `v` as far as the
         // compiler knows, and would force a reload of all 18 every pixel.
-        float normal[3][3], color[3][3];  // [vertex][component]
+        float normal[3][3], color[3][3];  // [vertex][component]; a constant colour in all three
         for (int k = 0; k < 3; ++k)
-            for (int c = 0; c < 3; ++c) normal[k][c] = v[k * n + on + c], color[k][c] = v[k * n + oc + c];
+            for (int c = 0; c < 3; ++c)
+                normal[k][c] = v[k * n + on + c], color[k][c] = oc >= 0 ? v[k * n + oc + c] : s_.constantColor[c];
         for (int i = 0; i < q.count; ++i) {
             const float q0 = std::max(0.0f, float(q.edge0[i] - int64_t(bias0)) * invArea) * invW0;
             const float q1 = std::max(0.0f, float(q.edge1[i] - int64_t(bias1)) * invArea) * invW1;

@@ -84,7 +84,8 @@ VaryingLayout varyingLayoutFor(const DrawCall& draw) {
         pointOrSpot = pointOrSpot || state.lighting.lights[i].type != LightType::Directional;
     const bool textured = state.textures.any() && draw.texCoords.size() == vertices;
     if (lit) l.normal = take(3);
-    l.color = take(3);
+    // Without vertex colours the albedo is the draw's constant: nothing to interpolate.
+    if (draw.vertexColors.size() == vertices && vertices > 0) l.color = take(3);
     if (draw.vertexAlphas.size() == vertices && vertices > 0) l.alpha = take(1);
     if (textured) l.texCoord = take(2);
     if (state.shading == ShadingModel::MetallicRoughness || (lit && pointOrSpot)) l.position = take(3);

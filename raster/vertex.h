@@ -36,7 +36,7 @@ struct VertexStageOutput {
 /// reads and what its mesh carries; -1 for an attribute that is not interpolated at all.
 struct VaryingLayout {
     int normal = -1;    // 3: world-space normal; Lambert, MetallicRoughness
-    int color = -1;     // 3: linear albedo, base colour factor x vertex colour; all but ConstantColor
+    int color = -1;     // 3: linear albedo, base colour factor x vertex colour; only with vertex colours
     int alpha = -1;     // 1: factor alpha x vertex alpha; only when the mesh has vertex alphas
     int texCoord = -1;  // 2: only when a texture is bound and the mesh has texture coordinates
     int position = -1;  // 3: world position; MetallicRoughness, and Lambert with point or spot lights

@@ -35,6 +35,11 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
         using raster::ShadingModel;
         d.state.shading = m.unlit ? ShadingModel::Unlit
                                   : (m.metallicRoughness ? ShadingModel::MetallicRoughness : ShadingModel::Lambert);
+        // An unlit mesh of one colour (no vertex colours or alphas, no textures) is a flat
+        // draw: the bare pipeline, nothing interpolated.
+        const bool textured = m.texCoords.size() == m.positions.size() &&
+                              (m.textures.baseColor || m.textures.emissive || m.textures.normal);
+        if (m.unlit && m.colors.empty() && m.alphas.empty() && !textured) d.state.shading = ShadingModel::ConstantColor;
         d.texCoords = m.texCoords;
         d.tangents = m.tangents;
         auto bind = [](const MeshTexture& t) { return raster::TextureBinding{t.texture.get(), t.transform}; };

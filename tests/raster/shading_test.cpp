@@ -10,6 +10,7 @@
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
 #include "raster/texture.h"
+#include "scene/scene.h"
 #include "tests/raster/test_support.h"
 
 namespace cuberille::testing {
@@ -260,16 +261,23 @@ TEST(Effects, AbsentEffectsRunZeroTimes) {
     EXPECT_EQ(r.counters.lightEvaluations, 0u);
     EXPECT_EQ(r.counters.pixelsBlended, 0u);
     EXPECT_EQ(r.counters.pixelsAlphaTested, 0u);
-    // Unlit without texture: the colour alone (3 floats a pixel), no lights even if some are set.
+    // Unlit without texture or vertex colours: a constant, nothing interpolated, no lights even
+    // if some are set.
     DrawCall unlit = quad.call(ShadingModel::Unlit);
     unlit.state.lighting.lightCount = 1;
     r = render(unlit);
-    EXPECT_EQ(r.counters.varyingsInterpolated, 3u * kSize * kSize);
+    EXPECT_EQ(r.counters.varyingsInterpolated, 0u);
     EXPECT_EQ(r.counters.lightEvaluations, 0u);
     EXPECT_EQ(r.counters.textureSamples, 0u);
-    // Lambert with one directional light: normal and colour (6 a pixel), one light each.
+    // Lambert with one directional light: the normal (3 a pixel; the colour is the constant),
+    // one light each; with vertex colours they join in.
     DrawCall lit = quad.call(ShadingModel::Lambert);
     lit.state.lighting.lightCount = 1;
+    r = render(lit);
+    EXPECT_EQ(r.counters.varyingsInterpolated, 3u * kSize * kSize);
+    EXPECT_EQ(r.counters.lightEvaluations, uint64_t(kSize) * kSize);
+    const std::vector<glm::vec3> colors(6, glm::vec3(0.5f));
+    lit.vertexColors = colors;
     r = render(lit);
     EXPECT_EQ(r.counters.varyingsInterpolated, 6u * kSize * kSize);
     EXPECT_EQ(r.counters.lightEvaluations, uint64_t(kSize) * kSize);
@@ -282,6 +290,24 @@ TEST(Effects, AbsentEffectsRunZeroTimes) {
     EXPECT_EQ(r.counters.textureSamples, uint64_t(kSize) * kSize);
     EXPECT_EQ(r.counters.pixelsBlended, uint64_t(kSize) * kSize);
     EXPECT_EQ(r.counters.varyingsInterpolated, 8u * kSize * kSize) << "uv joins normal and colour";
+}
+
+TEST(Effects, SceneSubmitsAFlatUnlitMeshAsTheBarePipeline) {
+    scene::Scene s;
+    scene::Mesh m;
+    m.positions = {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}};
+    m.normals.assign(3, glm::vec3(0, 0, 1));
+    m.indices = {0, 1, 2};
+    m.unlit = true;
+    s.meshes.push_back(m);
+    s.camera.position = {0, 0, 3};
+    raster::Pipeline p;
+    p.beginFrame(frame(kSize, kSize, 1));
+    s.draw(p, 1.0f);
+    p.endFrame();
+    EXPECT_GT(p.stats().counters.pixelsShaded, 0u);
+    EXPECT_EQ(p.stats().counters.varyingsInterpolated, 0u);
+    EXPECT_EQ(p.stats().counters.lightEvaluations, 0u);
 }
 
 }  // namespace
