@@ -27,8 +27,7 @@ struct TileGrid {
 /// One fixed-size run of a draw's triangles, after set-up and binning.
 struct TriangleBatch {
     int drawIndex = 0;
-    int varyingCount = 0;   // floats per vertex in `varyings`
-    VaryingLayout layout;   // what they are (the draw's)
+    VaryingLayout layout;  // the draw's: layout.count floats per vertex in `varyings`
     std::vector<TriangleSetup> triangles;
     std::vector<float> varyings;
     std::vector<uint32_t> tileOffsets;    // tileCount + 1 entries

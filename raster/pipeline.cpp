@@ -27,16 +27,15 @@ ClipVolume clipVolumeFor(const DrawCall& draw, const Framebuffer& fb) {
                                                : ClipVolume::forViewport(fb.width(), fb.height());
 }
 
-SetupContext setupContextFor(const DrawCall& draw, const Framebuffer& fb) {
+SetupContext setupContextFor(const DrawCall& draw, const Framebuffer& fb, const VaryingLayout& layout) {
     return SetupContext::forDraw(draw.space, fb.width(), fb.height(),
-                                 standardSamplePattern(fb.samples()), draw.state.cull,
-                                 varyingLayoutFor(draw).count);
+                                 standardSamplePattern(fb.samples()), draw.state.cull, layout.count);
 }
 
 ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {
     ClipVertex c;
     c.position = v.clipPositions[index];
-    std::copy_n(v.varyings.data() + index * v.varyingCount, v.varyingCount, c.varyings.data());
+    std::copy_n(v.varyings.data() + index * v.layout.count, v.layout.count, c.varyings.data());
     return c;
 }
 
@@ -52,7 +51,7 @@ void setupInto(const TriangleInput& in, const WindowVertex (&w)[3], const float*
             t.varyingOffset = uint32_t(batch.varyings.size());
             for (int v = 0; v < 3; ++v)
                 batch.varyings.insert(batch.varyings.end(), varyings[order[v]],
-                                      varyings[order[v]] + batch.varyingCount);
+                                      varyings[order[v]] + batch.layout.count);
             t.flatColor = color;
             batch.triangles.push_back(t);
             ++k.trianglesSetUp;
@@ -71,7 +70,7 @@ void clipAndSetup(const TriangleInput& in, const size_t (&index)[3], uint32_t pl
     ClippedPolygon polygon;
     clipTriangle(in.volume, planes, clipVertexOf(in.vertices, index[0]),
                  clipVertexOf(in.vertices, index[1]), clipVertexOf(in.vertices, index[2]),
-                 batch.varyingCount, polygon);
+                 batch.layout.count, polygon);
     WindowVertex window[kMaxClippedVertices];
     for (int i = 0; i < polygon.count; ++i) {
         if (!projectToWindow(polygon.vertices[i].position, in.setup, window[i])) {
@@ -130,7 +129,7 @@ void Pipeline::shadeVertices() {
     std::vector<std::pair<uint32_t, size_t>> tasks;  // (draw, first vertex)
     for (size_t d = drawsShaded_; d < draws_.size(); ++d) {
         const DrawCall& call = draws_[d];
-        vertexOutputs_[d].resize(call.positions.size(), varyingLayoutFor(call).count);
+        vertexOutputs_[d].resize(call.positions.size(), varyingLayoutFor(call));
         stats_.counters.verticesShaded += call.positions.size();
         for (size_t v = 0; v < call.positions.size(); v += kVerticesPerTask)
             tasks.emplace_back(uint32_t(d), v);
@@ -138,8 +137,8 @@ void Pipeline::shadeVertices() {
     parallelFor(tasks.size(), [&](size_t i) {
         const auto [d, first] = tasks[i];
         const DrawCall& call = draws_[d];
-        runVertexStage(call, clipVolumeFor(call, framebuffer_), setupContextFor(call, framebuffer_),
-                       first, std::min(call.positions.size(), first + kVerticesPerTask),
+        runVertexStage(call, clipVolumeFor(call, framebuffer_),
+                       setupContextFor(call, framebuffer_, vertexOutputs_[d].layout), first, std::min(call.positions.size(), first + kVerticesPerTask),
                        vertexOutputs_[d]);
     });
     drawsShaded_ = draws_.size();
@@ -150,10 +149,9 @@ void Pipeline::frontEnd(const BatchRef& ref, TriangleBatch& batch) const {
     const VertexStageOutput& vertices = vertexOutputs_[ref.draw];
     batch.clear();
     batch.drawIndex = int(ref.draw);
-    batch.varyingCount = vertices.varyingCount;
-    batch.layout = varyingLayoutFor(call);
+    batch.layout = vertices.layout;
     const TriangleInput in{vertices, clipVolumeFor(call, framebuffer_),
-                           setupContextFor(call, framebuffer_)};
+                           setupContextFor(call, framebuffer_, vertices.layout)};
     const size_t vertexCount = vertices.clipPositions.size();
     const size_t end = std::min(call.triangleCount(), ref.firstTriangle + kTrianglesPerBatch);
     StageCounters& k = batch.counters;
@@ -179,9 +177,9 @@ void Pipeline::frontEnd(const BatchRef& ref, TriangleBatch& batch) const {
                 const WindowVertex w[3] = {vertices.window[index[0]], vertices.window[index[1]],
                                            vertices.window[index[2]]};
                 const float* base = vertices.varyings.data();
-                const float* const v[3] = {base + index[0] * batch.varyingCount,
-                                           base + index[1] * batch.varyingCount,
-                                           base + index[2] * batch.varyingCount};
+                const float* const v[3] = {base + index[0] * batch.layout.count,
+                                           base + index[1] * batch.layout.count,
+                                           base + index[2] * batch.layout.count};
                 setupInto(in, w, v, color, batch);
                 break;
             }

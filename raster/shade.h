@@ -98,6 +98,7 @@ public:
             writeOut(q, a.albedo, a.alpha);
         } else {
             shadingNormals(t, v, q.count, a, counters);
+            if (layout_.position >= 0) interpolate<3>(v, layout_.position, q.count, a.w, a.position);
             float occlusion[ShadeQueue::kCapacity];
             std::fill_n(occlusion, q.count, 1.0f);
             if (textured && s_.textures.occlusion) occlusionFromTexture(q.count, a, occlusion, counters);
@@ -112,7 +113,6 @@ public:
 
 private:
     static constexpr int N = ShadeQueue::kCapacity;
-    using Channels3 = float[3][N];
 
     /// Per-pixel values of the queue, structure-of-arrays.
     struct PixelAttributes {
@@ -125,18 +125,25 @@ private:
         float radiance[3][N];    // the result
     };
 
-    // Perspective-correct weights: screen weights clamped onto the triangle (so the result is
-    // always a convex combination), times 1/w, renormalised.
-    static void perspectiveWeights(const TriangleSetup& t, const ShadeQueue& q, PixelAttributes& a) {
+    // Perspective-correct weights of queued pixel i: screen weights clamped onto the triangle
+    // (so the result is always a convex combination), times 1/w, renormalised. Shared by the
+    // passes and the fused Lambert loop, so both compute the same weights.
+    struct Weights {
+        float w0, w1, w2;
+    };
+    [[gnu::always_inline]] static Weights weightsAt(const TriangleSetup& t, const ShadeQueue& q, int i) {
         const float invArea = float(t.invDoubleArea);
-        const float bias0 = t.fillBias[0], bias1 = t.fillBias[1], bias2 = t.fillBias[2];
-        const float invW0 = t.invW[0], invW1 = t.invW[1], invW2 = t.invW[2];
+        const float q0 = std::max(0.0f, float(q.edge0[i] - t.fillBias[0]) * invArea) * t.invW[0];
+        const float q1 = std::max(0.0f, float(q.edge1[i] - t.fillBias[1]) * invArea) * t.invW[1];
+        const float q2 = std::max(0.0f, float(q.edge2[i] - t.fillBias[2]) * invArea) * t.invW[2];
+        const float norm = 1.0f / (q0 + q1 + q2);
+        return {q0 * norm, q1 * norm, q2 * norm};
+    }
+
+    static void perspectiveWeights(const TriangleSetup& t, const ShadeQueue& q, PixelAttributes& a) {
         for (int i = 0; i < q.count; ++i) {
-            const float q0 = std::max(0.0f, float(q.edge0[i] - int64_t(bias0)) * invArea) * invW0;
-            const float q1 = std::max(0.0f, float(q.edge1[i] - int64_t(bias1)) * invArea) * invW1;
-            const float q2 = std::max(0.0f, float(q.edge2[i] - int64_t(bias2)) * invArea) * invW2;
-            const float norm = 1.0f / (q0 + q1 + q2);
-            a.w[0][i] = q0 * norm, a.w[1][i] = q1 * norm, a.w[2][i] = q2 * norm;
+            const Weights w = weightsAt(t, q, i);
+            a.w[0][i] = w.w0, a.w[1][i] = w.w1, a.w[2][i] = w.w2;
         }
     }
 
@@ -205,7 +212,6 @@ private:
     void shadingNormals(const TriangleSetup& t, const float* v, int count, PixelAttributes& a,
                         StageCounters& counters) const {
         interpolate<3>(v, layout_.normal, count, a.w, a.normal);
-        if (layout_.position >= 0) interpolate<3>(v, layout_.position, count, a.w, a.position);
         if (layout_.tangent >= 0) {
             float tangent[4][N];
             interpolate<4>(v, layout_.tangent, count, a.w, tangent);
@@ -268,9 +274,6 @@ private:
     void lambertOneDirectionalLight(const TriangleSetup& t, const float* v, ShadeQueue& q,
                                     StageCounters& counters) const {
         const int n = layout_.count, on = layout_.normal, oc = layout_.color;
-        const float invArea = float(t.invDoubleArea);
-        const float bias0 = t.fillBias[0], bias1 = t.fillBias[1], bias2 = t.fillBias[2];
-        const float invW0 = t.invW[0], invW1 = t.invW[1], invW2 = t.invW[2];
         const Light& light = s_.lighting.lights[0];
         const glm::vec3 l = -light.direction * (t.backFacing ? -1.0f : 1.0f), e = light.intensity;
         const glm::vec3 amb = s_.lighting.ambient;
@@ -282,11 +285,7 @@ private:
             for (int c = 0; c < 3; ++c)
                 normal[k][c] = v[k * n + on + c], color[k][c] = oc >= 0 ? v[k * n + oc + c] : s_.constantColor[c];
         for (int i = 0; i < q.count; ++i) {
-            const float q0 = std::max(0.0f, float(q.edge0[i] - int64_t(bias0)) * invArea) * invW0;
-            const float q1 = std::max(0.0f, float(q.edge1[i] - int64_t(bias1)) * invArea) * invW1;
-            const float q2 = std::max(0.0f, float(q.edge2[i] - int64_t(bias2)) * invArea) * invW2;
-            const float norm = 1.0f / (q0 + q1 + q2);
-            const float w0 = q0 * norm, w1 = q1 * norm, w2 = q2 * norm;
+            const auto [w0, w1, w2] = weightsAt(t, q, i);
             auto lerp = [&](const float(&x)[3][3], int c) { return w0 * x[0][c] + w1 * x[1][c] + w2 * x[2][c]; };
             const float nx = lerp(normal, 0), ny = lerp(normal, 1), nz = lerp(normal, 2);
             const float len2 = nx * nx + ny * ny + nz * nz;

@@ -60,12 +60,12 @@ void postTransform(const ClipVolume& volume, const SetupContext& viewport, size_
 
 }  // namespace
 
-void VertexStageOutput::resize(size_t vertices, int varyingsPerVertex) {
-    varyingCount = varyingsPerVertex;
+void VertexStageOutput::resize(size_t vertices, const VaryingLayout& varyingLayout) {
+    layout = varyingLayout;
     clipPositions.resize(vertices);
     outcodes.resize(vertices);
     window.resize(vertices);
-    varyings.resize(vertices * varyingsPerVertex);
+    varyings.resize(vertices * varyingLayout.count);
 }
 
 VaryingLayout varyingLayoutFor(const DrawCall& draw) {
@@ -96,8 +96,7 @@ VaryingLayout varyingLayoutFor(const DrawCall& draw) {
 void runVertexStage(const DrawCall& draw, const ClipVolume& volume, const SetupContext& viewport,
                     size_t begin, size_t end, VertexStageOutput& out) {
     transformPositions(draw, begin, end, out.clipPositions.data());
-    const VaryingLayout layout = varyingLayoutFor(draw);
-    if (layout.count > 0) writeVaryings(draw, layout, begin, end, out.varyings.data());
+    if (out.layout.count > 0) writeVaryings(draw, out.layout, begin, end, out.varyings.data());
     postTransform(volume, viewport, begin, end, out);
 }
 

@@ -22,16 +22,6 @@ namespace cuberille::raster {
 inline constexpr uint8_t kInvalidVertex = 0x80;
 static_assert(ClipVolume::kPlaneCount < 8);
 
-struct VertexStageOutput {
-    std::vector<glm::vec4> clipPositions;
-    std::vector<uint8_t> outcodes;       // planes the vertex is outside of, or kInvalidVertex
-    std::vector<WindowVertex> window;    // valid where the outcode is 0
-    std::vector<float> varyings;         // vertex-major, varyingCount floats per vertex
-    int varyingCount = 0;
-
-    void resize(size_t vertices, int varyingsPerVertex);
-};
-
 /// Where each attribute sits among a vertex's varyings, derived from what the draw's shading
 /// reads and what its mesh carries; -1 for an attribute that is not interpolated at all.
 struct VaryingLayout {
@@ -45,12 +35,23 @@ struct VaryingLayout {
 };
 static_assert(3 + 3 + 1 + 2 + 3 + 4 <= kMaxVaryings);
 
+struct VertexStageOutput {
+    std::vector<glm::vec4> clipPositions;
+    std::vector<uint8_t> outcodes;       // planes the vertex is outside of, or kInvalidVertex
+    std::vector<WindowVertex> window;    // valid where the outcode is 0
+    std::vector<float> varyings;         // vertex-major, layout.count floats per vertex
+    VaryingLayout layout;                // the draw's, derived once per flush
+
+    void resize(size_t vertices, const VaryingLayout& varyingLayout);
+};
+
 VaryingLayout varyingLayoutFor(const DrawCall& draw);
 
 /// Vertices are processed in tasks of this many.
 inline constexpr size_t kVerticesPerTask = 16384;
 
-/// Shades vertices [begin, end) of the draw into `out` (already sized by out.resize()).
+/// Shades vertices [begin, end) of the draw into `out`, already sized by
+/// out.resize(vertexCount, varyingLayoutFor(draw)).
 void runVertexStage(const DrawCall& draw, const ClipVolume& volume, const SetupContext& viewport,
                     size_t begin, size_t end, VertexStageOutput& out);
 
