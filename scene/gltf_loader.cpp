@@ -32,6 +32,10 @@ public:
             if (sceneIndex >= int(model_.scenes.size())) fail("scene " + std::to_string(sceneIndex), "does not exist");
             globals_.assign(model_.nodes.size(), glm::mat4(1.0f));
             inScene_.assign(model_.nodes.size(), false);
+            parents_.assign(model_.nodes.size(), -1);
+            for (size_t p = 0; p < model_.nodes.size(); ++p)
+                for (int c : model_.nodes[p].children)
+                    if (c >= 0 && c < int(parents_.size()) && parents_[c] < 0) parents_[c] = int(p);
             for (int node : model_.scenes[sceneIndex].nodes) visit(node, glm::mat4(1.0f), 0);
             // Meshes after every global transform is known: a skin's joints may come later.
             for (int node : visited_) {
@@ -110,10 +114,7 @@ private:
         glm::mat4 world = localTransform(node, model_.nodes[node]);
         int child = node;
         for (int depth = 0;; ++depth) {
-            int parent = -1;
-            for (size_t p = 0; p < model_.nodes.size() && parent < 0; ++p)
-                for (int c : model_.nodes[p].children)
-                    if (c == child) parent = int(p);
+            const int parent = parents_[child];
             if (parent < 0) return world;
             if (depth > kMaxNodeDepth) fail(where, "joint " + std::to_string(node) + "'s ancestry is deeper than " + std::to_string(kMaxNodeDepth));
             if (parent < int(inScene_.size()) && inScene_[parent]) return globals_[parent] * world;
@@ -687,6 +688,7 @@ private:
     std::vector<glm::mat4> globals_;  // node → world, for the scene's nodes
     std::vector<int> visited_;        // the scene's nodes in traversal order
     std::vector<bool> inScene_;       // whether globals_ holds the node's transform
+    std::vector<int> parents_;        // node → parent (-1: a root), for joints outside the scene
 };
 
 }  // namespace
