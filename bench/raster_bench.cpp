@@ -62,13 +62,6 @@ OurFrame renderOurs(raster::Pipeline& p, const scene::Scene& s, int w, int h, in
 
 // --- What each effect costs: the field scene's geometry drawn with one effect added at a time.
 
-std::shared_ptr<const raster::Texture> benchChecker() {
-    std::vector<glm::vec4> t(256 * 256);
-    for (int y = 0; y < 256; ++y)
-        for (int x = 0; x < 256; ++x) t[y * 256 + x] = glm::vec4(glm::vec3((x / 32 + y / 32) % 2 ? 0.9f : 0.3f), 1.0f);
-    return std::make_shared<raster::Texture>(256, 256, std::move(t));
-}
-
 std::shared_ptr<const raster::Texture> benchBumps() {  // tangent-space normals of a bumpy grid
     std::vector<glm::vec4> t(128 * 128);
     for (int y = 0; y < 128; ++y)
@@ -98,7 +91,7 @@ void drawBare(raster::Pipeline& p, const scene::Scene& s, float aspect) {
 }
 
 void runEffectTable(int width, int height, int frames, int warmup) {
-    const auto checker = benchChecker(), bumps = benchBumps();
+    const auto checker = scene::checkerTexture(256, 8, glm::vec3(0.9f), glm::vec3(0.3f)), bumps = benchBumps();
     auto textured = [&](scene::Scene& s) {
         for (scene::Mesh& m : s.meshes) {
             m.texCoords.clear();

@@ -50,15 +50,6 @@ Scene makeField(float detail) {
     return s;
 }
 
-// A texture made in code: a two-tone checkerboard (linear RGB), `cells` squares a side.
-std::shared_ptr<const raster::Texture> checkerTexture(int size, int cells, glm::vec3 a, glm::vec3 b) {
-    std::vector<glm::vec4> texels(size_t(size) * size);
-    for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x)
-            texels[size_t(y) * size + x] = glm::vec4(((x * cells / size) + (y * cells / size)) % 2 ? a : b, 1.0f);
-    return std::make_shared<raster::Texture>(size, size, std::move(texels));
-}
-
 // A cut-out made in code: opaque discs on a transparent ground, for alpha MASK.
 std::shared_ptr<const raster::Texture> discTexture(int size, int discs) {
     std::vector<glm::vec4> texels(size_t(size) * size);
@@ -207,6 +198,14 @@ Scene makeFill(float detail) {
 }
 
 }  // namespace
+
+std::shared_ptr<const raster::Texture> checkerTexture(int size, int cells, glm::vec3 a, glm::vec3 b) {
+    std::vector<glm::vec4> texels(size_t(size) * size);
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x)
+            texels[size_t(y) * size + x] = glm::vec4(((x * cells / size) + (y * cells / size)) % 2 ? a : b, 1.0f);
+    return std::make_shared<raster::Texture>(size, size, std::move(texels));
+}
 
 Mesh makeSphere(glm::vec3 centre, float radius, int rings, int segments) {
     Mesh m;

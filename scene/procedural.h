@@ -9,6 +9,7 @@
 //             tessellated rolling terrain filling the view
 //   fill      a few hundred large overlapping triangles (fill-bound)
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,5 +29,9 @@ Scene makeProceduralScene(const std::string& name, float detail = 1.0f);
 Mesh makeSphere(glm::vec3 centre, float radius, int rings, int segments);
 Mesh makeTorus(glm::vec3 centre, float majorRadius, float minorRadius, int rings, int segments);
 Mesh makeGround(float halfExtent, float height);
+
+/// A texture made in code: a two-tone checkerboard (linear RGB), size x size texels, `cells`
+/// squares a side.
+std::shared_ptr<const raster::Texture> checkerTexture(int size, int cells, glm::vec3 a, glm::vec3 b);
 
 }  // namespace cuberille::scene

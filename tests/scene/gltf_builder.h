@@ -15,6 +15,22 @@
 
 namespace cuberille::testing {
 
+/// Standard base64 with padding, for `data:` URIs.
+inline std::string base64(const std::string& in) {
+    static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (size_t i = 0; i < in.size(); i += 3) {
+        uint32_t v = uint8_t(in[i]) << 16;
+        if (i + 1 < in.size()) v |= uint8_t(in[i + 1]) << 8;
+        if (i + 2 < in.size()) v |= uint8_t(in[i + 2]);
+        out += k[v >> 18];
+        out += k[(v >> 12) & 63];
+        out += i + 1 < in.size() ? k[(v >> 6) & 63] : '=';
+        out += i + 2 < in.size() ? k[v & 63] : '=';
+    }
+    return out;
+}
+
 class GltfBuilder {
 public:
     GltfBuilder() {
@@ -91,21 +107,6 @@ private:
         const size_t offset = bytes_.size();
         bytes_.append(static_cast<const char*>(data), size);
         return push("bufferViews", {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", size}});
-    }
-
-    static std::string base64(const std::string& in) {
-        static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-        std::string out;
-        for (size_t i = 0; i < in.size(); i += 3) {
-            uint32_t v = uint8_t(in[i]) << 16;
-            if (i + 1 < in.size()) v |= uint8_t(in[i + 1]) << 8;
-            if (i + 2 < in.size()) v |= uint8_t(in[i + 2]);
-            out += k[v >> 18];
-            out += k[(v >> 12) & 63];
-            out += i + 1 < in.size() ? k[(v >> 6) & 63] : '=';
-            out += i + 2 < in.size() ? k[v & 63] : '=';
-        }
-        return out;
     }
 
     nlohmann::json json_;

@@ -11,29 +11,14 @@
 #include "apps/image_io.h"
 #include "scene/gltf_loader.h"
 #include "scene/input_error.h"
+#include "tests/scene/gltf_builder.h"
 
 namespace cuberille::scene {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string base64(const std::string& in) {
-    static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    size_t i = 0;
-    for (; i + 2 < in.size(); i += 3) {
-        const uint32_t v = (uint8_t(in[i]) << 16) | (uint8_t(in[i + 1]) << 8) | uint8_t(in[i + 2]);
-        out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], k[v & 63]};
-    }
-    if (i + 1 == in.size()) {
-        const uint32_t v = uint8_t(in[i]) << 16;
-        out += {k[v >> 18], k[(v >> 12) & 63], '=', '='};
-    } else if (i + 2 == in.size()) {
-        const uint32_t v = (uint8_t(in[i]) << 16) | (uint8_t(in[i + 1]) << 8);
-        out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], '='};
-    }
-    return out;
-}
+using testing::base64;
 
 // Buffer: 4 positions (a unit square in z = 0: 0 1 2 3 as a strip, 0 1 3 2 as a fan, both
 // counter-clockwise from +z), 4 RGBA8 colours, 4 unsigned-byte indices, animation keys.
