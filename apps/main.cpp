@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "apps/render_command.h"
+#include "apps/voxel_commands.h"
 #include "scene/input_error.h"
 #include "scene/procedural.h"
 
@@ -48,6 +49,52 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 
+void addPackCommand(CLI::App& app, cuberille::apps::PackOptions& o) {
+    CLI::App* pack = app.add_subcommand(
+        "pack", "Convert a mesh to a geometry stream (.cgs): LZ4-compressed chunks the voxelizer reads in parallel");
+    pack->add_option("mesh", o.input, "A .ply, .ply.gz, .obj, .gltf, .glb (static pose) or .cgs file")->required();
+    pack->add_option("-o,--out", o.out, "Output geometry stream, .cgs")->required();
+    pack->add_option("--chunk-triangles", o.chunkTriangles, "Triangles per chunk")->capture_default_str();
+    pack->add_option("--stats", o.statsPath, "Write counts and timings as JSON");
+    pack->add_flag("--quiet", o.quiet, "Print nothing on success");
+}
+
+void addVoxelizeCommand(CLI::App& app, cuberille::apps::VoxelizeCommandOptions& o) {
+    CLI::App* v = app.add_subcommand(
+        "voxelize", "Voxelize a mesh's surface with the adaptive octree rasterizer into a voxel model (.cvox)");
+    v->add_option("mesh", o.input, "A .cgs, .ply, .ply.gz, .obj, .gltf or .glb file")->required();
+    v->add_option("-o,--out", o.out, "Output voxel model, .cvox")->required();
+    v->add_option("--resolution", o.resolution, "Voxels along the longest side: a power of two from 2 to 65536")
+        ->capture_default_str();
+    v->add_option("--separability", o.separability,
+                  "conservative (every voxel the surface touches), 26 or 6 (thinner, still separating inside "
+                  "from outside for 26- or 6-connected paths)")
+        ->capture_default_str();
+    v->add_option("--export-voxels", o.exportVoxels,
+                  "Also write the voxels as text: '# cuberille voxels R ox oy oz extent', then 'i j k' per voxel");
+    v->add_flag("--no-source-triangles", o.noSourceTriangles,
+                "Do not keep the source triangles clipped per block (smaller file; no hybrid rendering)");
+    v->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    v->add_option("--stats", o.statsPath, "Write counts, timings and peak memory as JSON");
+    v->add_flag("--quiet", o.quiet, "Print nothing on success");
+}
+
+void addIsosurfaceCommand(CLI::App& app, cuberille::apps::IsosurfaceCommandOptions& o) {
+    CLI::App* iso = app.add_subcommand(
+        "isosurface", "Surface voxels of a raw volume's iso-surface into a voxel model (.cvox)");
+    iso->add_option("volume", o.volume, "Raw samples, x fastest, little-endian")->required();
+    iso->add_option("--dims", o.dims, "Samples along x, y and z")->required()->expected(3);
+    iso->add_option("--type", o.type, "Sample type: u8, u16 or f32")->capture_default_str();
+    iso->add_option("--iso", o.iso, "Iso-value: samples >= it are inside")->required();
+    iso->add_option("-o,--out", o.out, "Output voxel model, .cvox")->required();
+    iso->add_option("--normals", o.normals, "Gradient estimator: regression (3x3x3 linear regression) or central")
+        ->capture_default_str();
+    iso->add_option("--export-voxels", o.exportVoxels, "Also write the voxels as text (see voxelize)");
+    iso->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    iso->add_option("--stats", o.statsPath, "Write counts and timings as JSON");
+    iso->add_flag("--quiet", o.quiet, "Print nothing on success");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -56,6 +103,12 @@ int main(int argc, char** argv) {
     cuberille::apps::RenderOptions renderOptions;
     std::string view = "color";
     addRenderCommand(app, renderOptions, view);
+    cuberille::apps::PackOptions packOptions;
+    addPackCommand(app, packOptions);
+    cuberille::apps::VoxelizeCommandOptions voxelizeOptions;
+    addVoxelizeCommand(app, voxelizeOptions);
+    cuberille::apps::IsosurfaceCommandOptions isosurfaceOptions;
+    addIsosurfaceCommand(app, isosurfaceOptions);
 
     try {
         app.parse(argc, argv);
@@ -73,6 +126,9 @@ int main(int argc, char** argv) {
             renderOptions.view = cuberille::apps::parseView(view);
             return cuberille::apps::runRenderCommand(renderOptions);
         }
+        if (app.got_subcommand("pack")) return cuberille::apps::runPackCommand(packOptions);
+        if (app.got_subcommand("voxelize")) return cuberille::apps::runVoxelizeCommand(voxelizeOptions);
+        if (app.got_subcommand("isosurface")) return cuberille::apps::runIsosurfaceCommand(isosurfaceOptions);
     } catch (const cuberille::scene::InputError& e) {
         std::fprintf(stderr, "cuberille: %s\n", e.what());
         return kExitBadInput;

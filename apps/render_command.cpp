@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "apps/atomic_file.h"
 #include "apps/image_io.h"
 #include "raster/parallel.h"
 #include "raster/pipeline.h"
@@ -135,13 +136,9 @@ std::filesystem::path frameFileName(const std::filesystem::path& out, int frame)
 }
 
 void writeStats(const std::filesystem::path& path, const nlohmann::json& json) {
-    const std::filesystem::path temp = path.string() + ".tmp";
-    {
-        std::ofstream f(temp);
-        f << json.dump(2) << "\n";
-        if (!f) throw std::runtime_error(path.string() + ": cannot write stats");
-    }
-    std::filesystem::rename(temp, path);
+    AtomicOutputFile f(path);
+    f.stream() << json.dump(2) << "\n";
+    f.commit();
 }
 
 }  // namespace

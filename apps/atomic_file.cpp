@@ -1,0 +1,34 @@
+#include "apps/atomic_file.h"
+
+#include <unistd.h>
+
+#include <stdexcept>
+
+namespace cuberille::apps {
+
+AtomicOutputFile::AtomicOutputFile(std::filesystem::path path) : path_(std::move(path)) {
+    const std::filesystem::path dir = path_.has_parent_path() ? path_.parent_path() : std::filesystem::path(".");
+    temp_ = dir / ("." + path_.filename().string() + ".tmp" + std::to_string(::getpid()));
+    out_.open(temp_, std::ios::binary | std::ios::trunc);
+    if (!out_) throw std::runtime_error(path_.string() + ": cannot create the file");
+}
+
+AtomicOutputFile::~AtomicOutputFile() {
+    if (committed_) return;
+    out_.close();
+    std::error_code ignored;
+    std::filesystem::remove(temp_, ignored);
+}
+
+void AtomicOutputFile::commit() {
+    out_.flush();
+    const bool ok = bool(out_);
+    out_.close();
+    if (!ok || out_.fail()) throw std::runtime_error(path_.string() + ": write failed (disk full?)");
+    std::error_code ec;
+    std::filesystem::rename(temp_, path_, ec);
+    if (ec) throw std::runtime_error(path_.string() + ": cannot rename the finished file into place: " + ec.message());
+    committed_ = true;
+}
+
+}  // namespace cuberille::apps

@@ -1,0 +1,29 @@
+#pragma once
+// Output files written under a temporary name in the same folder and renamed into place on
+// commit (DESIGN.md, command line): a failure part-way, or an exception, leaves neither a torn
+// file nor a clobbered earlier one, because the temporary is removed unless committed.
+
+#include <filesystem>
+#include <fstream>
+
+namespace cuberille::apps {
+
+class AtomicOutputFile {
+public:
+    /// Throws std::runtime_error naming the file when the temporary cannot be created.
+    explicit AtomicOutputFile(std::filesystem::path path);
+    ~AtomicOutputFile();
+    AtomicOutputFile(const AtomicOutputFile&) = delete;
+    AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
+
+    std::ofstream& stream() { return out_; }
+    /// Flushes, checks and renames into place; throws std::runtime_error naming the file.
+    void commit();
+
+private:
+    std::filesystem::path path_, temp_;
+    std::ofstream out_;
+    bool committed_ = false;
+};
+
+}  // namespace cuberille::apps

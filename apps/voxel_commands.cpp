@@ -1,0 +1,222 @@
+#include "apps/voxel_commands.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/atomic_file.h"
+#include "raster/parallel.h"
+#include "scene/input_error.h"
+#include "scene/ply_loader.h"
+#include "voxel/cvox_file.h"
+#include "voxel/voxel_export.h"
+
+namespace cuberille::apps {
+namespace {
+
+double nowMs() {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double peakResidentMib() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+bool hasExtension(const std::filesystem::path& p, const char* ext) {
+    std::string e = p.extension().string();
+    for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return e == ext;
+}
+
+void requireExtension(const std::filesystem::path& p, const char* ext, const char* what) {
+    if (!hasExtension(p, ext))
+        throw scene::InputError(p.string() + ": " + what + " must end in " + ext);
+}
+
+void warnToStderr(const std::string& message) { std::fprintf(stderr, "cuberille: warning: %s\n", message.c_str()); }
+
+/// "\rvoxelize: 12/40 chunks" on a terminal, at most ten times a second; nothing when piped.
+std::function<void(size_t, size_t)> terminalProgress(const char* what, const char* unit, bool quiet) {
+    if (quiet || !::isatty(STDERR_FILENO)) return {};
+    return [what, unit, last = 0.0](size_t done, size_t total) mutable {
+        const double now = nowMs();
+        if (done != total && now - last < 100.0) return;
+        last = now;
+        std::fprintf(stderr, "\r%s: %zu/%zu %s%s", what, done, total, unit, done == total ? "\n" : "");
+        std::fflush(stderr);
+    };
+}
+
+void writeJson(const std::filesystem::path& path, const nlohmann::json& json) {
+    AtomicOutputFile f(path);
+    f.stream() << json.dump(2) << "\n";
+    f.commit();
+}
+
+void writeModelFiles(const voxel::VoxelModel& model, const std::filesystem::path& out,
+                     const std::filesystem::path& exportPath, double& writeMs) {
+    const double t0 = nowMs();
+    // Both files are complete before either is renamed into place.
+    AtomicOutputFile cvox(out);
+    voxel::writeCvox(model, cvox.stream());
+    std::unique_ptr<AtomicOutputFile> text;
+    if (!exportPath.empty()) {
+        text = std::make_unique<AtomicOutputFile>(exportPath);
+        voxel::writeVoxelExport(model, text->stream());
+    }
+    cvox.commit();
+    if (text) text->commit();
+    writeMs = nowMs() - t0;
+}
+
+}  // namespace
+
+voxel::Separability parseSeparability(const std::string& name) {
+    if (name == "conservative") return voxel::Separability::Conservative;
+    if (name == "26") return voxel::Separability::TwentySix;
+    if (name == "6") return voxel::Separability::Six;
+    throw scene::InputError("--separability " + name + ": expected conservative, 26 or 6");
+}
+
+int runPackCommand(const PackOptions& o) {
+    requireExtension(o.out, ".cgs", "the geometry stream");
+    if (o.chunkTriangles == 0) throw scene::InputError("--chunk-triangles must be at least 1");
+    const double t0 = nowMs();
+    // A geometry stream is re-written with its own chunks; other files are cut at the asked size.
+    const std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr, o.chunkTriangles);
+    const double loadMs = nowMs() - t0;
+    const double w0 = nowMs();
+    AtomicOutputFile out(o.out);
+    const voxel::GeometryStreamWriteStats s = voxel::writeGeometryStream(*view, out.stream());
+    out.commit();
+    const double writeMs = nowMs() - w0;
+    if (!o.quiet)
+        std::printf("packed %s: %llu triangles, %llu vertices in %llu chunks, %.1f MiB (LZ4 %.2fx) -> %s\n",
+                    o.input.string().c_str(), (unsigned long long)s.triangles, (unsigned long long)s.vertices,
+                    (unsigned long long)s.chunks, double(s.compressedBytes) / (1 << 20),
+                    s.compressedBytes ? double(s.rawBytes) / double(s.compressedBytes) : 0.0, o.out.string().c_str());
+    if (!o.statsPath.empty())
+        writeJson(o.statsPath, {{"input", o.input.string()},
+                                {"chunks", s.chunks},
+                                {"triangles", s.triangles},
+                                {"vertices", s.vertices},
+                                {"rawBytes", s.rawBytes},
+                                {"compressedBytes", s.compressedBytes},
+                                {"times", {{"loadMs", loadMs}, {"writeMs", writeMs}}}});
+    return 0;
+}
+
+int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
+    requireExtension(o.out, ".cvox", "the voxel model");
+    if (!voxel::isValidResolution(o.resolution))
+        throw scene::InputError("--resolution " + std::to_string(o.resolution) + ": expected a power of two from " +
+                                std::to_string(voxel::kMinResolution) + " to " + std::to_string(voxel::kMaxResolution));
+    voxel::VoxelizeOptions vo;
+    vo.resolution = o.resolution;
+    vo.separability = parseSeparability(o.separability);
+    vo.keepSourceTriangles = !o.noSourceTriangles;
+    vo.progress = terminalProgress("voxelize", "chunks", o.quiet);
+    raster::ThreadLimit threadLimit(o.threads);
+
+    const double t0 = nowMs();
+    const std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr);
+    const double openMs = nowMs() - t0;
+    voxel::VoxelizeStats s;
+    const voxel::VoxelModel model = voxel::voxelizeMesh(*view, vo, &s);
+    double writeMs = 0;
+    writeModelFiles(model, o.out, o.exportVoxels, writeMs);
+    const double totalMs = nowMs() - t0;
+
+    if (!o.quiet)
+        std::printf("voxelized %s at %u^3 (%s): %llu triangles -> %llu voxels in %llu blocks, %.0f ms "
+                    "(open %.0f, rasterize %.0f, merge %.0f, emit %.0f, write %.0f) -> %s\n",
+                    o.input.string().c_str(), o.resolution, voxel::separabilityName(vo.separability),
+                    (unsigned long long)s.triangles, (unsigned long long)s.voxels, (unsigned long long)s.blocks, totalMs,
+                    openMs, s.rasterizeMs, s.mergeMs, s.emitMs, writeMs, o.out.string().c_str());
+    if (!o.statsPath.empty()) {
+        const double seconds = totalMs / 1000.0;
+        writeJson(o.statsPath,
+                  {{"input", o.input.string()},
+                   {"resolution", o.resolution},
+                   {"separability", voxel::separabilityName(vo.separability)},
+                   {"threads", raster::hardwareThreads()},
+                   {"treesBuilt", s.threads},
+                   {"chunks", s.chunks},
+                   {"triangles", s.triangles},
+                   {"leafPieces", s.leafPieces},
+                   {"exactTests", s.exactTests},
+                   {"conservativeVoxels", s.conservativeVoxels},
+                   {"voxels", s.voxels},
+                   {"blocks", s.blocks},
+                   {"sourceTriangles", s.sourceTriangles},
+                   {"octreeBytes", s.octreeBytes},
+                   {"peakResidentMib", peakResidentMib()},
+                   {"trianglesPerSecond", seconds > 0 ? double(s.triangles) / seconds : 0.0},
+                   {"voxelsPerSecond", seconds > 0 ? double(s.voxels) / seconds : 0.0},
+                   {"times",
+                    {{"openMs", openMs},
+                     {"readMsAllThreads", s.readMs},
+                     {"rasterizeMs", s.rasterizeMs},
+                     {"mergeMs", s.mergeMs},
+                     {"emitMs", s.emitMs},
+                     {"writeMs", writeMs},
+                     {"totalMs", totalMs}}}});
+    }
+    return 0;
+}
+
+int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
+    requireExtension(o.out, ".cvox", "the voxel model");
+    voxel::VolumeDesc d;
+    d.dims = {o.dims[0], o.dims[1], o.dims[2]};
+    if (d.dims.x == 0 || d.dims.y == 0 || d.dims.z == 0) throw scene::InputError("--dims: every dimension must be at least 1");
+    if (o.type == "u8") d.type = voxel::SampleType::U8;
+    else if (o.type == "u16") d.type = voxel::SampleType::U16;
+    else if (o.type == "f32") d.type = voxel::SampleType::F32;
+    else throw scene::InputError("--type " + o.type + ": expected u8, u16 or f32");
+    voxel::IsosurfaceOptions io;
+    io.iso = o.iso;
+    if (o.normals == "regression") io.gradient = voxel::GradientEstimator::LinearRegression;
+    else if (o.normals == "central") io.gradient = voxel::GradientEstimator::CentralDifferences;
+    else throw scene::InputError("--normals " + o.normals + ": expected regression or central");
+    raster::ThreadLimit threadLimit(o.threads);
+
+    const double t0 = nowMs();
+    const uint64_t expected = uint64_t(d.dims.x) * d.dims.y * d.dims.z * voxel::sampleBytes(d.type);
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(o.volume, ec);
+    if (ec) throw scene::InputError(o.volume.string() + ": cannot read: " + ec.message());
+    if (size != expected)
+        throw scene::InputError(o.volume.string() + ": " + std::to_string(size) + " bytes, but " + std::to_string(d.dims.x) +
+                                "x" + std::to_string(d.dims.y) + "x" + std::to_string(d.dims.z) + " " + o.type +
+                                " samples need " + std::to_string(expected) + (size < expected ? " (truncated)" : ""));
+    const std::string bytes = scene::readFileBytes(o.volume);
+    const double readMs = nowMs() - t0;
+    voxel::IsosurfaceStats s;
+    const voxel::VoxelModel model = voxel::extractIsosurface(bytes, d, io, &s);
+    double writeMs = 0;
+    writeModelFiles(model, o.out, o.exportVoxels, writeMs);
+    if (!o.quiet)
+        std::printf("isosurface of %s at %g: %llu voxels in %zu blocks (%llu of %llu blocks skipped), %.0f ms "
+                    "(read %.0f, extract %.0f, write %.0f) -> %s\n",
+                    o.volume.string().c_str(), o.iso, (unsigned long long)s.voxels, model.blocks.size(),
+                    (unsigned long long)s.blocksSkipped, (unsigned long long)s.blocks, nowMs() - t0, readMs,
+                    s.extractMs, writeMs, o.out.string().c_str());
+    if (!o.statsPath.empty())
+        writeJson(o.statsPath, {{"input", o.volume.string()},
+                                {"samples", s.samples},
+                                {"voxels", s.voxels},
+                                {"blocks", s.blocks},
+                                {"blocksSkipped", s.blocksSkipped},
+                                {"peakResidentMib", peakResidentMib()},
+                                {"times", {{"readMs", readMs}, {"extractMs", s.extractMs}, {"writeMs", writeMs}}}});
+    return 0;
+}
+
+}  // namespace cuberille::apps

@@ -1,0 +1,54 @@
+#pragma once
+// `cuberille pack`, `cuberille voxelize` and `cuberille isosurface`: meshes to geometry streams,
+// meshes to voxel models, volumes to voxel models. Library entry points, so tests and benchmarks
+// run the tool's own path.
+
+#include <array>
+#include <filesystem>
+#include <string>
+
+#include "voxel/geometry_stream.h"
+#include "voxel/isosurface.h"
+#include "voxel/octree_voxelizer.h"
+
+namespace cuberille::apps {
+
+struct PackOptions {
+    std::filesystem::path input, out;
+    uint32_t chunkTriangles = voxel::kDefaultChunkTriangles;
+    std::filesystem::path statsPath;
+    bool quiet = false;
+};
+
+struct VoxelizeCommandOptions {
+    std::filesystem::path input, out;
+    uint32_t resolution = 256;
+    std::string separability = "conservative";  // conservative, 26 or 6
+    std::filesystem::path exportVoxels;
+    bool noSourceTriangles = false;
+    int threads = 0;
+    std::filesystem::path statsPath;
+    bool quiet = false;
+};
+
+struct IsosurfaceCommandOptions {
+    std::filesystem::path volume, out;
+    std::array<uint32_t, 3> dims{0, 0, 0};
+    std::string type = "u8";  // u8, u16 or f32
+    double iso = 0.5;
+    std::string normals = "regression";  // regression or central
+    std::filesystem::path exportVoxels;
+    int threads = 0;
+    std::filesystem::path statsPath;
+    bool quiet = false;
+};
+
+/// Each returns the exit code; bad input throws scene::InputError (exit 2), failures while
+/// working std::runtime_error (exit 1).
+int runPackCommand(const PackOptions& options);
+int runVoxelizeCommand(const VoxelizeCommandOptions& options);
+int runIsosurfaceCommand(const IsosurfaceCommandOptions& options);
+
+voxel::Separability parseSeparability(const std::string& name);  // throws scene::InputError
+
+}  // namespace cuberille::apps

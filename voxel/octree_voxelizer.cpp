@@ -1,0 +1,398 @@
+#include "voxel/octree_voxelizer.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include "raster/parallel.h"
+#include "voxel/exact_overlap.h"
+#include "voxel/intersection_targets.h"
+#include "voxel/packing.h"
+#include "voxel/voxel_octree.h"
+
+namespace cuberille::voxel {
+namespace {
+
+double nowMs() {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+/// What a leaf needs of the triangle a piece came from.
+struct TriangleContext {
+    glm::dvec3 normal[3];
+    glm::dvec3 color[3];
+    glm::dvec3 geometricNormal{0.0};  // unit, or zero for a degenerate triangle
+    uint8_t faceMask = 0;
+    uint64_t index = 0;  // in the whole mesh: chunk order, then order in the chunk
+    LatticeTriangle lattice;  // the same corners, exactly, for leaves rounding cannot decide
+};
+
+/// A triangle of a piece's fan, kept for the block it lies in. Sorting by (block, triangle, fan)
+/// makes the order independent of which thread found it.
+struct BlockTriangleRecord {
+    uint64_t blockMorton = 0;
+    uint64_t triangle = 0;
+    uint32_t fan = 0;
+    SourceTriangle tri;
+};
+
+uint64_t spreadBits3(uint32_t v) {
+    uint64_t x = v & 0x1FFFFF;
+    x = (x | x << 32) & 0x1F00000000FFFFull;
+    x = (x | x << 16) & 0x1F0000FF0000FFull;
+    x = (x | x << 8) & 0x100F00F00F00F00Full;
+    x = (x | x << 4) & 0x10C30C30C30C30C3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+}
+
+/// Octant order (x in bit 0, y in bit 1, z in bit 2) at every level is Morton order.
+uint64_t mortonOf(const glm::uvec3& c) { return spreadBits3(c.x) | spreadBits3(c.y) << 1 | spreadBits3(c.z) << 2; }
+
+uint8_t activeFaces(const glm::dvec3& n, double epsilon) {
+    uint8_t m = 0;
+    if (n.x > epsilon) m |= kFacePosX;
+    if (n.x < -epsilon) m |= kFaceNegX;
+    if (n.y > epsilon) m |= kFacePosY;
+    if (n.y < -epsilon) m |= kFaceNegY;
+    if (n.z > epsilon) m |= kFacePosZ;
+    if (n.z < -epsilon) m |= kFaceNegZ;
+    return m;
+}
+
+template <class T>
+T interpolate(const T (&v)[3], const glm::dvec2& bary) {
+    return v[0] * (1.0 - bary.x - bary.y) + v[1] * bary.x + v[2] * bary.y;
+}
+
+/// One thread's octree and the source-triangle pieces it found.
+class TreeBuilder {
+public:
+    TreeBuilder(const VoxelGrid& grid, const VoxelizeOptions& options, bool colors)
+        : grid_(grid),
+          options_(options),
+          tree_(log2OfPowerOfTwo(grid.resolution), colors),
+          leafDepth_(tree_.leafDepth()),
+          blockDepth_(std::max(0, leafDepth_ - log2OfPowerOfTwo(kBlockSize))) {}
+
+    void insertChunk(const GeometryChunk& chunk, uint64_t firstTriangle) {
+        for (size_t t = 0; t < chunk.triangleCount(); ++t) {
+            TriangleContext tri;
+            tri.index = firstTriangle + t;
+            TrianglePiece piece;
+            piece.count = 3;
+            glm::dvec3 p[3];
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t v = chunk.indices[3 * t + k];
+                // Snapped to the 2^-40 lattice: the clipping below and the exact leaf test then see
+                // the very same triangle.
+                const glm::dvec3 unit = glm::clamp(grid_.toUnitCube(chunk.positions[v]), glm::dvec3(0.0), glm::dvec3(1.0));
+                for (int a = 0; a < 3; ++a) {
+                    tri.lattice.v[k][a] = std::llround(unit[a] * kLatticeScale);
+                    p[k][a] = double(tri.lattice.v[k][a]) / kLatticeScale;
+                }
+                tri.normal[k] = glm::dvec3(chunk.normals[v]);
+                tri.color[k] = chunk.hasColors() ? glm::dvec3(chunk.colors[v]) : glm::dvec3(1.0);
+                piece.v[k].position = p[k];
+            }
+            piece.v[0].bary = {0.0, 0.0};
+            piece.v[1].bary = {1.0, 0.0};
+            piece.v[2].bary = {0.0, 1.0};
+            const glm::dvec3 g = glm::cross(p[1] - p[0], p[2] - p[0]);
+            const double len = glm::length(g);
+            tri.geometricNormal = len > 0.0 ? g / len : glm::dvec3(0.0);
+            tri.faceMask = activeFaces(tri.geometricNormal, options_.activeFaceEpsilon);
+            tri_ = &tri;
+            descend(VoxelOctree::root(), 0, glm::uvec3(0), piece);
+        }
+    }
+
+    VoxelOctree& tree() { return tree_; }
+    std::vector<BlockTriangleRecord>& blockTriangles() { return blockTriangles_; }
+    uint64_t leafPieces() const { return leafPieces_; }
+    uint64_t exactTests() const { return exactTests_; }
+    double readMs = 0;
+
+private:
+    /// Walks a piece down from `node` (at `depth`, covering grid cell `cell` of that depth) to the
+    /// leaves. A piece inside one child moves down in place; one that straddles mid-planes is split
+    /// axis by axis, and each part recurses.
+    void descend(uint32_t node, int depth, glm::uvec3 cell, TrianglePiece& piece) {
+        for (;;) {
+            if (depth == blockDepth_ && options_.keepSourceTriangles) recordBlockPiece(cell, piece);
+            if (depth == leafDepth_) {
+                accumulateLeaf(node, cell, piece);
+                return;
+            }
+            int octant = 0;
+            bool single = true;
+            for (int axis = 0; axis < 3 && single; ++axis) {
+                if (piece.maxAlong(axis) < 0.5 - kTouchEpsilon) continue;
+                if (piece.minAlong(axis) > 0.5 + kTouchEpsilon) octant |= 1 << axis;
+                else single = false;
+            }
+            if (!single) break;
+            for (int i = 0; i < piece.count; ++i)
+                for (int axis = 0; axis < 3; ++axis) {
+                    double& c = piece.v[i].position[axis];
+                    c = (octant >> axis & 1) ? c * 2.0 - 1.0 : c * 2.0;
+                }
+            node = tree_.childOf(node, depth, octant);
+            cell = cell * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1);
+            ++depth;
+        }
+        TrianglePiece xs[2], ys[2], zs[2];
+        splitPieceAtMidPlane(piece, 0, xs[0], xs[1]);
+        for (int ix = 0; ix < 2; ++ix) {
+            if (xs[ix].count == 0) continue;
+            splitPieceAtMidPlane(xs[ix], 1, ys[0], ys[1]);
+            for (int iy = 0; iy < 2; ++iy) {
+                if (ys[iy].count == 0) continue;
+                splitPieceAtMidPlane(ys[iy], 2, zs[0], zs[1]);
+                for (int iz = 0; iz < 2; ++iz) {
+                    if (zs[iz].count == 0) continue;
+                    const int octant = ix | iy << 1 | iz << 2;
+                    descend(tree_.childOf(node, depth, octant), depth + 1, cell * 2u + glm::uvec3(ix, iy, iz), zs[iz]);
+                }
+            }
+        }
+    }
+
+    /// The clipped piece of one triangle in one voxel (in voxel units, so its area is in voxels²)
+    /// adds its area-weighted attributes; the face mask and targets are unions. A piece that only
+    /// grazes the voxel counts only if the exact test says the triangle touches it.
+    void accumulateLeaf(uint32_t leaf, const glm::uvec3& cell, const TrianglePiece& piece) {
+        if (pieceOnlyGrazesCube(piece)) {
+            ++exactTests_;
+            if (!latticeTriangleTouchesVoxel(tri_->lattice, cell, leafDepth_)) return;
+        }
+        ++leafPieces_;
+        const double weight = 0.5 * twicePieceArea(piece) * kLeafWeightScale + kContactWeight;
+        const glm::dvec2 bary = pieceCentroidBary(piece);
+        glm::dvec3 n = interpolate(tri_->normal, bary);
+        const double len = glm::length(n);
+        n = len > 0.0 ? n / len : tri_->geometricNormal;
+        LeafSums& s = tree_.leaf(leaf);
+        for (int k = 0; k < 3; ++k) s.normal[k] += std::llround(weight * n[k]);
+        s.weight += std::llround(weight);
+        s.faceMask |= tri_->faceMask;
+        if (tree_.withColors()) {
+            const glm::dvec3 c = interpolate(tri_->color, bary);
+            LeafColorSums& cs = tree_.leafColor(leaf);
+            for (int k = 0; k < 3; ++k) cs.rgb[k] += std::llround(weight * c[k]);
+        }
+        // Targets are tested only for the separability asked for, and only until one is met.
+        switch (options_.separability) {
+            case Separability::Conservative: break;
+            case Separability::Six:
+                if (!(s.targets & kMetCrosshair) && pieceMeetsCrosshair(piece)) s.targets |= kMetCrosshair;
+                break;
+            case Separability::TwentySix:
+                if (!(s.targets & (kMetDiagonals | kMetCrosshair))) {
+                    if (pieceMeetsDiagonals(piece)) s.targets |= kMetDiagonals;
+                    else if (pieceMeetsCrosshair(piece)) s.targets |= kMetCrosshair;
+                }
+                break;
+        }
+    }
+
+    /// The piece at the block depth, in model units, as a fan of triangles.
+    void recordBlockPiece(const glm::uvec3& block, const TrianglePiece& piece) {
+        if (piece.count < 3) return;  // a point or segment of contact: nothing to draw
+        const double blockExtent = grid_.extent / double(1u << blockDepth_);
+        auto vertex = [&](int i, SourceTriangle& out, int slot) {
+            const glm::dvec3 p = grid_.origin + (glm::dvec3(block) + piece.v[i].position) * blockExtent;
+            out.position[slot] = glm::vec3(p);
+            const glm::dvec3 n = interpolate(tri_->normal, piece.v[i].bary);
+            const double len = glm::length(n);
+            out.normal[slot] = packNormal1010102(glm::vec3(len > 0.0 ? n / len : tri_->geometricNormal));
+            out.color[slot] = packSrgba8(glm::vec3(interpolate(tri_->color, piece.v[i].bary)));
+        };
+        const uint64_t morton = mortonOf(block);
+        for (int i = 1; i + 1 < piece.count; ++i) {
+            BlockTriangleRecord r;
+            r.blockMorton = morton;
+            r.triangle = tri_->index;
+            r.fan = uint32_t(i - 1);
+            vertex(0, r.tri, 0);
+            vertex(i, r.tri, 1);
+            vertex(i + 1, r.tri, 2);
+            blockTriangles_.push_back(r);
+        }
+    }
+
+    const VoxelGrid& grid_;
+    const VoxelizeOptions& options_;
+    VoxelOctree tree_;
+    int leafDepth_, blockDepth_;
+    const TriangleContext* tri_ = nullptr;
+    std::vector<BlockTriangleRecord> blockTriangles_;
+    uint64_t leafPieces_ = 0, exactTests_ = 0;
+};
+
+/// Walks the merged tree in octant (Morton) order and gathers the kept voxels into blocks,
+/// pairing each block with its source triangles (sorted the same way).
+class BlockEmitter {
+public:
+    BlockEmitter(const VoxelOctree& tree, const VoxelizeOptions& options, const std::vector<BlockTriangleRecord>& triangles,
+                 VoxelModel& model, VoxelizeStats& stats)
+        : tree_(tree), options_(options), triangles_(triangles), model_(model), stats_(stats),
+          leafDepth_(tree.leafDepth()), blockDepth_(std::max(0, leafDepth_ - log2OfPowerOfTwo(kBlockSize))) {}
+
+    void run() { visit(VoxelOctree::root(), 0, glm::uvec3(0)); }
+
+private:
+    void visit(uint32_t node, int depth, const glm::uvec3& cell) {
+        if (depth == blockDepth_) {
+            emitBlock(node, cell);
+            return;
+        }
+        for (int octant = 0; octant < 8; ++octant)
+            if (const uint32_t c = tree_.existingChild(node, octant))
+                visit(c, depth + 1, cell * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1));
+    }
+
+    void emitBlock(uint32_t node, const glm::uvec3& cell) {
+        VoxelBlock b;
+        b.coord = cell;
+        b.tightMin = glm::uvec3(model_.blockSize);
+        gather(node, blockDepth_, glm::uvec3(0), b);
+        const uint64_t morton = mortonOf(cell);
+        while (nextTriangle_ < triangles_.size() && triangles_[nextTriangle_].blockMorton < morton) ++nextTriangle_;
+        while (nextTriangle_ < triangles_.size() && triangles_[nextTriangle_].blockMorton == morton)
+            b.triangles.push_back(triangles_[nextTriangle_++].tri);
+        if (b.voxels.empty() && b.triangles.empty()) return;
+        if (b.voxels.empty()) b.tightMin = glm::uvec3(0);
+        stats_.voxels += b.voxels.size();
+        stats_.sourceTriangles += b.triangles.size();
+        model_.blocks.push_back(std::move(b));
+    }
+
+    void gather(uint32_t node, int depth, const glm::uvec3& local, VoxelBlock& b) {
+        if (depth == leafDepth_) {
+            emitVoxel(tree_.leaf(node), node, local, b);
+            return;
+        }
+        for (int octant = 0; octant < 8; ++octant)
+            if (const uint32_t c = tree_.existingChild(node, octant))
+                gather(c, depth + 1, local * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1), b);
+    }
+
+    void emitVoxel(const LeafSums& s, uint32_t leaf, const glm::uvec3& local, VoxelBlock& b) {
+        if (s.weight == 0) return;  // reached only by pieces the exact test turned away
+        ++stats_.conservativeVoxels;
+        const bool keep = options_.separability == Separability::Conservative ||
+                          (options_.separability == Separability::Six && (s.targets & kMetCrosshair)) ||
+                          (options_.separability == Separability::TwentySix && s.targets != 0);
+        if (!keep) return;
+        const glm::dvec3 n(double(s.normal[0]), double(s.normal[1]), double(s.normal[2]));
+        const double len = glm::length(n);
+        b.voxels.push_back(packVoxel(local.x, local.y, local.z, s.faceMask));
+        b.normals.push_back(packNormal1010102(len > 0.0 ? glm::vec3(n / len) : glm::vec3(0.0f)));
+        if (tree_.withColors()) {
+            const LeafColorSums& c = tree_.leafColor(leaf);
+            const double w = double(s.weight);
+            b.colors.push_back(packSrgba8(glm::vec3(double(c.rgb[0]) / w, double(c.rgb[1]) / w, double(c.rgb[2]) / w)));
+        } else {
+            b.colors.push_back(0xFFFFFFFFu);
+        }
+        b.tightMin = glm::min(b.tightMin, local);
+        b.tightMax = glm::max(b.tightMax, local);
+    }
+
+    const VoxelOctree& tree_;
+    const VoxelizeOptions& options_;
+    const std::vector<BlockTriangleRecord>& triangles_;
+    VoxelModel& model_;
+    VoxelizeStats& stats_;
+    int leafDepth_, blockDepth_;
+    size_t nextTriangle_ = 0;
+};
+
+}  // namespace
+
+VoxelGrid gridFor(const MeshView& mesh, uint32_t resolution) {
+    glm::vec3 lo, hi;
+    mesh.bounds(lo, hi);
+    if (lo.x > hi.x) lo = hi = glm::vec3(0.0f);
+    return VoxelGrid::fitting(glm::dvec3(lo), glm::dvec3(hi), resolution);
+}
+
+VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, VoxelizeStats* statsOut) {
+    if (!isValidResolution(options.resolution))
+        throw std::invalid_argument("resolution " + std::to_string(options.resolution) +
+                                    " is not a power of two from 2 to 65536");
+    VoxelizeStats stats;
+    VoxelModel model;
+    model.grid = options.grid ? *options.grid : gridFor(mesh, options.resolution);
+    model.grid.resolution = options.resolution;
+    model.blockSize = std::min(kBlockSize, options.resolution);
+    model.separability = options.separability;
+    model.hasColors = mesh.hasColors();
+
+    // Each chunk's first triangle's index in the whole mesh: the sort key that makes source
+    // triangles come out in one order whatever thread read which chunk.
+    std::vector<uint64_t> firstTriangle(mesh.chunkCount() + 1, 0);
+    for (size_t i = 0; i < mesh.chunkCount(); ++i) firstTriangle[i + 1] = firstTriangle[i] + mesh.chunkInfo(i).triangleCount;
+    stats.chunks = mesh.chunkCount();
+    stats.triangles = firstTriangle.back();
+
+    tbb::enumerable_thread_specific<std::unique_ptr<TreeBuilder>> builders;
+    std::atomic<size_t> done{0};
+    std::mutex progressMutex;
+    double t0 = nowMs();
+    raster::parallelFor(mesh.chunkCount(), [&](size_t chunk) {
+        std::unique_ptr<TreeBuilder>& b = builders.local();
+        if (!b) b = std::make_unique<TreeBuilder>(model.grid, options, model.hasColors);
+        const double r0 = nowMs();
+        const GeometryChunk c = mesh.readChunk(chunk);
+        b->readMs += nowMs() - r0;
+        b->insertChunk(c, firstTriangle[chunk]);
+        const size_t n = ++done;
+        if (options.progress) {
+            std::lock_guard<std::mutex> lock(progressMutex);
+            options.progress(n, mesh.chunkCount());
+        }
+    });
+    stats.rasterizeMs = nowMs() - t0;
+
+    t0 = nowMs();
+    std::vector<TreeBuilder*> trees;
+    for (auto& b : builders)
+        if (b) trees.push_back(b.get());
+    stats.threads = int(trees.size());
+    std::vector<BlockTriangleRecord> triangles;
+    for (TreeBuilder* b : trees) {
+        stats.octreeBytes += b->tree().reservedBytes();
+        stats.leafPieces += b->leafPieces();
+        stats.exactTests += b->exactTests();
+        stats.readMs += b->readMs;
+    }
+    if (!trees.empty()) {
+        for (size_t i = 1; i < trees.size(); ++i) trees[0]->tree().mergeFrom(trees[i]->tree());
+        for (TreeBuilder* b : trees) {
+            triangles.insert(triangles.end(), b->blockTriangles().begin(), b->blockTriangles().end());
+            std::vector<BlockTriangleRecord>().swap(b->blockTriangles());
+        }
+        std::sort(triangles.begin(), triangles.end(), [](const BlockTriangleRecord& a, const BlockTriangleRecord& b) {
+            if (a.blockMorton != b.blockMorton) return a.blockMorton < b.blockMorton;
+            if (a.triangle != b.triangle) return a.triangle < b.triangle;
+            return a.fan < b.fan;
+        });
+    }
+    stats.mergeMs = nowMs() - t0;
+
+    t0 = nowMs();
+    if (!trees.empty()) BlockEmitter(trees[0]->tree(), options, triangles, model, stats).run();
+    stats.blocks = model.blocks.size();
+    stats.emitMs = nowMs() - t0;
+    if (statsOut) *statsOut = stats;
+    return model;
+}
+
+}  // namespace cuberille::voxel

@@ -1,0 +1,62 @@
+#pragma once
+// The adaptive octree voxelizer (Chajdas 2015, sections 3.1.1 and 3.1.2): every triangle walks
+// down an octree over the grid's unit cube, split at each node's mid-planes into the pieces that
+// fall in each child, until the pieces are single voxels. The tree adapts to the surface: only
+// nodes a triangle touches are ever created.
+//
+//   voxelizeMesh
+//     per chunk, on whichever thread is free (work stealing): read it, then insert each triangle
+//       insertTriangle -> descend: split the piece at the node's mid-planes, recurse per child
+//         at the block depth: keep the piece as a source triangle of that block
+//         at the leaf depth: accumulate area-weighted normal and colour, active faces, targets
+//     merge the per-thread trees (integer sums: any order, same bits)
+//     emit: walk the merged tree in octant order, one block per subtree at the block depth,
+//           keeping the voxels the separability asks for
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+
+#include "voxel/mesh_view.h"
+#include "voxel/voxel_model.h"
+
+namespace cuberille::voxel {
+
+struct VoxelizeOptions {
+    uint32_t resolution = 256;  // a power of two, kMinResolution..kMaxResolution
+    Separability separability = Separability::Conservative;
+    /// The grid to voxelize into; by default the mesh's bounds (gridFor). A given grid lets
+    /// several models share one, and tests place triangles exactly on voxel boundaries.
+    /// Geometry outside it is clamped onto its faces.
+    std::optional<VoxelGrid> grid;
+    bool keepSourceTriangles = true;  // clip the source triangles per block (hybrid rendering)
+    /// A face is active when the surface's unit normal n satisfies dot(n, face normal) > this
+    /// (section 3.1.1): triangles lying in or parallel to a voxel face do not activate the side
+    /// faces through rounding.
+    double activeFaceEpsilon = 1e-3;
+    /// Called from the calling thread's work as chunks finish (done, total); may be empty.
+    std::function<void(size_t, size_t)> progress;
+};
+
+struct VoxelizeStats {
+    uint64_t chunks = 0, triangles = 0;
+    uint64_t leafPieces = 0;       // triangle pieces that reached a leaf (duplicates included)
+    uint64_t exactTests = 0;       // leaf pieces near a voxel face, decided by the exact test
+    uint64_t conservativeVoxels = 0;  // voxels the surface touches
+    uint64_t voxels = 0;           // voxels kept by the separability
+    uint64_t blocks = 0, sourceTriangles = 0;
+    uint64_t octreeBytes = 0;      // all per-thread trees at their largest, before merging
+    int threads = 0;               // trees built (threads that took at least one chunk)
+    double readMs = 0;             // summed over threads: reading and decompressing chunks
+    double rasterizeMs = 0;        // wall: reading and inserting every chunk
+    double mergeMs = 0, emitMs = 0;
+};
+
+/// Throws std::invalid_argument for a resolution that is not a power of two in range, and
+/// scene::InputError for bad chunk data.
+VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, VoxelizeStats* stats = nullptr);
+
+/// The grid voxelizeMesh uses for a view: the view's bounds, uniformly scaled.
+VoxelGrid gridFor(const MeshView& mesh, uint32_t resolution);
+
+}  // namespace cuberille::voxel
