@@ -83,7 +83,7 @@ void addIsosurfaceCommand(CLI::App& app, cuberille::apps::IsosurfaceCommandOptio
     CLI::App* iso = app.add_subcommand(
         "isosurface", "Surface voxels of a raw volume's iso-surface into a voxel model (.cvox)");
     iso->add_option("volume", o.volume, "Raw samples, x fastest, little-endian")->required();
-    iso->add_option("--dims", o.dims, "Samples along x, y and z")->required()->expected(3);
+    iso->add_option("--dims", o.dims, "Samples along x, y and z")->required();
     iso->add_option("--type", o.type, "Sample type: u8, u16 or f32")->capture_default_str();
     iso->add_option("--iso", o.iso, "Iso-value: samples >= it are inside")->required();
     iso->add_option("-o,--out", o.out, "Output voxel model, .cvox")->required();

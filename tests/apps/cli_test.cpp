@@ -179,6 +179,68 @@ TEST_F(Cli, HelpOnEveryLevel) {
     const CommandRun r = run("render --help");
     EXPECT_EQ(r.exitCode, 0);
     EXPECT_NE(r.output.find("--msaa"), std::string::npos);
+    for (const char* sub : {"pack", "voxelize", "isosurface"}) EXPECT_EQ(run(std::string(sub) + " --help").exitCode, 0) << sub;
+}
+
+// A closed tetrahedron as an OBJ.
+constexpr const char* kTetrahedronObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+TEST_F(Cli, PackThenVoxelizeMatchesVoxelizingTheMeshAndExportsTheGrid) {
+    const fs::path obj = write("tet.obj", kTetrahedronObj);
+    const fs::path cgs = dir_ / "tet.cgs";
+    CommandRun r = run("pack " + obj.string() + " -o " + cgs.string() + " --chunk-triangles 2");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (const fs::path& input : {obj, cgs}) {
+        const fs::path out = dir_ / (input.filename().string() + ".cvox"), txt = dir_ / (input.filename().string() + ".txt");
+        r = run("voxelize " + input.string() + " --resolution 16 --separability 6 -o " + out.string() +
+                " --export-voxels " + txt.string() + " --stats " + (dir_ / "v.json").string());
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_TRUE(fs::exists(out));
+        EXPECT_TRUE(fs::exists(dir_ / "v.json"));
+    }
+    std::ifstream a(dir_ / "tet.obj.txt"), b(dir_ / "tet.cgs.txt");
+    const std::string ta((std::istreambuf_iterator<char>(a)), {}), tb((std::istreambuf_iterator<char>(b)), {});
+    EXPECT_EQ(ta.rfind("# cuberille voxels 16 0 0 0 1\n", 0), 0u) << ta.substr(0, 80);
+    EXPECT_GT(ta.size(), 100u);
+    EXPECT_EQ(ta, tb);
+}
+
+TEST_F(Cli, VoxelCommandsRejectBadInputWithExitTwoAndWriteNothing) {
+    const fs::path obj = write("tet.obj", kTetrahedronObj);
+    const fs::path cgs = dir_ / "tet.cgs", out = dir_ / "out.cvox";
+    ASSERT_EQ(run("pack " + obj.string() + " -o " + cgs.string()).exitCode, 0);
+    // A truncated geometry stream names the file and the chunk.
+    std::string bytes;
+    {
+        std::ifstream in(cgs, std::ios::binary);
+        bytes.assign((std::istreambuf_iterator<char>(in)), {});
+    }
+    const fs::path cut = dir_ / "cut.cgs";
+    std::ofstream(cut, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() - 7));
+    CommandRun r = run("voxelize " + cut.string() + " -o " + out.string());
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_NE(r.output.find(cut.string() + ": chunk 0"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+    // Bad options.
+    ASSERT_EQ(run("voxelize " + obj.string() + " --resolution 8 -o " + out.string()).exitCode, 0);
+    EXPECT_EQ(run("voxelize " + obj.string() + " --resolution 12 -o " + (dir_ / "bad.cvox").string()).exitCode, 2);
+    EXPECT_EQ(run("voxelize " + obj.string() + " --separability 18 -o " + (dir_ / "bad.cvox").string()).exitCode, 2);
+    EXPECT_EQ(run("voxelize " + obj.string() + " -o " + (dir_ / "bad.vox").string()).exitCode, 2);
+    EXPECT_FALSE(fs::exists(dir_ / "bad.cvox"));
+    // A volume of the wrong size.
+    const fs::path raw = write("v.raw", std::string(100, '\x10'));
+    r = run("isosurface " + raw.string() + " --dims 5 5 5 --type u8 --iso 8 -o " + (dir_ / "iso.cvox").string());
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("125"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir_ / "iso.cvox"));
+    r = run("isosurface " + write("w.raw", std::string(125, '\x10')).string() +
+            " --dims 5 5 5 --type u8 --iso 8 -o " + (dir_ / "iso.cvox").string());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir_ / "iso.cvox"));
+    // A failed run leaves the earlier good output untouched.
+    const auto before = fs::file_size(out);
+    EXPECT_EQ(run("voxelize " + cut.string() + " -o " + out.string()).exitCode, 2);
+    EXPECT_EQ(fs::file_size(out), before);
 }
 
 }  // namespace
