@@ -8,6 +8,8 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "raster/srgb.h"
+
 #include "scene/input_error.h"
 
 namespace cuberille::apps {
@@ -17,21 +19,6 @@ std::string lowerExtension(const std::filesystem::path& p) {
     std::string e = p.extension().string();
     std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
     return e;
-}
-
-// thresholds[c] = the smallest linear value that encodes to c + 1.
-const std::array<float, 255>& srgbThresholds() {
-    static const std::array<float, 255> table = [] {
-        std::array<float, 255> t{};
-        for (int c = 0; c < 255; ++c) {
-            const double encoded = (c + 0.5) / 255.0;
-            const double linear = encoded <= 0.04045 ? encoded / 12.92
-                                                     : std::pow((encoded + 0.055) / 1.055, 2.4);
-            t[c] = static_cast<float>(linear);
-        }
-        return t;
-    }();
-    return table;
 }
 
 }  // namespace
@@ -44,11 +31,6 @@ ImageFormat imageFormatFor(const std::filesystem::path& path) {
                             "' (use .png or .exr)");
 }
 
-uint8_t encodeSrgb8(float linear) {
-    if (!(linear > 0.0f)) return 0;  // also NaN
-    const auto& t = srgbThresholds();
-    return static_cast<uint8_t>(std::upper_bound(t.begin(), t.end(), linear) - t.begin());
-}
 
 void writeImageAtomically(const std::filesystem::path& path, const raster::Image& image) {
     const ImageFormat format = imageFormatFor(path);
@@ -67,7 +49,7 @@ void writeImageAtomically(const std::filesystem::path& path, const raster::Image
     } else {
         std::vector<uint8_t> rgb(size_t(image.width) * image.height * 3);
         for (size_t i = 0; i < size_t(image.width) * image.height; ++i)
-            for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = encodeSrgb8(image.rgba[i * 4 + c]);
+            for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = raster::encodeSrgb8(image.rgba[i * 4 + c]);
         OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::UINT8);
         ok = out->open(temp.string(), spec) && out->write_image(OIIO::TypeDesc::UINT8, rgb.data());
     }

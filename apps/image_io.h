@@ -16,10 +16,6 @@ enum class ImageFormat { Png, Exr };
 /// The format for a path's extension; throws scene::InputError for others.
 ImageFormat imageFormatFor(const std::filesystem::path& path);
 
-/// Encodes a linear value to 8-bit sRGB, round to nearest, by comparison against the exact
-/// decision thresholds (no pow per pixel, and no libm rounding can change a result).
-uint8_t encodeSrgb8(float linear);
-
 /// Throws std::runtime_error naming the file on failure (exit code 1).
 void writeImageAtomically(const std::filesystem::path& path, const raster::Image& image);
 

@@ -37,7 +37,7 @@ std::vector<char> serializePayload(const GeometryChunk& c, uint32_t flags) {
     for (const glm::vec3& n : c.normals) w.put(packNormal1010102(n));
     if (flags & kHasColors) {
         for (const glm::vec3& col : c.colors) {
-            const std::array<uint8_t, 3> rgb{encodeSrgb8(col.r), encodeSrgb8(col.g), encodeSrgb8(col.b)};
+            const std::array<uint8_t, 3> rgb{raster::encodeSrgb8(col.r), raster::encodeSrgb8(col.g), raster::encodeSrgb8(col.b)};
             w.putArray(rgb.data(), 3);
         }
         w.padTo(4);
@@ -128,7 +128,7 @@ public:
             r.alignTo(4, "colour padding");
             c.colors.resize(info.vertexCount);
             for (size_t v = 0; v < c.colors.size(); ++v)
-                c.colors[v] = {decodeSrgb8(rgb[3 * v]), decodeSrgb8(rgb[3 * v + 1]), decodeSrgb8(rgb[3 * v + 2])};
+                c.colors[v] = {raster::decodeSrgb8(rgb[3 * v]), raster::decodeSrgb8(rgb[3 * v + 1]), raster::decodeSrgb8(rgb[3 * v + 2])};
         }
         c.indices.resize(size_t(info.triangleCount) * 3);
         if (loc.flags & kIndices16) {

@@ -60,7 +60,7 @@ public:
 /// Triangles per chunk when a view splits a mesh held in memory, and when `cuberille pack`
 /// writes a geometry stream: large enough that the per-chunk overhead vanishes, small enough
 /// that threads balance on a model of a few chunks.
-constexpr uint32_t kDefaultChunkTriangles = 1u << 16;
+constexpr uint32_t kDefaultChunkTriangles = 1u << 14;
 
 /// Meshes already in memory, cut into chunks of at most chunkTriangles triangles, each with its
 /// own compact vertex array. Colours (the material colour times vertex colours) are kept when

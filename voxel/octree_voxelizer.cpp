@@ -129,11 +129,13 @@ private:
                 accumulateLeaf(node, cell, piece);
                 return;
             }
+            glm::dvec3 lo, hi;
+            piece.bounds(lo, hi);
             int octant = 0;
             bool single = true;
             for (int axis = 0; axis < 3 && single; ++axis) {
-                if (piece.maxAlong(axis) < 0.5 - kTouchEpsilon) continue;
-                if (piece.minAlong(axis) > 0.5 + kTouchEpsilon) octant |= 1 << axis;
+                if (hi[axis] < 0.5 - kTouchEpsilon) continue;
+                if (lo[axis] > 0.5 + kTouchEpsilon) octant |= 1 << axis;
                 else single = false;
             }
             if (!single) break;
@@ -172,19 +174,19 @@ private:
             if (!latticeTriangleTouchesVoxel(tri_->lattice, cell, leafDepth_)) return;
         }
         ++leafPieces_;
-        const double weight = 0.5 * twicePieceArea(piece) * kLeafWeightScale + kContactWeight;
-        const glm::dvec2 bary = pieceCentroidBary(piece);
+        glm::dvec2 bary;
+        const double weight = pieceAreaAndCentroid(piece, bary) * kLeafWeightScale + kContactWeight;
         glm::dvec3 n = interpolate(tri_->normal, bary);
         const double len = glm::length(n);
         n = len > 0.0 ? n / len : tri_->geometricNormal;
         LeafSums& s = tree_.leaf(leaf);
-        for (int k = 0; k < 3; ++k) s.normal[k] += std::llround(weight * n[k]);
-        s.weight += std::llround(weight);
+        for (int k = 0; k < 3; ++k) s.normal[k] += roundToInt64(weight * n[k]);
+        s.weight += roundToInt64(weight);
         s.faceMask |= tri_->faceMask;
         if (tree_.withColors()) {
             const glm::dvec3 c = interpolate(tri_->color, bary);
             LeafColorSums& cs = tree_.leafColor(leaf);
-            for (int k = 0; k < 3; ++k) cs.rgb[k] += std::llround(weight * c[k]);
+            for (int k = 0; k < 3; ++k) cs.rgb[k] += roundToInt64(weight * c[k]);
         }
         // Targets are tested only for the separability asked for, and only until one is met.
         switch (options_.separability) {

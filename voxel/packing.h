@@ -1,13 +1,16 @@
 #pragma once
 // Compact encodings shared by the voxel files (.cgs, .cvox): unit vectors as 10-10-10 signed
 // normalised integers and colours as 8-bit sRGB. Both are exact round trips of their own output
-// (decode(encode(x)) re-encodes to the same bits), which the file tests rely on.
+// (decode(encode(x)) re-encodes to the same bits), which the file tests rely on. sRGB is
+// raster/srgb.h's exact table encoding.
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 #include <glm/glm.hpp>
+
+#include "raster/srgb.h"
 
 namespace cuberille::voxel {
 
@@ -29,27 +32,15 @@ inline glm::vec3 unpackNormal1010102(uint32_t packed) {
     return {field(packed), field(packed >> 10), field(packed >> 20)};
 }
 
-/// Linear [0, 1] to 8-bit sRGB, round to nearest (the transfer function of IEC 61966-2-1).
-inline uint8_t encodeSrgb8(float linear) {
-    const float c = std::clamp(linear, 0.0f, 1.0f);
-    const float e = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
-    return uint8_t(std::lround(e * 255.0f));
-}
-
-inline float decodeSrgb8(uint8_t encoded) {
-    const float e = float(encoded) / 255.0f;
-    return e <= 0.04045f ? e / 12.92f : std::pow((e + 0.055f) / 1.055f, 2.4f);
-}
-
 /// RGBA8 with R in the lowest byte; RGB sRGB-encoded, alpha linear.
 inline uint32_t packSrgba8(const glm::vec3& linear, float alpha = 1.0f) {
-    return uint32_t(encodeSrgb8(linear.r)) | (uint32_t(encodeSrgb8(linear.g)) << 8) |
-           (uint32_t(encodeSrgb8(linear.b)) << 16) |
+    return uint32_t(raster::encodeSrgb8(linear.r)) | (uint32_t(raster::encodeSrgb8(linear.g)) << 8) |
+           (uint32_t(raster::encodeSrgb8(linear.b)) << 16) |
            (uint32_t(std::lround(std::clamp(alpha, 0.0f, 1.0f) * 255.0f)) << 24);
 }
 
 inline glm::vec3 unpackSrgba8Rgb(uint32_t packed) {
-    return {decodeSrgb8(uint8_t(packed)), decodeSrgb8(uint8_t(packed >> 8)), decodeSrgb8(uint8_t(packed >> 16))};
+    return {raster::decodeSrgb8(uint8_t(packed)), raster::decodeSrgb8(uint8_t(packed >> 8)), raster::decodeSrgb8(uint8_t(packed >> 16))};
 }
 
 }  // namespace cuberille::voxel

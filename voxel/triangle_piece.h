@@ -48,6 +48,14 @@ struct TrianglePiece {
         for (int i = 1; i < count; ++i) m = std::max(m, v[i].position[axis]);
         return m;
     }
+    /// Both corners of the bounding box in one pass over the vertices.
+    void bounds(glm::dvec3& lo, glm::dvec3& hi) const {
+        lo = hi = v[0].position;
+        for (int i = 1; i < count; ++i) {
+            lo = glm::min(lo, v[i].position);
+            hi = glm::max(hi, v[i].position);
+        }
+    }
 };
 
 /// The crossing of edge a-b with the plane position[axis] = m, where a and b are strictly on
@@ -127,37 +135,39 @@ inline void splitPieceAtMidPlane(const TrianglePiece& in, int axis, TrianglePiec
 /// kTouchEpsilon of one face plane. Otherwise it reaches into the voxel further than any rounding
 /// error and the triangle certainly touches it.
 inline bool pieceOnlyGrazesCube(const TrianglePiece& p) {
-    for (int axis = 0; axis < 3; ++axis) {
-        if (p.maxAlong(axis) <= kTouchEpsilon) return true;
-        if (p.minAlong(axis) >= 1.0 - kTouchEpsilon) return true;
-    }
-    return false;
+    glm::dvec3 lo, hi;
+    p.bounds(lo, hi);
+    return glm::any(glm::lessThanEqual(hi, glm::dvec3(kTouchEpsilon))) ||
+           glm::any(glm::greaterThanEqual(lo, glm::dvec3(1.0 - kTouchEpsilon)));
 }
 
-/// Twice the area of the (planar, convex) piece, in its cube's units squared.
-inline double twicePieceArea(const TrianglePiece& p) {
-    glm::dvec3 sum(0.0);
-    for (int i = 1; i + 1 < p.count; ++i)
-        sum += glm::cross(p.v[i].position - p.v[0].position, p.v[i + 1].position - p.v[0].position);
-    return glm::length(sum);
-}
-
-/// The barycentric weights at the piece's area centroid (the vertex average when the piece has no
-/// area), where its attributes are evaluated: attributes are linear, so their value there times
-/// the area is their exact integral over the piece.
-inline glm::dvec2 pieceCentroidBary(const TrianglePiece& p) {
+/// The piece's area (in its cube's units squared) and the barycentric weights at its area
+/// centroid (the vertex average when it has no area), where its attributes are evaluated:
+/// attributes are linear, so their value there times the area is their exact integral over the
+/// piece. One pass over the fan.
+inline double pieceAreaAndCentroid(const TrianglePiece& p, glm::dvec2& centroidBary) {
+    glm::dvec3 normalSum(0.0);
     glm::dvec2 weighted(0.0);
-    double total = 0.0;
+    double fanArea = 0.0;
     for (int i = 1; i + 1 < p.count; ++i) {
-        const double a =
-            glm::length(glm::cross(p.v[i].position - p.v[0].position, p.v[i + 1].position - p.v[0].position));
-        weighted += a * (p.v[0].bary + p.v[i].bary + p.v[i + 1].bary) / 3.0;
-        total += a;
+        const glm::dvec3 c = glm::cross(p.v[i].position - p.v[0].position, p.v[i + 1].position - p.v[0].position);
+        const double a = glm::length(c);
+        normalSum += c;
+        weighted += a * (p.v[0].bary + p.v[i].bary + p.v[i + 1].bary);
+        fanArea += a;
     }
-    if (total > 0.0) return weighted / total;
-    glm::dvec2 avg(0.0);
-    for (int i = 0; i < p.count; ++i) avg += p.v[i].bary;
-    return avg / double(p.count);
+    if (fanArea > 0.0) {
+        centroidBary = weighted / (3.0 * fanArea);
+    } else {
+        glm::dvec2 avg(0.0);
+        for (int i = 0; i < p.count; ++i) avg += p.v[i].bary;
+        centroidBary = avg / double(p.count);
+    }
+    return 0.5 * glm::length(normalSum);
 }
+
+/// Round to nearest, halves away from zero, without a libm call (std::llround is one per use in
+/// the leaf loop). Exact for the magnitudes of leaf sums (below 2^52).
+inline int64_t roundToInt64(double x) { return int64_t(x < 0.0 ? x - 0.5 : x + 0.5); }
 
 }  // namespace cuberille::voxel
