@@ -95,6 +95,11 @@ void addIsosurfaceCommand(CLI::App& app, cuberille::apps::IsosurfaceCommandOptio
     iso->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 
+void addInfoCommand(CLI::App& app, cuberille::apps::InfoOptions& o) {
+    CLI::App* info = app.add_subcommand("info", "Describe a geometry stream (.cgs) or voxel model (.cvox), checking all of it");
+    info->add_option("file", o.file, "A .cgs or .cvox file")->required();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -109,6 +114,8 @@ int main(int argc, char** argv) {
     addVoxelizeCommand(app, voxelizeOptions);
     cuberille::apps::IsosurfaceCommandOptions isosurfaceOptions;
     addIsosurfaceCommand(app, isosurfaceOptions);
+    cuberille::apps::InfoOptions infoOptions;
+    addInfoCommand(app, infoOptions);
 
     try {
         app.parse(argc, argv);
@@ -129,6 +136,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("pack")) return cuberille::apps::runPackCommand(packOptions);
         if (app.got_subcommand("voxelize")) return cuberille::apps::runVoxelizeCommand(voxelizeOptions);
         if (app.got_subcommand("isosurface")) return cuberille::apps::runIsosurfaceCommand(isosurfaceOptions);
+        if (app.got_subcommand("info")) return cuberille::apps::runInfoCommand(infoOptions);
     } catch (const cuberille::scene::InputError& e) {
         std::fprintf(stderr, "cuberille: %s\n", e.what());
         return kExitBadInput;

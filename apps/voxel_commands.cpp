@@ -219,4 +219,36 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
     return 0;
 }
 
+int runInfoCommand(const InfoOptions& o) {
+    if (hasExtension(o.file, ".cvox")) {
+        const voxel::VoxelModel m = voxel::readCvox(o.file);
+        uint32_t levels = 0;
+        for (const voxel::VoxelBlock& b : m.blocks) levels = std::max(levels, b.level + 1);
+        std::printf("%s: voxel model, %u^3 (%s), %u level(s), %zu blocks of up to %u^3, %llu voxels, %llu source "
+                    "triangles\n  grid origin (%.9g, %.9g, %.9g), extent %.9g (voxel %.9g)\n  colours: %s\n",
+                    o.file.string().c_str(), m.grid.resolution, voxel::separabilityName(m.separability), levels,
+                    m.blocks.size(), m.blockSize, (unsigned long long)m.voxelCount(),
+                    (unsigned long long)m.triangleCount(), m.grid.origin.x, m.grid.origin.y, m.grid.origin.z,
+                    m.grid.extent, m.grid.voxelSize(), m.hasColors ? "from the source" : "none (white)");
+        return 0;
+    }
+    if (voxel::isGeometryStreamFile(o.file)) {
+        const auto view = voxel::openMeshView(o.file, warnToStderr);
+        uint64_t vertices = 0;
+        for (size_t i = 0; i < view->chunkCount(); ++i) {
+            view->readChunk(i);  // decompress and check every chunk
+            vertices += view->chunkInfo(i).vertexCount;
+        }
+        glm::vec3 lo, hi;
+        view->bounds(lo, hi);
+        std::printf("%s: geometry stream, %zu chunks, %llu triangles, %llu vertices, %s\n  bounds (%.9g, %.9g, %.9g) - "
+                    "(%.9g, %.9g, %.9g)\n",
+                    o.file.string().c_str(), view->chunkCount(), (unsigned long long)view->triangleCount(),
+                    (unsigned long long)vertices, view->hasColors() ? "with colours" : "no colours", lo.x, lo.y, lo.z,
+                    hi.x, hi.y, hi.z);
+        return 0;
+    }
+    throw scene::InputError(o.file.string() + ": info reads .cgs and .cvox files");
+}
+
 }  // namespace cuberille::apps

@@ -43,11 +43,17 @@ struct IsosurfaceCommandOptions {
     bool quiet = false;
 };
 
+struct InfoOptions {
+    std::filesystem::path file;
+};
+
 /// Each returns the exit code; bad input throws scene::InputError (exit 2), failures while
 /// working std::runtime_error (exit 1).
 int runPackCommand(const PackOptions& options);
 int runVoxelizeCommand(const VoxelizeCommandOptions& options);
 int runIsosurfaceCommand(const IsosurfaceCommandOptions& options);
+/// `cuberille info FILE`: what a .cgs or .cvox holds (reading and checking all of it).
+int runInfoCommand(const InfoOptions& options);
 
 voxel::Separability parseSeparability(const std::string& name);  // throws scene::InputError
 

@@ -23,23 +23,21 @@ public:
     template <class T>
     void put(const T& value) {
         static_assert(std::is_trivially_copyable_v<T>);
-        const char* p = reinterpret_cast<const char*>(&value);
-        bytes_.insert(bytes_.end(), p, p + sizeof(T));
+        bytes_.append(reinterpret_cast<const char*>(&value), sizeof(T));
     }
     template <class T>
     void putArray(const T* values, size_t count) {
         static_assert(std::is_trivially_copyable_v<T>);
-        const char* p = reinterpret_cast<const char*>(values);
-        if (count) bytes_.insert(bytes_.end(), p, p + sizeof(T) * count);
+        if (count) bytes_.append(reinterpret_cast<const char*>(values), sizeof(T) * count);
     }
     void padTo(size_t alignment) {
-        while (bytes_.size() % alignment) bytes_.push_back(0);
+        while (bytes_.size() % alignment) bytes_.push_back('\0');
     }
     size_t size() const { return bytes_.size(); }
-    std::vector<char>& bytes() { return bytes_; }
+    std::string& bytes() { return bytes_; }
 
 private:
-    std::vector<char> bytes_;
+    std::string bytes_;  // (a std::vector<char> here trips GCC 12's -Wstringop-overflow falsely)
 };
 
 class ByteReader {

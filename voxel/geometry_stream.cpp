@@ -31,7 +31,7 @@ uint64_t rawPayloadBytes(uint64_t vertices, uint64_t triangles, uint32_t flags) 
     return n;
 }
 
-std::vector<char> serializePayload(const GeometryChunk& c, uint32_t flags) {
+std::string serializePayload(const GeometryChunk& c, uint32_t flags) {
     ByteWriter w;
     w.putArray(c.positions.data(), c.positions.size());
     for (const glm::vec3& n : c.normals) w.put(packNormal1010102(n));
@@ -50,7 +50,7 @@ std::vector<char> serializePayload(const GeometryChunk& c, uint32_t flags) {
     return std::move(w.bytes());
 }
 
-std::vector<char> compressFrame(const std::vector<char>& raw) {
+std::vector<char> compressFrame(const std::string& raw) {
     LZ4F_preferences_t prefs{};
     prefs.frameInfo.contentChecksumFlag = LZ4F_contentChecksumEnabled;
     prefs.frameInfo.contentSize = raw.size();
@@ -243,7 +243,7 @@ GeometryStreamWriteStats writeGeometryStream(const MeshView& view, std::ostream&
         uint32_t flags = 0;
         if (c.hasColors()) flags |= kHasColors;
         if (c.positions.size() <= 65536) flags |= kIndices16;
-        const std::vector<char> raw = serializePayload(c, flags);
+        const std::string raw = serializePayload(c, flags);
         const std::vector<char> packed = compressFrame(raw);
         ByteWriter h;
         h.putArray(kChunkMagic, 4);

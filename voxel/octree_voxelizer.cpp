@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <numeric>
+#include <unordered_map>
 #include <stdexcept>
 
 #include <tbb/enumerable_thread_specific.h>
@@ -32,14 +34,14 @@ struct TriangleContext {
     LatticeTriangle lattice;  // the same corners, exactly, for leaves rounding cannot decide
 };
 
-/// A triangle of a piece's fan, kept for the block it lies in. Sorting by (block, triangle, fan)
-/// makes the order independent of which thread found it.
-struct BlockTriangleRecord {
-    uint64_t blockMorton = 0;
-    uint64_t triangle = 0;
-    uint32_t fan = 0;
-    SourceTriangle tri;
+/// The fan triangles of the pieces one thread found in one block, each with its sort key
+/// (source triangle index << 8 | fan index): sorting by it at emission makes the order independent
+/// of which thread found which piece.
+struct BlockTriangles {
+    std::vector<uint64_t> keys;
+    std::vector<SourceTriangle> triangles;
 };
+using BlockTriangleBuckets = std::unordered_map<uint64_t, BlockTriangles>;  // by block Morton code
 
 uint64_t spreadBits3(uint32_t v) {
     uint64_t x = v & 0x1FFFFF;
@@ -113,7 +115,7 @@ public:
     }
 
     VoxelOctree& tree() { return tree_; }
-    std::vector<BlockTriangleRecord>& blockTriangles() { return blockTriangles_; }
+    BlockTriangleBuckets& blockTriangles() { return blockTriangles_; }
     uint64_t leafPieces() const { return leafPieces_; }
     uint64_t exactTests() const { return exactTests_; }
     double readMs = 0;
@@ -216,15 +218,17 @@ private:
             out.color[slot] = packSrgba8(glm::vec3(interpolate(tri_->color, piece.v[i].bary)));
         };
         const uint64_t morton = mortonOf(block);
+        if (!lastBucket_ || lastBlock_ != morton) {
+            lastBucket_ = &blockTriangles_[morton];
+            lastBlock_ = morton;
+        }
         for (int i = 1; i + 1 < piece.count; ++i) {
-            BlockTriangleRecord r;
-            r.blockMorton = morton;
-            r.triangle = tri_->index;
-            r.fan = uint32_t(i - 1);
-            vertex(0, r.tri, 0);
-            vertex(i, r.tri, 1);
-            vertex(i + 1, r.tri, 2);
-            blockTriangles_.push_back(r);
+            SourceTriangle t;
+            vertex(0, t, 0);
+            vertex(i, t, 1);
+            vertex(i + 1, t, 2);
+            lastBucket_->keys.push_back(tri_->index << 8 | uint64_t(i - 1));
+            lastBucket_->triangles.push_back(t);
         }
     }
 
@@ -233,61 +237,94 @@ private:
     VoxelOctree tree_;
     int leafDepth_, blockDepth_;
     const TriangleContext* tri_ = nullptr;
-    std::vector<BlockTriangleRecord> blockTriangles_;
+    BlockTriangleBuckets blockTriangles_;
+    BlockTriangles* lastBucket_ = nullptr;  // the bucket of the block last recorded into
+    uint64_t lastBlock_ = 0;
     uint64_t leafPieces_ = 0, exactTests_ = 0;
 };
 
 /// Walks the merged tree in octant (Morton) order and gathers the kept voxels into blocks,
-/// pairing each block with its source triangles (sorted the same way).
+/// pairing each block with its source triangles. The top levels are walked once to list the
+/// blocks; the blocks are then filled in parallel, each independently, and kept in list order.
 class BlockEmitter {
 public:
-    BlockEmitter(const VoxelOctree& tree, const VoxelizeOptions& options, const std::vector<BlockTriangleRecord>& triangles,
+    BlockEmitter(const VoxelOctree& tree, const VoxelizeOptions& options, std::vector<BlockTriangleBuckets*> triangles,
                  VoxelModel& model, VoxelizeStats& stats)
-        : tree_(tree), options_(options), triangles_(triangles), model_(model), stats_(stats),
+        : tree_(tree), options_(options), triangles_(std::move(triangles)), model_(model), stats_(stats),
           leafDepth_(tree.leafDepth()), blockDepth_(std::max(0, leafDepth_ - log2OfPowerOfTwo(kBlockSize))) {}
 
-    void run() { visit(VoxelOctree::root(), 0, glm::uvec3(0)); }
+    void run() {
+        listBlocks(VoxelOctree::root(), 0, glm::uvec3(0));
+        std::vector<VoxelBlock> blocks(roots_.size());
+        std::vector<uint64_t> touched(roots_.size(), 0);  // conservative voxels per block
+        raster::parallelFor(roots_.size(), [&](size_t i) { fillBlock(roots_[i], blocks[i], touched[i]); });
+        for (size_t i = 0; i < blocks.size(); ++i) {
+            stats_.conservativeVoxels += touched[i];
+            if (blocks[i].voxels.empty() && blocks[i].triangles.empty()) continue;
+            stats_.voxels += blocks[i].voxels.size();
+            stats_.sourceTriangles += blocks[i].triangles.size();
+            model_.blocks.push_back(std::move(blocks[i]));
+        }
+    }
 
 private:
-    void visit(uint32_t node, int depth, const glm::uvec3& cell) {
+    struct BlockRoot {
+        uint32_t node;
+        glm::uvec3 cell;
+    };
+
+    void listBlocks(uint32_t node, int depth, const glm::uvec3& cell) {
         if (depth == blockDepth_) {
-            emitBlock(node, cell);
+            roots_.push_back({node, cell});
             return;
         }
         for (int octant = 0; octant < 8; ++octant)
             if (const uint32_t c = tree_.existingChild(node, octant))
-                visit(c, depth + 1, cell * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1));
+                listBlocks(c, depth + 1, cell * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1));
     }
 
-    void emitBlock(uint32_t node, const glm::uvec3& cell) {
-        VoxelBlock b;
-        b.coord = cell;
+    void fillBlock(const BlockRoot& root, VoxelBlock& b, uint64_t& touched) {
+        b.coord = root.cell;
         b.tightMin = glm::uvec3(model_.blockSize);
-        gather(node, blockDepth_, glm::uvec3(0), b);
-        const uint64_t morton = mortonOf(cell);
-        while (nextTriangle_ < triangles_.size() && triangles_[nextTriangle_].blockMorton < morton) ++nextTriangle_;
-        while (nextTriangle_ < triangles_.size() && triangles_[nextTriangle_].blockMorton == morton)
-            b.triangles.push_back(triangles_[nextTriangle_++].tri);
-        if (b.voxels.empty() && b.triangles.empty()) return;
+        gather(root.node, blockDepth_, glm::uvec3(0), b, touched);
+        gatherTriangles(mortonOf(root.cell), b);
         if (b.voxels.empty()) b.tightMin = glm::uvec3(0);
-        stats_.voxels += b.voxels.size();
-        stats_.sourceTriangles += b.triangles.size();
-        model_.blocks.push_back(std::move(b));
     }
 
-    void gather(uint32_t node, int depth, const glm::uvec3& local, VoxelBlock& b) {
+    /// Every thread's fan triangles for the block, in source triangle order. Each bucket is
+    /// emptied as it is used (its own block's entry only, so blocks filled in parallel never touch
+    /// the same entry, and the maps are not restructured), so the peak holds them once.
+    void gatherTriangles(uint64_t morton, VoxelBlock& b) const {
+        std::vector<uint64_t> keys;
+        std::vector<SourceTriangle> found;
+        for (BlockTriangleBuckets* buckets : triangles_) {
+            const auto it = buckets->find(morton);
+            if (it == buckets->end()) continue;
+            keys.insert(keys.end(), it->second.keys.begin(), it->second.keys.end());
+            found.insert(found.end(), it->second.triangles.begin(), it->second.triangles.end());
+            std::vector<uint64_t>().swap(it->second.keys);
+            std::vector<SourceTriangle>().swap(it->second.triangles);
+        }
+        std::vector<uint32_t> order(keys.size());
+        std::iota(order.begin(), order.end(), 0u);
+        std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return keys[x] < keys[y]; });
+        b.triangles.reserve(order.size());
+        for (uint32_t i : order) b.triangles.push_back(found[i]);
+    }
+
+    void gather(uint32_t node, int depth, const glm::uvec3& local, VoxelBlock& b, uint64_t& touched) const {
         if (depth == leafDepth_) {
-            emitVoxel(tree_.leaf(node), node, local, b);
+            emitVoxel(tree_.leaf(node), node, local, b, touched);
             return;
         }
         for (int octant = 0; octant < 8; ++octant)
             if (const uint32_t c = tree_.existingChild(node, octant))
-                gather(c, depth + 1, local * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1), b);
+                gather(c, depth + 1, local * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1), b, touched);
     }
 
-    void emitVoxel(const LeafSums& s, uint32_t leaf, const glm::uvec3& local, VoxelBlock& b) {
+    void emitVoxel(const LeafSums& s, uint32_t leaf, const glm::uvec3& local, VoxelBlock& b, uint64_t& touched) const {
         if (s.weight == 0) return;  // reached only by pieces the exact test turned away
-        ++stats_.conservativeVoxels;
+        ++touched;
         const bool keep = options_.separability == Separability::Conservative ||
                           (options_.separability == Separability::Six && (s.targets & kMetCrosshair)) ||
                           (options_.separability == Separability::TwentySix && s.targets != 0);
@@ -309,11 +346,11 @@ private:
 
     const VoxelOctree& tree_;
     const VoxelizeOptions& options_;
-    const std::vector<BlockTriangleRecord>& triangles_;
+    std::vector<BlockTriangleBuckets*> triangles_;
     VoxelModel& model_;
     VoxelizeStats& stats_;
     int leafDepth_, blockDepth_;
-    size_t nextTriangle_ = 0;
+    std::vector<BlockRoot> roots_;
 };
 
 }  // namespace
@@ -368,29 +405,19 @@ VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, Vo
     for (auto& b : builders)
         if (b) trees.push_back(b.get());
     stats.threads = int(trees.size());
-    std::vector<BlockTriangleRecord> triangles;
+    std::vector<BlockTriangleBuckets*> triangles;
     for (TreeBuilder* b : trees) {
         stats.octreeBytes += b->tree().reservedBytes();
         stats.leafPieces += b->leafPieces();
         stats.exactTests += b->exactTests();
         stats.readMs += b->readMs;
+        triangles.push_back(&b->blockTriangles());
     }
-    if (!trees.empty()) {
-        for (size_t i = 1; i < trees.size(); ++i) trees[0]->tree().mergeFrom(trees[i]->tree());
-        for (TreeBuilder* b : trees) {
-            triangles.insert(triangles.end(), b->blockTriangles().begin(), b->blockTriangles().end());
-            std::vector<BlockTriangleRecord>().swap(b->blockTriangles());
-        }
-        std::sort(triangles.begin(), triangles.end(), [](const BlockTriangleRecord& a, const BlockTriangleRecord& b) {
-            if (a.blockMorton != b.blockMorton) return a.blockMorton < b.blockMorton;
-            if (a.triangle != b.triangle) return a.triangle < b.triangle;
-            return a.fan < b.fan;
-        });
-    }
+    for (size_t i = 1; i < trees.size(); ++i) trees[0]->tree().mergeFrom(trees[i]->tree());
     stats.mergeMs = nowMs() - t0;
 
     t0 = nowMs();
-    if (!trees.empty()) BlockEmitter(trees[0]->tree(), options, triangles, model, stats).run();
+    if (!trees.empty()) BlockEmitter(trees[0]->tree(), options, std::move(triangles), model, stats).run();
     stats.blocks = model.blocks.size();
     stats.emitMs = nowMs() - t0;
     if (statsOut) *statsOut = stats;

@@ -18,7 +18,8 @@ namespace cuberille::voxel {
 /// standing for [-1, 1]. A zero vector stays zero.
 inline uint32_t packNormal1010102(const glm::vec3& n) {
     auto field = [](float c) {
-        const int v = int(std::lround(std::clamp(c, -1.0f, 1.0f) * 511.0f));
+        const float scaled = std::clamp(c, -1.0f, 1.0f) * 511.0f;  // NaN clamps to NaN: keep it out
+        const int v = scaled == scaled ? int(scaled < 0.0f ? scaled - 0.5f : scaled + 0.5f) : 0;
         return uint32_t(v) & 0x3FFu;
     };
     return field(n.x) | (field(n.y) << 10) | (field(n.z) << 20);

@@ -179,7 +179,7 @@ TEST_F(Cli, HelpOnEveryLevel) {
     const CommandRun r = run("render --help");
     EXPECT_EQ(r.exitCode, 0);
     EXPECT_NE(r.output.find("--msaa"), std::string::npos);
-    for (const char* sub : {"pack", "voxelize", "isosurface"}) EXPECT_EQ(run(std::string(sub) + " --help").exitCode, 0) << sub;
+    for (const char* sub : {"pack", "voxelize", "isosurface", "info"}) EXPECT_EQ(run(std::string(sub) + " --help").exitCode, 0) << sub;
 }
 
 // A closed tetrahedron as an OBJ.
@@ -237,6 +237,20 @@ TEST_F(Cli, VoxelCommandsRejectBadInputWithExitTwoAndWriteNothing) {
             " --dims 5 5 5 --type u8 --iso 8 -o " + (dir_ / "iso.cvox").string());
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_TRUE(fs::exists(dir_ / "iso.cvox"));
+    // `info` reads both formats, and rejects a truncated voxel file naming it.
+    r = run("info " + out.string());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("voxel model, 8^3"), std::string::npos) << r.output;
+    EXPECT_EQ(run("info " + cgs.string()).exitCode, 0);
+    {
+        std::ifstream in(out, std::ios::binary);
+        bytes.assign((std::istreambuf_iterator<char>(in)), {});
+    }
+    const fs::path cutVoxels = dir_ / "cut.cvox";
+    std::ofstream(cutVoxels, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() - 5));
+    r = run("info " + cutVoxels.string());
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_NE(r.output.find(cutVoxels.string() + ": block"), std::string::npos) << r.output;
     // A failed run leaves the earlier good output untouched.
     const auto before = fs::file_size(out);
     EXPECT_EQ(run("voxelize " + cut.string() + " -o " + out.string()).exitCode, 2);
