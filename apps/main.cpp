@@ -74,6 +74,10 @@ void addVoxelizeCommand(CLI::App& app, cuberille::apps::VoxelizeCommandOptions& 
                   "Also write the voxels as text: '# cuberille voxels R ox oy oz extent', then 'i j k' per voxel");
     v->add_flag("--no-source-triangles", o.noSourceTriangles,
                 "Do not keep the source triangles clipped per block (smaller file; no hybrid rendering)");
+    v->add_option("--levels", o.levels, "LOD levels to write (each halves the resolution); 0: down to one 64^3 block")
+        ->capture_default_str();
+    v->add_option("--simplify", o.simplify, "Simplification: parallel or serial (streaming); identical output")
+        ->capture_default_str();
     v->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
     v->add_option("--stats", o.statsPath, "Write counts, timings and peak memory as JSON");
     v->add_flag("--quiet", o.quiet, "Print nothing on success");
@@ -89,6 +93,7 @@ void addIsosurfaceCommand(CLI::App& app, cuberille::apps::IsosurfaceCommandOptio
     iso->add_option("-o,--out", o.out, "Output voxel model, .cvox")->required();
     iso->add_option("--normals", o.normals, "Gradient estimator: regression (3x3x3 linear regression) or central")
         ->capture_default_str();
+    iso->add_option("--levels", o.levels, "LOD levels to write; 0: down to one 64^3 block")->capture_default_str();
     iso->add_option("--export-voxels", o.exportVoxels, "Also write the voxels as text (see voxelize)");
     iso->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
     iso->add_option("--stats", o.statsPath, "Write counts and timings as JSON");

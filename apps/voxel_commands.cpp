@@ -59,6 +59,20 @@ void writeJson(const std::filesystem::path& path, const nlohmann::json& json) {
     f.commit();
 }
 
+lod::SimplifyMethod parseSimplify(const std::string& name) {
+    if (name == "parallel") return lod::SimplifyMethod::Parallel;
+    if (name == "serial") return lod::SimplifyMethod::Serial;
+    throw scene::InputError("--simplify " + name + ": expected parallel or serial");
+}
+
+nlohmann::json pyramidJson(const lod::PyramidStats& p) {
+    return {{"levels", p.levels},
+            {"blocksPerLevel", p.blocksPerLevel},
+            {"voxelsPerLevel", p.voxelsPerLevel},
+            {"skirtFaces", p.skirtFaces},
+            {"simplifyMs", p.simplifyMs}};
+}
+
 void writeModelFiles(const voxel::VoxelModel& model, const std::filesystem::path& out,
                      const std::filesystem::path& exportPath, double& writeMs) {
     const double t0 = nowMs();
@@ -122,23 +136,30 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
     vo.separability = parseSeparability(o.separability);
     vo.keepSourceTriangles = !o.noSourceTriangles;
     vo.progress = terminalProgress("voxelize", "chunks", o.quiet);
+    lod::PyramidOptions po;
+    po.method = parseSimplify(o.simplify);
+    po.maxLevels = o.levels;
     raster::ThreadLimit threadLimit(o.threads);
 
     const double t0 = nowMs();
     const std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr);
     const double openMs = nowMs() - t0;
     voxel::VoxelizeStats s;
-    const voxel::VoxelModel model = voxel::voxelizeMesh(*view, vo, &s);
+    voxel::VoxelModel model = voxel::voxelizeMesh(*view, vo, &s);
+    lod::PyramidStats ps;
+    lod::buildLodPyramid(model, po, &ps);
     double writeMs = 0;
     writeModelFiles(model, o.out, o.exportVoxels, writeMs);
     const double totalMs = nowMs() - t0;
 
     if (!o.quiet)
         std::printf("voxelized %s at %u^3 (%s): %llu triangles -> %llu voxels in %llu blocks, %.0f ms "
-                    "(open %.0f, rasterize %.0f, merge %.0f, emit %.0f, write %.0f) -> %s\n",
+                    "(open %.0f, rasterize %.0f, merge %.0f, emit %.0f, simplify %.0f, write %.0f); %u LOD levels, "
+                    "%zu blocks in all -> %s\n",
                     o.input.string().c_str(), o.resolution, voxel::separabilityName(vo.separability),
                     (unsigned long long)s.triangles, (unsigned long long)s.voxels, (unsigned long long)s.blocks, totalMs,
-                    openMs, s.rasterizeMs, s.mergeMs, s.emitMs, writeMs, o.out.string().c_str());
+                    openMs, s.rasterizeMs, s.mergeMs, s.emitMs, ps.simplifyMs, writeMs, ps.levels, model.blocks.size(),
+                    o.out.string().c_str());
     if (!o.statsPath.empty()) {
         const double seconds = totalMs / 1000.0;
         writeJson(o.statsPath,
@@ -155,6 +176,7 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
                    {"voxels", s.voxels},
                    {"blocks", s.blocks},
                    {"sourceTriangles", s.sourceTriangles},
+                   {"lod", pyramidJson(ps)},
                    {"octreeBytes", s.octreeBytes},
                    {"peakResidentMib", peakResidentMib()},
                    {"trianglesPerSecond", seconds > 0 ? double(s.triangles) / seconds : 0.0},
@@ -165,6 +187,7 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
                      {"rasterizeMs", s.rasterizeMs},
                      {"mergeMs", s.mergeMs},
                      {"emitMs", s.emitMs},
+                     {"simplifyMs", ps.simplifyMs},
                      {"writeMs", writeMs},
                      {"totalMs", totalMs}}}});
     }
@@ -199,7 +222,11 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
     const std::string bytes = scene::readFileBytes(o.volume);
     const double readMs = nowMs() - t0;
     voxel::IsosurfaceStats s;
-    const voxel::VoxelModel model = voxel::extractIsosurface(bytes, d, io, &s);
+    voxel::VoxelModel model = voxel::extractIsosurface(bytes, d, io, &s);
+    lod::PyramidOptions po;
+    po.maxLevels = o.levels;
+    lod::PyramidStats ps;
+    lod::buildLodPyramid(model, po, &ps);
     double writeMs = 0;
     writeModelFiles(model, o.out, o.exportVoxels, writeMs);
     if (!o.quiet)
@@ -214,6 +241,7 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
                                 {"voxels", s.voxels},
                                 {"blocks", s.blocks},
                                 {"blocksSkipped", s.blocksSkipped},
+                                {"lod", pyramidJson(ps)},
                                 {"peakResidentMib", peakResidentMib()},
                                 {"times", {{"readMs", readMs}, {"extractMs", s.extractMs}, {"writeMs", writeMs}}}});
     return 0;

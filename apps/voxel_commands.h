@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "lod/lod_pyramid.h"
 #include "voxel/geometry_stream.h"
 #include "voxel/isosurface.h"
 #include "voxel/octree_voxelizer.h"
@@ -26,6 +27,8 @@ struct VoxelizeCommandOptions {
     std::string separability = "conservative";  // conservative, 26 or 6
     std::filesystem::path exportVoxels;
     bool noSourceTriangles = false;
+    uint32_t levels = 0;               // LOD levels to write; 0: down to a single block
+    std::string simplify = "parallel";  // parallel or serial (identical output)
     int threads = 0;
     std::filesystem::path statsPath;
     bool quiet = false;
@@ -37,6 +40,7 @@ struct IsosurfaceCommandOptions {
     std::string type = "u8";  // u8, u16 or f32
     double iso = 0.5;
     std::string normals = "regression";  // regression or central
+    uint32_t levels = 0;
     std::filesystem::path exportVoxels;
     int threads = 0;
     std::filesystem::path statsPath;

@@ -54,9 +54,10 @@ void writeCvox(const VoxelModel& model, std::ostream& out) {
         const std::array<uint8_t, 6> tight{uint8_t(b.tightMin.x), uint8_t(b.tightMin.y), uint8_t(b.tightMin.z),
                                            uint8_t(b.tightMax.x), uint8_t(b.tightMax.y), uint8_t(b.tightMax.z)};
         h.putArray(tight.data(), tight.size());
-        h.padTo(8);  // 4 + 12 + 4 + 4 + 8 + 8 + 6 = 46, padded to 48, then reserved to 64
-        h.put(uint64_t(0));
-        h.put(uint64_t(0));
+        h.padTo(8);  // 4 + 12 + 4 + 4 + 8 + 8 + 6 = 46, padded to 48
+        h.put(b.firstChild);
+        h.put(uint32_t(b.childMask));
+        h.put(uint64_t(0));  // reserved, to 64
         at += blockDataBytes(b.voxels.size(), b.triangles.size());
     }
     out.write(h.bytes().data(), std::streamsize(h.size()));
@@ -125,6 +126,13 @@ VoxelModel readCvox(const std::filesystem::path& path) {
         const auto tight = e.get<std::array<uint8_t, 6>>("tight bounds");
         b.tightMin = {tight[0], tight[1], tight[2]};
         b.tightMax = {tight[3], tight[4], tight[5]};
+        e.skip(2, "padding");
+        b.firstChild = e.get<uint32_t>("first child");
+        const uint32_t mask = e.get<uint32_t>("child mask");
+        if (mask > 0xFF || (mask && b.level == 0) ||
+            uint64_t(b.firstChild) + uint64_t(__builtin_popcount(mask)) > blockCount || (mask && b.firstChild <= i))
+            e.fail("child mask", "child links outside the block table (corrupt)");
+        b.childMask = uint8_t(mask);
         ByteReader data(std::string_view(bytes).substr(voxelOffset, uint64_t(nv) * 12), where, voxelOffset);
         b.voxels.resize(nv);
         b.normals.resize(nv);

@@ -65,6 +65,10 @@ struct VoxelBlock {
     std::vector<uint32_t> voxels, normals, colors;
     std::vector<SourceTriangle> triangles;
     glm::uvec3 tightMin{0}, tightMax{0};  // voxel bounds inside the block (inclusive)
+    // Block octree (lod/lod_pyramid.h): the children at level - 1 are blocks
+    // [firstChild, firstChild + popcount(childMask)) of the model, one per octant bit set.
+    uint32_t firstChild = 0;
+    uint8_t childMask = 0;
 
     size_t voxelCount() const { return voxels.size(); }
 };

@@ -1,0 +1,41 @@
+#pragma once
+// The LOD pyramid and its block octree (Chajdas 2015, sections 3.2 and 4.3): level 0 is the
+// voxelizer's output; each further level halves the resolution (lod/simplify.h) until the whole
+// model is one block. Blocks are then ordered coarsest level first, Morton order within a level,
+// so a block's (at most 8) children are consecutive at the level below: a block links to them by
+// the index of the first and an 8-bit mask of the octants present. The root is the single block
+// of the coarsest level, which a renderer keeps resident.
+//
+// Skirts: every voxel on a block's boundary gets the face on that boundary marked active, so a
+// block drawn next to a neighbour at another level (or next to source triangles) closes the gap
+// between them instead of showing a crack (section 4.3). They are added after simplification, so
+// a parent's face mask is still exactly the union of its children's interior faces.
+
+#include <cstdint>
+
+#include "voxel/voxel_model.h"
+
+namespace cuberille::lod {
+
+enum class SimplifyMethod { Serial, Parallel };
+
+struct PyramidOptions {
+    SimplifyMethod method = SimplifyMethod::Parallel;
+    uint32_t maxLevels = 0;  // 0: down to a single block; 1: level 0 only (skirts and links still)
+};
+
+struct PyramidStats {
+    uint32_t levels = 0;
+    std::vector<uint64_t> blocksPerLevel, voxelsPerLevel;
+    uint64_t skirtFaces = 0;  // faces the skirts activated
+    double simplifyMs = 0;
+};
+
+/// Builds every level above level 0 into the model (whose blocks must be level 0, in Morton
+/// order, voxels in Morton order), orders and links the blocks, adds skirts.
+void buildLodPyramid(voxel::VoxelModel& model, const PyramidOptions& options, PyramidStats* stats = nullptr);
+
+/// Number of levels a model of this resolution gets: down to one block of kBlockSize.
+uint32_t pyramidLevels(uint32_t resolution, uint32_t blockSize);
+
+}  // namespace cuberille::lod
