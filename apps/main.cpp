@@ -22,7 +22,7 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     std::string scenes;
     for (const auto& n : cuberille::scene::proceduralSceneNames()) scenes += " " + n;
     render->add_option("scene", o.scene,
-                       "A .tri, .ply, .ply.gz, .obj, .gltf or .glb file, or a built-in scene:" + scenes)
+                       "A .tri, .ply, .ply.gz, .obj, .gltf, .glb or .cvox file, or a built-in scene:" + scenes)
         ->required();
     render->add_option("--width", o.width, "Image width in pixels")->capture_default_str();
     render->add_option("--height", o.height, "Image height in pixels")->capture_default_str();
@@ -31,7 +31,8 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_option("--out", o.out, "Output image, .png or .exr")->required();
     render->add_option("--stats", o.statsPath, "Write per-stage counters and timings as JSON");
     render->add_option("--view", view, "What to show: color, depth, tiles (coarse block "
-                                       "classes) or overdraw (depth-passing samples)")
+                                       "classes), overdraw (depth-passing samples) or lod (voxel models: "
+                                       "blocks coloured by level)")
         ->capture_default_str();
     render->add_option("--detail", o.detail, "Tessellation scale of built-in scenes")
         ->capture_default_str();
@@ -46,6 +47,12 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
         ->capture_default_str();
     render->add_option("--turntable", o.turntable,
                        "Write N frames turning around the scene (OUT_000.png, OUT_001.png, ...)");
+    render->add_option("--pixel-error", o.pixelError,
+                       "Voxel models: refine blocks until a voxel projects to at most this many pixels "
+                       "(0: always the finest level)")
+        ->capture_default_str();
+    render->add_flag("--no-hybrid", o.noHybrid,
+                     "Voxel models: never draw source triangles where even the finest voxels are too coarse");
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 

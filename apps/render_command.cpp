@@ -16,6 +16,7 @@
 #include "scene/model_scene.h"
 #include "scene/procedural.h"
 #include "scene/tri_scene.h"
+#include "voxel/cvox_file.h"
 
 namespace cuberille::apps {
 namespace {
@@ -54,7 +55,8 @@ raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) 
 void finishView(const raster::Pipeline& p, View view, raster::Image& image, double& resolveMs) {
     const double t0 = nowMs();
     switch (view) {
-        case View::Color: raster::resolveColor(p.framebuffer(), image); break;
+        case View::Color:
+        case View::Lod: raster::resolveColor(p.framebuffer(), image); break;
         case View::Depth: raster::resolveDepth(p.framebuffer(), image); break;
         case View::Overdraw: raster::visualizeOverdraw(p.framebuffer(), image); break;
         case View::Tiles: {
@@ -73,6 +75,7 @@ const char* viewName(View v) {
         case View::Depth: return "depth";
         case View::Tiles: return "tiles";
         case View::Overdraw: return "overdraw";
+        case View::Lod: return "lod";
     }
     return "?";
 }
@@ -84,12 +87,15 @@ View parseView(const std::string& name) {
     if (name == "depth") return View::Depth;
     if (name == "tiles") return View::Tiles;
     if (name == "overdraw") return View::Overdraw;
-    throw scene::InputError("--view: '" + name + "' is not color, depth, tiles or overdraw");
+    if (name == "lod") return View::Lod;
+    throw scene::InputError("--view: '" + name + "' is not color, depth, tiles, overdraw or lod");
 }
 
 namespace {
 
 bool isTriFile(const RenderOptions& o) { return o.scene.ends_with(".tri"); }
+bool isVoxelFile(const RenderOptions& o) { return o.scene.ends_with(".cvox"); }
+
 
 // Built-in or mesh-file scenes: everything but .tri.
 scene::Scene load3dScene(const RenderOptions& o) {
@@ -141,12 +147,31 @@ void writeStats(const std::filesystem::path& path, const nlohmann::json& json) {
     f.commit();
 }
 
+/// A voxel model: blocks selected, expanded and drawn through the same pipeline.
+void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
+    const double t0 = nowMs();
+    lod::VoxelScene s(voxel::readCvox(o.scene), o.azimuth, o.elevation);
+    result.loadMs = nowMs() - t0;
+    result.sceneTriangles = s.model().triangleCount();
+    lod::VoxelRenderOptions vo;
+    vo.selection.pixelError = o.pixelError;
+    vo.selection.hybrid = !o.noHybrid;
+    vo.colorByLevel = o.view == View::Lod;
+    renderFrame(o, s.background, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); }, result);
+}
+
 }  // namespace
 
 RenderResult renderScene(const RenderOptions& o) {
     validate(o);
     raster::ThreadLimit threadLimit(o.threads);
     RenderResult result;
+    if (o.view == View::Lod && !isVoxelFile(o)) throw scene::InputError("--view lod: only for voxel models (.cvox)");
+    if (!(o.pixelError >= 0.0f)) throw scene::InputError("--pixel-error: must be 0 or more");
+    if (isVoxelFile(o)) {
+        renderVoxelModel(o, result);
+        return result;
+    }
     const double t0 = nowMs();
     if (!isTriFile(o)) {
         const scene::Scene s = load3dScene(o);
@@ -173,6 +198,19 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
     j["threads"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
     j["view"] = viewName(o.view);
     j["sceneTriangles"] = r.sceneTriangles;
+    if (r.voxel) {
+        const lod::VoxelFrameStats& v = *r.voxel;
+        j["voxel"] = {{"blocksVisited", v.selection.blocksVisited},
+                      {"frustumCulled", v.selection.frustumCulled},
+                      {"voxelBlocksDrawn", v.voxelBlocksDrawn},
+                      {"drawnPerLevel", v.selection.drawnPerLevel},
+                      {"triangleBlocksDrawn", v.triangleBlocksDrawn},
+                      {"hybridTriangles", v.hybridTriangles},
+                      {"voxelsExpanded", v.voxelsExpanded},
+                      {"facesEmitted", v.facesEmitted},
+                      {"selectMs", v.selectMs},
+                      {"expandMs", v.expandMs}};
+    }
     j["stages"] = {
         {"vertex", {{"verticesShaded", c.verticesShaded}, {"ms", t.vertexMs}}},
         {"clip",
@@ -236,6 +274,7 @@ int runTurntable(const RenderOptions& o);
 int runRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png or .exr)");
     imageFormatFor(o.out);  // reject a bad extension before any work
+    if (o.turntable > 0 && isVoxelFile(o)) throw scene::InputError("--turntable: not for voxel models yet");
     if (o.turntable > 0) return runTurntable(o);
     const RenderResult r = renderScene(o);
     writeImageAtomically(o.out, r.image);

@@ -3,17 +3,19 @@
 // Also the library entry point tests and benchmarks call, so they exercise the tool's path.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "raster/resolve.h"
 #include "raster/stats.h"
+#include "lod/voxel_scene.h"
 #include "scene/load_stats.h"
 
 namespace cuberille::apps {
 
-enum class View { Color, Depth, Tiles, Overdraw };
+enum class View { Color, Depth, Tiles, Overdraw, Lod };
 
 struct RenderOptions {
     std::string scene;  // a .tri, .ply, .ply.gz or .obj path, or a built-in scene name
@@ -28,6 +30,8 @@ struct RenderOptions {
     int cameraIndex = -1;     // a camera of the file (glTF), instead of framing the model
     float timeSeconds = 0.0f; // glTF animation time
     int turntable = 0;        // > 0: that many frames around the scene, OUT_000.ext ...
+    float pixelError = 1.0f;  // voxel models: largest projected voxel in pixels (0: finest level)
+    bool noHybrid = false;    // voxel models: never draw source triangles
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;
@@ -39,6 +43,7 @@ struct RenderResult {
     size_t sceneTriangles = 0;
     double loadMs = 0;
     scene::LoadStats load;
+    std::optional<lod::VoxelFrameStats> voxel;  // voxel models only
 };
 
 View parseView(const std::string& name);  // throws scene::InputError

@@ -251,6 +251,12 @@ TEST_F(Cli, VoxelCommandsRejectBadInputWithExitTwoAndWriteNothing) {
     r = run("info " + cutVoxels.string());
     EXPECT_EQ(r.exitCode, 2) << r.output;
     EXPECT_NE(r.output.find(cutVoxels.string() + ": block"), std::string::npos) << r.output;
+    // The voxel model renders, also as its LOD view; the lod view is refused for other scenes.
+    r = run("render " + out.string() + " --width 64 --height 48 --view lod --out " + (dir_ / "v.png").string() +
+            " --stats " + (dir_ / "v.json").string());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir_ / "v.png"));
+    EXPECT_EQ(run("render " + obj.string() + " --view lod --out " + (dir_ / "w.png").string()).exitCode, 2);
     // A failed run leaves the earlier good output untouched.
     const auto before = fs::file_size(out);
     EXPECT_EQ(run("voxelize " + cut.string() + " -o " + out.string()).exitCode, 2);

@@ -1,0 +1,108 @@
+#include "lod/voxel_scene.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "raster/parallel.h"
+#include "voxel/packing.h"
+
+namespace cuberille::lod {
+namespace {
+
+double nowMs() {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+glm::vec3 levelColor(uint32_t level) {
+    static const glm::vec3 palette[8] = {{0.9f, 0.2f, 0.2f}, {0.95f, 0.6f, 0.1f}, {0.9f, 0.9f, 0.2f}, {0.3f, 0.85f, 0.3f},
+                                         {0.2f, 0.7f, 0.9f}, {0.3f, 0.35f, 0.95f}, {0.7f, 0.3f, 0.9f}, {0.9f, 0.9f, 0.9f}};
+    return palette[level % 8];
+}
+
+VoxelScene::VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elevationDegrees) : model_(std::move(model)) {
+    glm::dvec3 lo(1e300), hi(-1e300);
+    for (const voxel::VoxelBlock& b : model_.blocks) {
+        glm::dvec3 blo, bhi;
+        blockBounds(model_, b, blo, bhi);
+        lo = glm::min(lo, blo);
+        hi = glm::max(hi, bhi);
+    }
+    if (model_.blocks.empty()) lo = model_.grid.origin, hi = model_.grid.origin + model_.grid.extent;
+    camera = scene::frameBounds(glm::vec3(lo), glm::vec3(hi), azimuthDegrees, elevationDegrees);
+    const glm::vec3 toCamera = glm::normalize(camera.position - camera.target);
+    lighting = raster::Lighting::directional(glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f)), glm::vec3(0.85f),
+                                             glm::vec3(0.12f));
+}
+
+VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int height, const VoxelRenderOptions& o) {
+    VoxelFrameStats stats;
+    const float aspect = float(width) / float(height);
+    const glm::mat4 clipFromWorld = camera.clipFromWorld(aspect);
+    SelectionOptions so = o.selection;
+    so.viewportHeightPixels = height;
+    so.verticalFovRadians = glm::radians(camera.verticalFovDegrees);
+    so.orthographic = camera.orthographic;
+    so.orthographicHalfHeight = camera.orthographicHalfHeight;
+    double t0 = nowMs();
+    const BlockSelection selection = selectBlocks(model_, glm::dmat4(clipFromWorld), glm::dvec3(camera.position), so);
+    stats.selectMs = nowMs() - t0;
+    stats.selection = selection.stats;
+
+    // Expansion, block by block in parallel; each block's geometry is its own, so the draws (and
+    // the image) do not depend on the thread count.
+    t0 = nowMs();
+    faces_.resize(selection.voxelBlocks.size());
+    triangles_.resize(selection.triangleBlocks.size());
+    raster::parallelFor(selection.voxelBlocks.size(), [&](size_t k) {
+        const voxel::VoxelBlock& b = model_.blocks[selection.voxelBlocks[k]];
+        const glm::vec3 levelTint = levelColor(b.level);
+        faces_[k].clear();
+        voxel::expandVoxelFaces(model_, b, glm::dvec3(camera.position), faces_[k], o.colorByLevel ? &levelTint : nullptr);
+    });
+    raster::parallelFor(selection.triangleBlocks.size(), [&](size_t k) {
+        const voxel::VoxelBlock& b = model_.blocks[selection.triangleBlocks[k]];
+        TriangleMesh& m = triangles_[k];
+        m.positions.clear(), m.normals.clear(), m.colors.clear();
+        const glm::vec3 tint = levelColor(0);
+        for (const voxel::SourceTriangle& t : b.triangles)
+            for (int v = 0; v < 3; ++v) {
+                m.positions.push_back(t.position[v]);
+                m.normals.push_back(voxel::unpackNormal1010102(t.normal[v]));
+                m.colors.push_back(o.colorByLevel ? tint * 0.6f : voxel::unpackSrgba8Rgb(t.color[v]));
+            }
+    });
+    stats.expandMs = nowMs() - t0;
+
+    auto submit = [&](std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                      std::span<const glm::vec3> colors, std::span<const uint32_t> indices) {
+        if (positions.empty()) return;
+        raster::DrawCall d;
+        d.space = raster::PositionSpace::Clip;
+        d.clipFromObject = clipFromWorld;
+        d.positions = positions;
+        d.normals = normals;
+        d.vertexColors = colors;
+        d.indices = indices;
+        d.state.shading = raster::ShadingModel::Lambert;
+        d.state.cull = raster::CullMode::None;  // faces are chosen by the camera side already
+        d.state.lighting = lighting;
+        d.state.cameraPosition = camera.position;
+        pipeline.draw(d);
+    };
+    for (const TriangleMesh& m : triangles_) {
+        submit(m.positions, m.normals, m.colors, {});
+        stats.hybridTriangles += m.positions.size() / 3;
+        ++stats.triangleBlocksDrawn;
+    }
+    for (const voxel::FaceMesh& f : faces_) {
+        submit(f.positions, f.normals, f.colors, f.indices);
+        stats.voxelsExpanded += f.voxels;
+        stats.facesEmitted += f.faces;
+        ++stats.voxelBlocksDrawn;
+    }
+    return stats;
+}
+
+}  // namespace cuberille::lod

@@ -1,0 +1,56 @@
+#pragma once
+// A voxel model as a scene for the rasterizer (Chajdas 2015, chapter 4): each frame selects blocks
+// (lod/block_selection.h), expands the selected blocks' voxels into camera-facing quads
+// (voxel/face_expansion.h) and submits one draw per block, source-triangle blocks first, then
+// voxel blocks, each list front to back. Model space is world space.
+
+#include <vector>
+
+#include "lod/block_selection.h"
+#include "raster/pipeline.h"
+#include "scene/camera.h"
+#include "voxel/face_expansion.h"
+#include "voxel/voxel_model.h"
+
+namespace cuberille::lod {
+
+struct VoxelRenderOptions {
+    SelectionOptions selection;
+    bool colorByLevel = false;  // --view lod: each block in its level's colour
+};
+
+struct VoxelFrameStats {
+    SelectionStats selection;
+    uint64_t voxelBlocksDrawn = 0, triangleBlocksDrawn = 0;
+    uint64_t voxelsExpanded = 0, facesEmitted = 0, hybridTriangles = 0;
+    double selectMs = 0, expandMs = 0;
+};
+
+/// The colour of a level in the `lod` view (level 0 first; repeats after 8).
+glm::vec3 levelColor(uint32_t level);
+
+class VoxelScene {
+public:
+    /// Frames the model from the given angles, lit like a mesh file (a key light above the camera).
+    VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elevationDegrees);
+
+    scene::Camera camera;
+    raster::Lighting lighting;
+    glm::vec4 background{0.05f, 0.06f, 0.08f, 1.0f};
+
+    const voxel::VoxelModel& model() const { return model_; }
+
+    /// Records one frame's draws into the pipeline (between its beginFrame and endFrame). The
+    /// expanded geometry lives in this object until the next call.
+    VoxelFrameStats draw(raster::Pipeline& pipeline, int width, int height, const VoxelRenderOptions& options);
+
+private:
+    voxel::VoxelModel model_;
+    std::vector<voxel::FaceMesh> faces_;
+    struct TriangleMesh {
+        std::vector<glm::vec3> positions, normals, colors;
+    };
+    std::vector<TriangleMesh> triangles_;
+};
+
+}  // namespace cuberille::lod

@@ -1,0 +1,165 @@
+// Rendering voxel models: the LOD bound holds for every drawn voxel, mixed levels leave no crack,
+// and frames do not depend on the thread count.
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "lod/lod_pyramid.h"
+#include "lod/voxel_scene.h"
+#include "raster/parallel.h"
+#include "raster/resolve.h"
+#include "tests/voxel/voxel_test_support.h"
+
+namespace cuberille {
+namespace {
+
+constexpr double kRadius = 2.0;
+const glm::dvec3 kCentre(0.3, 0.1, -0.2);
+
+voxel::VoxelModel spherePyramid(uint32_t resolution, bool withTriangles = true,
+                                voxel::Separability separability = voxel::Separability::Conservative) {
+    std::mt19937 rng(21);
+    const auto tris = testing::icosphere(4, kCentre, kRadius, testing::randomRotation(rng));
+    voxel::VoxelizeOptions o;
+    o.resolution = resolution;
+    o.keepSourceTriangles = withTriangles;
+    o.separability = separability;
+    voxel::VoxelModel m = voxel::voxelizeMesh(*testing::viewOf(tris, 1000), o);
+    lod::buildLodPyramid(m, {});
+    return m;
+}
+
+scene::Camera cameraAt(const glm::dvec3& eye) {
+    scene::Camera c;
+    c.position = glm::vec3(eye);
+    c.target = glm::vec3(kCentre) + glm::vec3(0.0f, 0.0f, 0.01f);  // never looking straight down an axis at itself
+    c.verticalFovDegrees = glm::degrees(0.7f);
+    c.nearPlane = 0.01f;
+    c.farPlane = 100.0f;
+    return c;
+}
+
+double distanceToBox(const glm::dvec3& p, const glm::dvec3& lo, const glm::dvec3& hi) {
+    return glm::length(glm::max(glm::max(lo - p, p - hi), glm::dvec3(0.0)));
+}
+
+TEST(LodBound, NoDrawnVoxelProjectsBeyondThePixelError) {
+    const voxel::VoxelModel m = spherePyramid(512);
+    lod::SelectionOptions o;
+    o.viewportHeightPixels = 720;
+    o.verticalFovRadians = 0.7f;
+    const double focal = 720 / (2.0 * std::tan(0.35));
+    for (float pixelError : {1.0f, 4.0f})
+        for (const glm::dvec3& eye : {glm::dvec3(0.3, 0.1, 12.0), glm::dvec3(5.0, 3.0, 2.0), glm::dvec3(0.3, 0.1, 2.5),
+                                      glm::dvec3(40.0, -30.0, 25.0), glm::dvec3(0.3, 0.1, -0.2) /* inside */}) {
+            o.pixelError = pixelError;
+            const glm::mat4 clip = cameraAt(eye).clipFromWorld(16.0f / 9.0f);
+            const lod::BlockSelection s = lod::selectBlocks(m, glm::dmat4(clip), eye, o);
+            ASSERT_FALSE(s.voxelBlocks.empty() && s.triangleBlocks.empty());
+            for (uint32_t i : s.voxelBlocks) {
+                const voxel::VoxelBlock& b = m.blocks[i];
+                const voxel::VoxelBoxes boxes(m, b);
+                for (uint32_t packed : b.voxels) {  // each voxel, by itself
+                    const glm::dvec3 lo = boxes.lowCorner(voxel::voxelPositionInBlock(packed));
+                    const double d = distanceToBox(eye, lo, lo + boxes.voxelSize);
+                    ASSERT_GT(d, 0.0) << "a voxel around the camera was drawn";
+                    EXPECT_LE(boxes.voxelSize * std::sqrt(3.0) * focal / d, pixelError * (1.0 + 1e-9))
+                        << "level " << b.level;
+                }
+            }
+        }
+}
+
+TEST(LodBound, HybridBlocksAreFinestLevelBlocksThatNeededRefining) {
+    const voxel::VoxelModel m = spherePyramid(256);
+    const glm::dvec3 eye(0.3, 0.1, 2.3);  // just outside the sphere: the nearest voxels are too coarse
+    const glm::mat4 clip = cameraAt(eye).clipFromWorld(1.0f);
+    lod::SelectionOptions o;
+    const lod::BlockSelection with = lod::selectBlocks(m, glm::dmat4(clip), eye, o);
+    EXPECT_GT(with.triangleBlocks.size(), 0u);
+    for (uint32_t i : with.triangleBlocks) EXPECT_EQ(m.blocks[i].level, 0u);
+    o.hybrid = false;
+    const lod::BlockSelection without = lod::selectBlocks(m, glm::dmat4(clip), eye, o);
+    EXPECT_EQ(without.triangleBlocks.size(), 0u);
+    EXPECT_EQ(without.voxelBlocks.size(), with.voxelBlocks.size() + with.triangleBlocks.size());
+}
+
+/// Renders the scene's depth at 256x256 and returns it (1 where nothing was drawn).
+raster::Image renderDepth(lod::VoxelScene& scene, const lod::VoxelRenderOptions& o, lod::VoxelFrameStats* stats = nullptr) {
+    raster::Pipeline p;
+    raster::FramebufferDesc d;
+    d.widthPixels = d.heightPixels = 256;
+    p.beginFrame(d);
+    const lod::VoxelFrameStats s = scene.draw(p, 256, 256, o);
+    p.endFrame();
+    if (stats) *stats = s;
+    raster::Image depth;
+    raster::resolveDepth(p.framebuffer(), depth);
+    return depth;
+}
+
+class NoCracks : public ::testing::TestWithParam<voxel::Separability> {};
+
+TEST_P(NoCracks, MixedLevelsLeaveNoHoleInsideTheSilhouette) {
+    lod::VoxelScene scene(spherePyramid(512, false, GetParam()), 0.0f, 0.0f);
+    scene.camera.position = glm::vec3(kCentre) + glm::vec3(0.0f, 0.0f, 3.2f);  // close: levels vary across the sphere
+    scene.camera.target = glm::vec3(kCentre);
+    scene.camera.verticalFovDegrees = 80.0f;
+    scene.camera.nearPlane = 0.01f;
+    lod::VoxelRenderOptions o;
+    o.selection.pixelError = 3.0f;
+    lod::VoxelFrameStats stats;
+    const raster::Image depth = renderDepth(scene, o, &stats);
+    int levelsDrawn = 0;
+    uint32_t coarsest = 0;
+    for (uint32_t l = 0; l < stats.selection.drawnPerLevel.size(); ++l)
+        if (stats.selection.drawnPerLevel[l]) ++levelsDrawn, coarsest = l;
+    ASSERT_GE(levelsDrawn, 2) << "the test needs blocks of several levels side by side";
+    // Every pixel whose ray meets the sphere shrunk by the coarsest drawn voxel's diagonal (and the
+    // mesh's faceting) must be covered.
+    const double shrink = scene.model().grid.voxelSize() * double(1u << coarsest) * std::sqrt(3.0) + 0.01 * kRadius;
+    const glm::mat4 inverse = glm::inverse(scene.camera.clipFromWorld(1.0f));
+    int inside = 0, holes = 0;
+    for (int y = 0; y < 256; ++y)
+        for (int x = 0; x < 256; ++x) {
+            const glm::vec4 ndc((x + 0.5f) / 128.0f - 1.0f, 1.0f - (y + 0.5f) / 128.0f, 1.0f, 1.0f);
+            glm::vec4 far = inverse * ndc;
+            const glm::dvec3 dir = glm::normalize(glm::dvec3(far / far.w) - glm::dvec3(scene.camera.position));
+            const glm::dvec3 oc = glm::dvec3(scene.camera.position) - kCentre;
+            const double b = glm::dot(oc, dir), c = glm::dot(oc, oc) - (kRadius - shrink) * (kRadius - shrink);
+            if (b * b - c <= 0.0) continue;
+            ++inside;
+            holes += depth.rgba[(size_t(y) * 256 + x) * 4] >= 1.0f;
+        }
+    EXPECT_GT(inside, 5000);
+    EXPECT_EQ(holes, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Separability, NoCracks,
+                         ::testing::Values(voxel::Separability::Conservative, voxel::Separability::Six));
+
+TEST(VoxelDeterminism, SameFrameForAnyThreadCount) {
+    lod::VoxelScene scene(spherePyramid(256), 30.0f, 20.0f);
+    lod::VoxelRenderOptions o;
+    o.selection.pixelError = 2.0f;
+    auto render = [&](int threads) {
+        raster::ThreadLimit limit(threads);
+        raster::Pipeline p;
+        raster::FramebufferDesc d;
+        d.widthPixels = 200, d.heightPixels = 150, d.samples = 4;
+        p.beginFrame(d);
+        scene.draw(p, 200, 150, o);
+        p.endFrame();
+        raster::Image image;
+        raster::resolveColor(p.framebuffer(), image);
+        return image.rgba;
+    };
+    const std::vector<float> one = render(1);
+    EXPECT_EQ(one, render(2));
+    EXPECT_EQ(one, render(5));
+}
+
+}  // namespace
+}  // namespace cuberille

@@ -1,0 +1,43 @@
+#pragma once
+// Voxel-face expansion (Chajdas 2015, section 4.3): the software version of the vertex/geometry
+// shader pair that turns a block's packed voxels into quads. Each voxel's position is unpacked
+// from its block; of its active faces, only those facing the camera are emitted (at most three
+// per voxel: the camera sees +x only from beyond the voxel's +x side, and so on), each as two
+// triangles whose four corners all carry the voxel's normal and colour, so nothing varies
+// across a face (flat attributes, as the paper's geometry shader emits them).
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "voxel/voxel_model.h"
+
+namespace cuberille::voxel {
+
+struct FaceMesh {
+    std::vector<glm::vec3> positions, normals, colors;  // model units; linear colours
+    std::vector<uint32_t> indices;
+    uint64_t voxels = 0, faces = 0;
+
+    void clear() { positions.clear(), normals.clear(), colors.clear(), indices.clear(), voxels = faces = 0; }
+};
+
+/// The world box of one voxel of a block (at the block's level).
+struct VoxelBoxes {
+    glm::dvec3 blockOrigin;  // model units
+    double voxelSize;        // model units, at the block's level
+
+    VoxelBoxes(const VoxelModel& m, const VoxelBlock& b)
+        : voxelSize(m.grid.voxelSize() * double(1u << b.level)) {
+        blockOrigin = m.grid.origin + glm::dvec3(b.coord) * double(m.blockSize) * voxelSize;
+    }
+    glm::dvec3 lowCorner(const glm::uvec3& local) const { return blockOrigin + glm::dvec3(local) * voxelSize; }
+};
+
+/// Appends the camera-facing active faces of every voxel of the block. overrideColor, when
+/// given, replaces the voxels' colours (debug views).
+void expandVoxelFaces(const VoxelModel& model, const VoxelBlock& block, const glm::dvec3& cameraPosition,
+                      FaceMesh& out, const glm::vec3* overrideColor = nullptr);
+
+}  // namespace cuberille::voxel
