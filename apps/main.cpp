@@ -53,6 +53,10 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
         ->capture_default_str();
     render->add_flag("--no-hybrid", o.noHybrid,
                      "Voxel models: never draw source triangles where even the finest voxels are too coarse");
+    render->add_flag("--no-occlusion", o.noOcclusion, "Voxel models: no occlusion culling");
+    render->add_option("--warmup", o.warmup,
+                       "Voxel models: frames rendered first so occlusion culling has the frame before to learn from")
+        ->capture_default_str();
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 

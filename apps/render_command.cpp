@@ -157,7 +157,15 @@ void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     vo.selection.pixelError = o.pixelError;
     vo.selection.hybrid = !o.noHybrid;
     vo.colorByLevel = o.view == View::Lod;
-    renderFrame(o, s.background, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); }, result);
+    vo.occlusion = !o.noOcclusion;
+    // Occlusion culling learns from the frame before: the warm-up frames give it that history
+    // (the image is the same with or without it; only the work differs).
+    const int frames = vo.occlusion ? 1 + o.warmup : 1;
+    for (int f = 0; f < frames; ++f) {
+        renderFrame(o, s.background, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
+                    result);
+        s.readOcclusion(result.stats);
+    }
 }
 
 }  // namespace
@@ -168,6 +176,7 @@ RenderResult renderScene(const RenderOptions& o) {
     RenderResult result;
     if (o.view == View::Lod && !isVoxelFile(o)) throw scene::InputError("--view lod: only for voxel models (.cvox)");
     if (!(o.pixelError >= 0.0f)) throw scene::InputError("--pixel-error: must be 0 or more");
+    if (o.warmup < 0 || o.warmup > 100) throw scene::InputError("--warmup: must be 0 to 100 frames");
     if (isVoxelFile(o)) {
         renderVoxelModel(o, result);
         return result;
@@ -202,6 +211,8 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
         const lod::VoxelFrameStats& v = *r.voxel;
         j["voxel"] = {{"blocksVisited", v.selection.blocksVisited},
                       {"frustumCulled", v.selection.frustumCulled},
+                      {"occlusionCulled", v.occlusionCulled},
+                      {"visibilityTests", v.visibilityTests},
                       {"voxelBlocksDrawn", v.voxelBlocksDrawn},
                       {"drawnPerLevel", v.selection.drawnPerLevel},
                       {"triangleBlocksDrawn", v.triangleBlocksDrawn},

@@ -32,6 +32,8 @@ struct RenderOptions {
     int turntable = 0;        // > 0: that many frames around the scene, OUT_000.ext ...
     float pixelError = 1.0f;  // voxel models: largest projected voxel in pixels (0: finest level)
     bool noHybrid = false;    // voxel models: never draw source triangles
+    bool noOcclusion = false; // voxel models: no occlusion culling
+    int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;

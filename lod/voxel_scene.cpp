@@ -1,7 +1,9 @@
 #include "lod/voxel_scene.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 
 #include "raster/parallel.h"
 #include "voxel/packing.h"
@@ -31,6 +33,13 @@ VoxelScene::VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elev
     }
     if (model_.blocks.empty()) lo = model_.grid.origin, hi = model_.grid.origin + model_.grid.extent;
     camera = scene::frameBounds(glm::vec3(lo), glm::vec3(hi), azimuthDegrees, elevationDegrees);
+    parent_.resize(model_.blocks.size());
+    for (uint32_t i = 0; i < model_.blocks.size(); ++i) parent_[i] = i;
+    for (uint32_t i = 0; i < model_.blocks.size(); ++i) {
+        const voxel::VoxelBlock& b = model_.blocks[i];
+        for (int k = 0; k < __builtin_popcount(b.childMask); ++k) parent_[b.firstChild + uint32_t(k)] = i;
+    }
+    visibility_.assign(model_.blocks.size(), kUnknown);
     const glm::vec3 toCamera = glm::normalize(camera.position - camera.target);
     lighting = raster::Lighting::directional(glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f)), glm::vec3(0.85f),
                                              glm::vec3(0.12f));
@@ -46,17 +55,24 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     so.orthographic = camera.orthographic;
     so.orthographicHalfHeight = camera.orthographicHalfHeight;
     double t0 = nowMs();
-    const BlockSelection selection = selectBlocks(model_, glm::dmat4(clipFromWorld), glm::dvec3(camera.position), so);
+    BlockSelection selection = selectBlocks(model_, glm::dmat4(clipFromWorld), glm::dvec3(camera.position), so);
+    slotBlocks_.clear();
+    slotCovers_.clear();
+    tests_.clear();
+    if (o.occlusion) planOcclusion(selection.voxelBlocks, stats);
     stats.selectMs = nowMs() - t0;
     stats.selection = selection.stats;
 
     // Expansion, block by block in parallel; each block's geometry is its own, so the draws (and
     // the image) do not depend on the thread count.
     t0 = nowMs();
-    faces_.resize(selection.voxelBlocks.size());
+    // Drawn blocks first, then the visibility tests: both expand the same way.
+    std::vector<uint32_t> expand = selection.voxelBlocks;
+    expand.insert(expand.end(), tests_.begin(), tests_.end());
+    faces_.resize(expand.size());
     triangles_.resize(selection.triangleBlocks.size());
-    raster::parallelFor(selection.voxelBlocks.size(), [&](size_t k) {
-        const voxel::VoxelBlock& b = model_.blocks[selection.voxelBlocks[k]];
+    raster::parallelFor(expand.size(), [&](size_t k) {
+        const voxel::VoxelBlock& b = model_.blocks[expand[k]];
         const glm::vec3 levelTint = levelColor(b.level);
         faces_[k].clear();
         voxel::expandVoxelFaces(model_, b, glm::dvec3(camera.position), faces_[k], o.colorByLevel ? &levelTint : nullptr);
@@ -76,7 +92,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     stats.expandMs = nowMs() - t0;
 
     auto submit = [&](std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
-                      std::span<const glm::vec3> colors, std::span<const uint32_t> indices) {
+                      std::span<const glm::vec3> colors, std::span<const uint32_t> indices, int slot, bool testOnly) {
         if (positions.empty()) return;
         raster::DrawCall d;
         d.space = raster::PositionSpace::Clip;
@@ -89,20 +105,66 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
         d.state.cull = raster::CullMode::None;  // faces are chosen by the camera side already
         d.state.lighting = lighting;
         d.state.cameraPosition = camera.position;
+        d.state.occlusionSlot = slot;
+        if (testOnly) {
+            d.state.colorWriteMask = 0;
+            d.state.depthWrite = false;
+            d.state.shading = raster::ShadingModel::ConstantColor;  // nothing is written: no shading
+        }
         pipeline.draw(d);
     };
     for (const TriangleMesh& m : triangles_) {
-        submit(m.positions, m.normals, m.colors, {});
+        submit(m.positions, m.normals, m.colors, {}, -1, false);
         stats.hybridTriangles += m.positions.size() / 3;
         ++stats.triangleBlocksDrawn;
     }
-    for (const voxel::FaceMesh& f : faces_) {
-        submit(f.positions, f.normals, f.colors, f.indices);
+    for (size_t k = 0; k < faces_.size(); ++k) {
+        const voxel::FaceMesh& f = faces_[k];
+        const bool test = k >= selection.voxelBlocks.size();
+        submit(f.positions, f.normals, f.colors, f.indices, o.occlusion ? int(k) : -1, test);
         stats.voxelsExpanded += f.voxels;
         stats.facesEmitted += f.faces;
-        ++stats.voxelBlocksDrawn;
+        ++(test ? stats.visibilityTests : stats.voxelBlocksDrawn);
     }
     return stats;
+}
+
+void VoxelScene::planOcclusion(std::vector<uint32_t>& voxelBlocks, VoxelFrameStats& stats) {
+    std::vector<uint32_t> drawn;
+    std::map<uint32_t, std::vector<uint32_t>> hiddenByParent;  // ordered: the same plan every run
+    std::map<uint32_t, int> selectedUnderParent;
+    for (uint32_t i : voxelBlocks) ++selectedUnderParent[parent_[i]];
+    for (uint32_t i : voxelBlocks) {
+        if (visibility_[i] == kHidden) hiddenByParent[parent_[i]].push_back(i);
+        else drawn.push_back(i);
+    }
+    stats.occlusionCulled = voxelBlocks.size() - drawn.size();
+    for (uint32_t i : drawn) {
+        slotBlocks_.push_back(i);
+        slotCovers_.push_back({i});
+    }
+    for (auto& [parent, hidden] : hiddenByParent) {
+        // Every selected block under the parent was hidden: the parent's faces bound them all.
+        if (parent != hidden.front() && int(hidden.size()) == selectedUnderParent[parent]) {
+            tests_.push_back(parent);
+            slotBlocks_.push_back(parent);
+            slotCovers_.push_back(hidden);
+            continue;
+        }
+        for (uint32_t i : hidden) {
+            tests_.push_back(i);
+            slotBlocks_.push_back(i);
+            slotCovers_.push_back({i});
+        }
+    }
+    voxelBlocks = std::move(drawn);
+}
+
+void VoxelScene::readOcclusion(const raster::PipelineStats& stats) {
+    for (size_t slot = 0; slot < slotCovers_.size(); ++slot) {
+        const bool passed = slot < stats.occlusionSamplesPassed.size() && stats.occlusionSamplesPassed[slot] > 0;
+        for (uint32_t i : slotCovers_[slot]) visibility_[i] = passed ? kVisible : kHidden;
+    }
 }
 
 }  // namespace cuberille::lod

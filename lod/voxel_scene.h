@@ -17,11 +17,14 @@ namespace cuberille::lod {
 struct VoxelRenderOptions {
     SelectionOptions selection;
     bool colorByLevel = false;  // --view lod: each block in its level's colour
+    bool occlusion = true;      // skip blocks hidden last frame; test them with colour writes off
 };
 
 struct VoxelFrameStats {
     SelectionStats selection;
     uint64_t voxelBlocksDrawn = 0, triangleBlocksDrawn = 0;
+    uint64_t occlusionCulled = 0;    // selected voxel blocks skipped: hidden in the last frame
+    uint64_t visibilityTests = 0;    // blocks drawn with colour writes off to test them
     uint64_t voxelsExpanded = 0, facesEmitted = 0, hybridTriangles = 0;
     double selectMs = 0, expandMs = 0;
 };
@@ -43,9 +46,24 @@ public:
     /// Records one frame's draws into the pipeline (between its beginFrame and endFrame). The
     /// expanded geometry lives in this object until the next call.
     VoxelFrameStats draw(raster::Pipeline& pipeline, int width, int height, const VoxelRenderOptions& options);
+    /// After the pipeline's endFrame: which drawn and tested blocks had samples pass the depth test,
+    /// for the next frame's occlusion culling.
+    void readOcclusion(const raster::PipelineStats& stats);
 
 private:
+    /// Occlusion culling (Chajdas 2015, section 4.5): the selected blocks that were hidden in the
+    /// last frame are not drawn; after everything visible, each is tested by drawing, with colour
+    /// and depth writes off, either itself or, when every selected block under its parent was
+    /// hidden, the parent once for all of them (a parent's faces bound its children's).
+    void planOcclusion(std::vector<uint32_t>& voxelBlocks, VoxelFrameStats& stats);
+
+    enum Visibility : uint8_t { kUnknown = 0, kVisible = 1, kHidden = 2 };
     voxel::VoxelModel model_;
+    std::vector<uint32_t> parent_;           // block -> parent block (the root: itself)
+    std::vector<uint8_t> visibility_;        // per block, from the last frame
+    std::vector<uint32_t> slotBlocks_;       // this frame: occlusion slot -> block drawn or tested
+    std::vector<std::vector<uint32_t>> slotCovers_;  // slot -> selected blocks its result speaks for
+    std::vector<uint32_t> tests_;            // this frame's visibility-only blocks (slots follow the drawn ones)
     std::vector<voxel::FaceMesh> faces_;
     struct TriangleMesh {
         std::vector<glm::vec3> positions, normals, colors;

@@ -140,6 +140,77 @@ TEST_P(NoCracks, MixedLevelsLeaveNoHoleInsideTheSilhouette) {
 INSTANTIATE_TEST_SUITE_P(Separability, NoCracks,
                          ::testing::Values(voxel::Separability::Conservative, voxel::Separability::Six));
 
+/// A big sphere with a small one hidden behind it (seen from +z), as one model.
+voxel::VoxelModel twoSpheres() {
+    std::mt19937 rng(4);
+    auto tris = testing::icosphere(4, kCentre, kRadius, testing::randomRotation(rng));
+    const auto small = testing::icosphere(3, kCentre + glm::dvec3(0.2, 0.0, -3.5), 0.6, testing::randomRotation(rng));
+    tris.insert(tris.end(), small.begin(), small.end());
+    std::vector<glm::vec3> colors;
+    for (size_t i = 0; i < tris.size(); ++i) colors.push_back(glm::vec3(float(i % 7) / 6.0f, 0.5f, float(i % 3) / 2.0f));
+    voxel::VoxelizeOptions o;
+    o.resolution = 512;
+    voxel::VoxelModel m = voxel::voxelizeMesh(*testing::viewOf(tris, 1000, colors), o);
+    lod::buildLodPyramid(m, {});
+    return m;
+}
+
+std::vector<float> renderColor(lod::VoxelScene& scene, const lod::VoxelRenderOptions& o, lod::VoxelFrameStats* stats) {
+    raster::Pipeline p;
+    raster::FramebufferDesc d;
+    d.widthPixels = 240, d.heightPixels = 160, d.samples = 4;
+    p.beginFrame(d);
+    const lod::VoxelFrameStats s = scene.draw(p, 240, 160, o);
+    p.endFrame();
+    scene.readOcclusion(p.stats());
+    if (stats) *stats = s;
+    raster::Image image;
+    raster::resolveColor(p.framebuffer(), image);
+    return image.rgba;
+}
+
+TEST(Occlusion, ConvergedImageEqualsTheImageWithoutCulling) {
+    const voxel::VoxelModel model = twoSpheres();
+    struct View {
+        const char* name;
+        glm::vec3 eye, target;
+    };
+    const glm::vec3 c(kCentre);
+    const View views[] = {
+        {"front: the small sphere hidden", c + glm::vec3(0.3f, 0.2f, 9.0f), c},
+        {"side: both visible", c + glm::vec3(9.0f, 1.0f, -1.5f), c + glm::vec3(0, 0, -1.5f)},
+        {"grazing along the surface", c + glm::vec3(0.0f, 2.05f, 6.0f), c + glm::vec3(0.0f, 2.0f, -6.0f)},
+        {"inside the big sphere", c + glm::vec3(0.5f, 0.1f, 0.3f), c + glm::vec3(0, 0, -3.5f)},
+        {"far away", c + glm::vec3(-30.0f, 20.0f, 40.0f), c},
+    };
+    uint64_t culledSomewhere = 0;
+    for (const View& v : views) {
+        lod::VoxelScene culled(model, 0, 0), reference(model, 0, 0);
+        for (lod::VoxelScene* s : {&culled, &reference}) {
+            s->camera.position = v.eye;
+            s->camera.target = v.target;
+            s->camera.nearPlane = 0.01f;
+            s->camera.farPlane = 200.0f;
+        }
+        lod::VoxelRenderOptions with, without;
+        with.selection.pixelError = without.selection.pixelError = 2.0f;
+        without.occlusion = false;
+        const std::vector<float> want = renderColor(reference, without, nullptr);
+        lod::VoxelFrameStats stats;
+        std::vector<float> got;
+        for (int frame = 0; frame < 4; ++frame) {
+            got = renderColor(culled, with, &stats);
+            EXPECT_EQ(got, want) << v.name << ", frame " << frame;  // never a visible difference, converged or not
+        }
+        culledSomewhere += stats.occlusionCulled;
+        if (std::string(v.name).starts_with("front")) {
+            EXPECT_GT(stats.occlusionCulled, 0u) << "the hidden sphere's blocks are culled";
+            EXPECT_GT(stats.visibilityTests, 0u);
+        }
+    }
+    EXPECT_GT(culledSomewhere, 0u);
+}
+
 TEST(VoxelDeterminism, SameFrameForAnyThreadCount) {
     lod::VoxelScene scene(spherePyramid(256), 30.0f, 20.0f);
     lod::VoxelRenderOptions o;
