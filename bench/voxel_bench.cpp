@@ -26,6 +26,7 @@
 #include <openvdb/tools/MeshToVolume.h>
 #include <tbb/global_control.h>
 
+#include "bench/procedural_meshes.h"
 #include "raster/parallel.h"
 #include "voxel/cvox_file.h"
 #include "voxel/geometry_stream.h"
@@ -71,26 +72,6 @@ RunResult inChild(Work&& work) {
     wait4(pid, &status, 0, &usage);
     r.peakMib = double(usage.ru_maxrss) / 1024.0;
     return r;
-}
-
-/// A bumpy sphere of about n triangles: a surface with detail everywhere, like a dense scan.
-scene::Mesh proceduralMesh(uint64_t n) {
-    const int s = std::max(8, int(std::sqrt(double(n) / 2.0)));
-    scene::Mesh m;
-    for (int j = 0; j <= s; ++j)
-        for (int i = 0; i <= s; ++i) {
-            const double u = 2.0 * M_PI * i / s, v = M_PI * j / s;
-            const double r = 1.0 + 0.05 * std::sin(13.0 * u) * std::sin(11.0 * v);
-            m.positions.push_back(glm::vec3(float(r * std::sin(v) * std::cos(u)), float(r * std::cos(v)),
-                                            float(r * std::sin(v) * std::sin(u))));
-        }
-    for (int j = 0; j < s; ++j)
-        for (int i = 0; i < s; ++i) {
-            const uint32_t a = uint32_t(j * (s + 1) + i), b = a + 1, c = a + uint32_t(s + 1), d = c + 1;
-            m.indices.insert(m.indices.end(), {a, c, b, b, c, d});
-        }
-    scene::computeVertexNormals(m);
-    return m;
 }
 
 fs::path modelPath(const std::string& name) {
@@ -187,7 +168,7 @@ int main(int argc, char** argv) {
         std::unique_ptr<voxel::MeshView> source;
         if (name == "procedural") {
             std::vector<scene::Mesh> meshes;
-            meshes.push_back(proceduralMesh(proceduralTriangles));
+            meshes.push_back(bench::bumpySphere(proceduralTriangles));
             source = voxel::viewOfMeshes(std::move(meshes), "procedural", false);
         } else {
             const fs::path path = modelPath(name);
