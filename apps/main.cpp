@@ -31,8 +31,9 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_option("--out", o.out, "Output image, .png or .exr")->required();
     render->add_option("--stats", o.statsPath, "Write per-stage counters and timings as JSON");
     render->add_option("--view", view, "What to show: color, depth, tiles (coarse block "
-                                       "classes), overdraw (depth-passing samples) or lod (voxel models: "
-                                       "blocks coloured by level)")
+                                       "classes), overdraw (depth-passing samples), lod (voxel models: "
+                                       "blocks coloured by level) or visibility (voxel models: drawn green, "
+                                       "source triangles yellow, occlusion-culled red)")
         ->capture_default_str();
     render->add_option("--detail", o.detail, "Tessellation scale of built-in scenes")
         ->capture_default_str();
@@ -54,6 +55,8 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_flag("--no-hybrid", o.noHybrid,
                      "Voxel models: never draw source triangles where even the finest voxels are too coarse");
     render->add_flag("--no-occlusion", o.noOcclusion, "Voxel models: no occlusion culling");
+    render->add_flag("--debug-camera", o.debugCamera,
+                     "Voxel models: draw what the camera's frame selected as seen from its side, farther and above");
     render->add_option("--warmup", o.warmup,
                        "Voxel models: frames rendered first so occlusion culling has the frame before to learn from")
         ->capture_default_str();

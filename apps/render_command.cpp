@@ -56,7 +56,8 @@ void finishView(const raster::Pipeline& p, View view, raster::Image& image, doub
     const double t0 = nowMs();
     switch (view) {
         case View::Color:
-        case View::Lod: raster::resolveColor(p.framebuffer(), image); break;
+        case View::Lod:
+        case View::Visibility: raster::resolveColor(p.framebuffer(), image); break;
         case View::Depth: raster::resolveDepth(p.framebuffer(), image); break;
         case View::Overdraw: raster::visualizeOverdraw(p.framebuffer(), image); break;
         case View::Tiles: {
@@ -76,6 +77,7 @@ const char* viewName(View v) {
         case View::Tiles: return "tiles";
         case View::Overdraw: return "overdraw";
         case View::Lod: return "lod";
+        case View::Visibility: return "visibility";
     }
     return "?";
 }
@@ -88,7 +90,8 @@ View parseView(const std::string& name) {
     if (name == "tiles") return View::Tiles;
     if (name == "overdraw") return View::Overdraw;
     if (name == "lod") return View::Lod;
-    throw scene::InputError("--view: '" + name + "' is not color, depth, tiles, overdraw or lod");
+    if (name == "visibility") return View::Visibility;
+    throw scene::InputError("--view: '" + name + "' is not color, depth, tiles, overdraw, lod or visibility");
 }
 
 namespace {
@@ -156,7 +159,9 @@ void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     lod::VoxelRenderOptions vo;
     vo.selection.pixelError = o.pixelError;
     vo.selection.hybrid = !o.noHybrid;
-    vo.colorByLevel = o.view == View::Lod;
+    vo.coloring = o.view == View::Lod          ? lod::BlockColoring::Level
+                  : o.view == View::Visibility ? lod::BlockColoring::Visibility
+                                               : lod::BlockColoring::Model;
     vo.occlusion = !o.noOcclusion;
     // Occlusion culling learns from the frame before: the warm-up frames give it that history
     // (the image is the same with or without it; only the work differs).
@@ -166,6 +171,12 @@ void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
                     result);
         s.readOcclusion(result.stats);
     }
+    if (o.debugCamera) {  // what the main camera's frame selected, seen from its side
+        const scene::Camera debug = lod::debugCameraFor(s.camera);
+        vo.viewFrom = &debug;
+        renderFrame(o, s.background, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
+                    result);
+    }
 }
 
 }  // namespace
@@ -174,7 +185,8 @@ RenderResult renderScene(const RenderOptions& o) {
     validate(o);
     raster::ThreadLimit threadLimit(o.threads);
     RenderResult result;
-    if (o.view == View::Lod && !isVoxelFile(o)) throw scene::InputError("--view lod: only for voxel models (.cvox)");
+    if ((o.view == View::Lod || o.view == View::Visibility || o.debugCamera) && !isVoxelFile(o))
+        throw scene::InputError("--view lod, --view visibility and --debug-camera: only for voxel models (.cvox)");
     if (!(o.pixelError >= 0.0f)) throw scene::InputError("--pixel-error: must be 0 or more");
     if (o.warmup < 0 || o.warmup > 100) throw scene::InputError("--warmup: must be 0 to 100 frames");
     if (isVoxelFile(o)) {

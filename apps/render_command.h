@@ -15,7 +15,7 @@
 
 namespace cuberille::apps {
 
-enum class View { Color, Depth, Tiles, Overdraw, Lod };
+enum class View { Color, Depth, Tiles, Overdraw, Lod, Visibility };
 
 struct RenderOptions {
     std::string scene;  // a .tri, .ply, .ply.gz or .obj path, or a built-in scene name
@@ -34,6 +34,7 @@ struct RenderOptions {
     bool noHybrid = false;    // voxel models: never draw source triangles
     bool noOcclusion = false; // voxel models: no occlusion culling
     int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
+    bool debugCamera = false; // voxel models: show the frame's selection from behind and above
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;

@@ -134,6 +134,8 @@ int main(int argc, char** argv) {
     uint32_t resolution = 1024;
     int frames = 5, width = 1280, height = 720;
     float pixelError = 1.0f;
+    std::string separability = "conservative";
+    app.add_option("--separability", separability, "Voxelization: conservative, 26 or 6")->capture_default_str();
     app.add_option("--models", models, "bunny, dragon, horse, 1m, 10m, 100m (bumpy spheres), or mesh files")
         ->capture_default_str();
     app.add_option("--resolution", resolution, "Voxelization resolution")->capture_default_str();
@@ -143,8 +145,8 @@ int main(int argc, char** argv) {
     CLI11_PARSE(app, argc, argv);
     setenv("LP_NUM_THREADS", std::to_string(raster::hardwareThreads()).c_str(), 1);
 
-    std::printf("# %d threads, %dx%d, voxels at %u^3, pixel error %g; times in ms (median of %d warm frames)\n",
-                raster::hardwareThreads(), width, height, resolution, pixelError, frames);
+    std::printf("# %d threads, %dx%d, voxels at %u^3 (%s), pixel error %g; times in ms (median of %d warm frames)\n",
+                raster::hardwareThreads(), width, height, resolution, separability.c_str(), pixelError, frames);
     std::printf("%-7s %10s %4s | %9s %7s %6s %9s %7s %9s | %9s %9s | %7s %7s | %6s %7s\n", "model", "triangles", "spp",
                 "voxel ms", "blocks", "occl", "faces", "hybrid", "voxMiB", "tris ms", "llvm ms", "tri/vox", "llvm/vox",
                 "RMSE", "off>1");
@@ -159,6 +161,9 @@ int main(int argc, char** argv) {
         // Voxelize and simplify (not timed here: voxel_bench measures it).
         voxel::VoxelizeOptions vo;
         vo.resolution = resolution;
+        vo.separability = separability == "6"    ? voxel::Separability::Six
+                          : separability == "26" ? voxel::Separability::TwentySix
+                                                 : voxel::Separability::Conservative;
         std::vector<scene::Mesh> copy = meshes;
         voxel::VoxelModel model = voxel::voxelizeMesh(*voxel::viewOfMeshes(std::move(copy), name, false), vo);
         lod::buildLodPyramid(model, {});

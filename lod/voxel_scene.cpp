@@ -23,6 +23,19 @@ glm::vec3 levelColor(uint32_t level) {
     return palette[level % 8];
 }
 
+scene::Camera debugCameraFor(const scene::Camera& main) {
+    scene::Camera c = main;
+    const glm::vec3 back = main.position - main.target;
+    const float distance = glm::length(back);
+    // From the side (a quarter turn about the up axis), farther and higher: the selection's front
+    // and back, and the frustum's edges, all in view.
+    const glm::vec3 side = glm::normalize(glm::cross(main.up, back)) * distance;
+    c.position = main.target + back * 1.5f + side * 2.5f + main.up * distance * 1.5f;
+    c.nearPlane = main.nearPlane;
+    c.farPlane = main.farPlane + distance * 6.0f;
+    return c;
+}
+
 VoxelScene::VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elevationDegrees) : model_(std::move(model)) {
     glm::dvec3 lo(1e300), hi(-1e300);
     for (const voxel::VoxelBlock& b : model_.blocks) {
@@ -48,14 +61,16 @@ VoxelScene::VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elev
 VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int height, const VoxelRenderOptions& o) {
     VoxelFrameStats stats;
     const float aspect = float(width) / float(height);
-    const glm::mat4 clipFromWorld = camera.clipFromWorld(aspect);
+    const scene::Camera& eye = o.viewFrom ? *o.viewFrom : camera;  // where the frame is seen from
+    const glm::mat4 clipFromWorld = eye.clipFromWorld(aspect);
     SelectionOptions so = o.selection;
     so.viewportHeightPixels = height;
     so.verticalFovRadians = glm::radians(camera.verticalFovDegrees);
     so.orthographic = camera.orthographic;
     so.orthographicHalfHeight = camera.orthographicHalfHeight;
     double t0 = nowMs();
-    BlockSelection selection = selectBlocks(model_, glm::dmat4(clipFromWorld), glm::dvec3(camera.position), so);
+    BlockSelection selection =
+        selectBlocks(model_, glm::dmat4(camera.clipFromWorld(aspect)), glm::dvec3(camera.position), so);
     slotBlocks_.clear();
     slotCovers_.clear();
     tests_.clear();
@@ -66,27 +81,37 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     // Expansion, block by block in parallel; each block's geometry is its own, so the draws (and
     // the image) do not depend on the thread count.
     t0 = nowMs();
-    // Drawn blocks first, then the visibility tests: both expand the same way.
+    // Drawn blocks first, then the visibility tests (or, seen from a debug camera, none), then in
+    // the visibility view the occlusion-culled blocks themselves: all expand the same way.
+    enum Role : uint8_t { kDraw, kTest, kShowCulled };
     std::vector<uint32_t> expand = selection.voxelBlocks;
-    expand.insert(expand.end(), tests_.begin(), tests_.end());
+    std::vector<uint8_t> roles(expand.size(), kDraw);
+    if (!o.viewFrom)
+        for (uint32_t t : tests_) expand.push_back(t), roles.push_back(kTest);
+    if (o.coloring == BlockColoring::Visibility)
+        for (size_t slot = selection.voxelBlocks.size(); slot < slotCovers_.size(); ++slot)
+            for (uint32_t hidden : slotCovers_[slot]) expand.push_back(hidden), roles.push_back(kShowCulled);
     faces_.resize(expand.size());
     triangles_.resize(selection.triangleBlocks.size());
     raster::parallelFor(expand.size(), [&](size_t k) {
         const voxel::VoxelBlock& b = model_.blocks[expand[k]];
-        const glm::vec3 levelTint = levelColor(b.level);
+        glm::vec3 tint = levelColor(b.level);
+        if (o.coloring == BlockColoring::Visibility)
+            tint = roles[k] == kShowCulled ? glm::vec3(0.9f, 0.15f, 0.1f) : glm::vec3(0.2f, 0.8f, 0.3f);
         faces_[k].clear();
-        voxel::expandVoxelFaces(model_, b, glm::dvec3(camera.position), faces_[k], o.colorByLevel ? &levelTint : nullptr);
+        voxel::expandVoxelFaces(model_, b, glm::dvec3(eye.position), faces_[k],
+                                o.coloring == BlockColoring::Model ? nullptr : &tint);
     });
     raster::parallelFor(selection.triangleBlocks.size(), [&](size_t k) {
         const voxel::VoxelBlock& b = model_.blocks[selection.triangleBlocks[k]];
         TriangleMesh& m = triangles_[k];
         m.positions.clear(), m.normals.clear(), m.colors.clear();
-        const glm::vec3 tint = levelColor(0);
+        const glm::vec3 tint = o.coloring == BlockColoring::Level ? levelColor(0) * 0.6f : glm::vec3(0.95f, 0.85f, 0.2f);
         for (const voxel::SourceTriangle& t : b.triangles)
             for (int v = 0; v < 3; ++v) {
                 m.positions.push_back(t.position[v]);
                 m.normals.push_back(voxel::unpackNormal1010102(t.normal[v]));
-                m.colors.push_back(o.colorByLevel ? tint * 0.6f : voxel::unpackSrgba8Rgb(t.color[v]));
+                m.colors.push_back(o.coloring == BlockColoring::Model ? voxel::unpackSrgba8Rgb(t.color[v]) : tint);
             }
     });
     stats.expandMs = nowMs() - t0;
@@ -104,7 +129,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
         d.state.shading = raster::ShadingModel::Lambert;
         d.state.cull = raster::CullMode::None;  // faces are chosen by the camera side already
         d.state.lighting = lighting;
-        d.state.cameraPosition = camera.position;
+        d.state.cameraPosition = eye.position;
         d.state.occlusionSlot = slot;
         if (testOnly) {
             d.state.colorWriteMask = 0;
@@ -120,11 +145,12 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     }
     for (size_t k = 0; k < faces_.size(); ++k) {
         const voxel::FaceMesh& f = faces_[k];
-        const bool test = k >= selection.voxelBlocks.size();
-        submit(f.positions, f.normals, f.colors, f.indices, o.occlusion ? int(k) : -1, test);
+        const bool counted = o.occlusion && !o.viewFrom && roles[k] != kShowCulled;
+        submit(f.positions, f.normals, f.colors, f.indices, counted ? int(k) : -1, roles[k] == kTest);
+        if (roles[k] == kShowCulled) continue;
         stats.voxelsExpanded += f.voxels;
         stats.facesEmitted += f.faces;
-        ++(test ? stats.visibilityTests : stats.voxelBlocksDrawn);
+        ++(roles[k] == kTest ? stats.visibilityTests : stats.voxelBlocksDrawn);
     }
     return stats;
 }

@@ -14,11 +14,27 @@
 
 namespace cuberille::lod {
 
+/// What a block's faces are coloured by.
+enum class BlockColoring {
+    Model,       // the voxels' own colours
+    Level,       // --view lod: each block in its level's colour
+    Visibility,  // --view visibility: drawn green, source triangles yellow, occlusion-culled red
+                 // (drawn last, so from the main camera red shows only where culling was wrong)
+};
+
 struct VoxelRenderOptions {
     SelectionOptions selection;
-    bool colorByLevel = false;  // --view lod: each block in its level's colour
-    bool occlusion = true;      // skip blocks hidden last frame; test them with colour writes off
+    BlockColoring coloring = BlockColoring::Model;
+    bool occlusion = true;  // skip blocks hidden last frame; test them with colour writes off
+    /// --debug-camera: select (LOD, frustum, occlusion) for `camera` as usual, but draw what it
+    /// selected as seen from this one. No visibility tests are drawn (they would answer for the
+    /// wrong view); do not call readOcclusion after such a frame.
+    const scene::Camera* viewFrom = nullptr;
 };
+
+/// A camera beside, behind and above `main`, looking at its target from about three times as far,
+/// for --debug-camera.
+scene::Camera debugCameraFor(const scene::Camera& main);
 
 struct VoxelFrameStats {
     SelectionStats selection;

@@ -257,6 +257,9 @@ TEST_F(Cli, VoxelCommandsRejectBadInputWithExitTwoAndWriteNothing) {
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_TRUE(fs::exists(dir_ / "v.png"));
     EXPECT_EQ(run("render " + obj.string() + " --view lod --out " + (dir_ / "w.png").string()).exitCode, 2);
+    r = run("render " + out.string() + " --width 64 --height 48 --view visibility --debug-camera --out " +
+            (dir_ / "d.png").string());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
     // A failed run leaves the earlier good output untouched.
     const auto before = fs::file_size(out);
     EXPECT_EQ(run("voxelize " + cut.string() + " -o " + out.string()).exitCode, 2);

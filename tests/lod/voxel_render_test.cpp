@@ -162,7 +162,7 @@ std::vector<float> renderColor(lod::VoxelScene& scene, const lod::VoxelRenderOpt
     p.beginFrame(d);
     const lod::VoxelFrameStats s = scene.draw(p, 240, 160, o);
     p.endFrame();
-    scene.readOcclusion(p.stats());
+    if (!o.viewFrom) scene.readOcclusion(p.stats());
     if (stats) *stats = s;
     raster::Image image;
     raster::resolveColor(p.framebuffer(), image);
@@ -209,6 +209,28 @@ TEST(Occlusion, ConvergedImageEqualsTheImageWithoutCulling) {
         }
     }
     EXPECT_GT(culledSomewhere, 0u);
+}
+
+TEST(Occlusion, VisibilityViewShowsNoCulledBlockFromTheMainCamera) {
+    // The culled blocks are drawn in red after everything else: none may show.
+    const voxel::VoxelModel model = twoSpheres();
+    lod::VoxelScene culled(model, 0, 0), reference(model, 0, 0);
+    for (lod::VoxelScene* s : {&culled, &reference}) {
+        s->camera.position = glm::vec3(kCentre) + glm::vec3(0.3f, 0.2f, 9.0f);
+        s->camera.target = glm::vec3(kCentre);
+    }
+    lod::VoxelRenderOptions with, without;
+    with.coloring = without.coloring = lod::BlockColoring::Visibility;
+    without.occlusion = false;
+    const std::vector<float> want = renderColor(reference, without, nullptr);
+    lod::VoxelFrameStats stats;
+    for (int frame = 0; frame < 3; ++frame) EXPECT_EQ(renderColor(culled, with, &stats), want) << "frame " << frame;
+    EXPECT_GT(stats.occlusionCulled, 0u);
+    // Seen from the debug camera, the culled blocks do show.
+    const scene::Camera debug = lod::debugCameraFor(culled.camera);
+    with.viewFrom = &debug;
+    without.viewFrom = &debug;
+    EXPECT_NE(renderColor(culled, with, nullptr), renderColor(reference, without, nullptr));
 }
 
 TEST(VoxelDeterminism, SameFrameForAnyThreadCount) {
