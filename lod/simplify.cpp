@@ -88,32 +88,52 @@ void appendChildren(const std::vector<const VoxelBlock*>& level, uint32_t blockI
 
 uint64_t morton3(const glm::uvec3& p) { return spread3(p.x) | spread3(p.y) << 1 | spread3(p.z) << 2; }
 
-std::vector<VoxelBlock> simplifySerial(const std::vector<const VoxelBlock*>& level, uint32_t blockSize) {
-    std::vector<VoxelBlock> out;
-    if (level.empty()) return out;
-    const uint32_t parentLevel = level[0]->level + 1;
+void simplifySerial(const LevelSource& level, uint32_t blockSize, const std::function<void(VoxelBlock&&)>& emit) {
     std::vector<ChildRef> children;
     std::vector<ParentVoxel> parents;
     // Child blocks of one parent block are consecutive in Morton order of block coordinates.
-    for (size_t first = 0; first < level.size();) {
-        const glm::uvec3 parentBlock = level[first]->coord / 2u;
+    for (size_t first = 0; first < level.blockCount();) {
+        const glm::uvec3 parentBlock = level.blockCoord(first) / 2u;
         size_t last = first;
-        while (last < level.size() && level[last]->coord / 2u == parentBlock) ++last;
+        while (last < level.blockCount() && level.blockCoord(last) / 2u == parentBlock) ++last;
+        std::vector<std::shared_ptr<const VoxelBlock>> held;
+        std::vector<const VoxelBlock*> loaded;
+        for (size_t b = first; b < last; ++b) {
+            held.push_back(level.load(b));
+            loaded.push_back(held.back().get());
+        }
         // 1. Sort this parent block's children by Morton key.
         children.clear();
-        for (size_t b = first; b < last; ++b) appendChildren(level, uint32_t(b), blockSize, children);
+        for (uint32_t b = 0; b < loaded.size(); ++b) appendChildren(loaded, b, blockSize, children);
         std::sort(children.begin(), children.end(), [](const ChildRef& a, const ChildRef& b) { return a.key < b.key; });
         // 2. Compact runs with the same parent.
         parents.clear();
         for (size_t i = 0; i < children.size();) {
             size_t j = i + 1;
             while (j < children.size() && children[j].key >> 3 == children[i].key >> 3) ++j;
-            parents.push_back(combineChildren(&children[i], j - i, level, blockSize));
+            parents.push_back(combineChildren(&children[i], j - i, loaded, blockSize));
             i = j;
         }
-        appendParentBlocks(parents, blockSize, parentLevel, out);
+        std::vector<VoxelBlock> out;
+        appendParentBlocks(parents, blockSize, loaded[0]->level + 1, out);
+        for (VoxelBlock& b : out) emit(std::move(b));
         first = last;
     }
+}
+
+std::vector<VoxelBlock> simplifySerial(const std::vector<const VoxelBlock*>& level, uint32_t blockSize) {
+    // The in-memory level as a source: loading is handing out a pointer that owns nothing.
+    struct InMemory final : LevelSource {
+        const std::vector<const VoxelBlock*>& blocks;
+        explicit InMemory(const std::vector<const VoxelBlock*>& b) : blocks(b) {}
+        size_t blockCount() const override { return blocks.size(); }
+        glm::uvec3 blockCoord(size_t i) const override { return blocks[i]->coord; }
+        std::shared_ptr<const VoxelBlock> load(size_t i) const override {
+            return std::shared_ptr<const VoxelBlock>(std::shared_ptr<const VoxelBlock>(), blocks[i]);
+        }
+    } source(level);
+    std::vector<VoxelBlock> out;
+    simplifySerial(source, blockSize, [&](VoxelBlock&& b) { out.push_back(std::move(b)); });
     return out;
 }
 

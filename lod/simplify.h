@@ -12,11 +12,29 @@
 //   simplifyParallel  parallel sort of every voxel by its Morton key, run marking, prefix sum,
 //                     compaction, one parent per run (section 3.2.2).
 
+#include <functional>
+#include <memory>
 #include <vector>
 
 #include "voxel/voxel_model.h"
 
 namespace cuberille::lod {
+
+/// The blocks of one level, in Morton order, read on demand: from memory, or from a .cvox file
+/// one block at a time (so a level far larger than memory can be simplified).
+class LevelSource {
+public:
+    virtual ~LevelSource() = default;
+    virtual size_t blockCount() const = 0;
+    virtual glm::uvec3 blockCoord(size_t block) const = 0;
+    /// The block's voxels; released when the last pointer to it goes.
+    virtual std::shared_ptr<const voxel::VoxelBlock> load(size_t block) const = 0;
+};
+
+/// The serial, streaming simplification: for each parent block in turn, load its (at most 8)
+/// child blocks, build it, hand it to emit, release the children. At most 8 child blocks and one
+/// parent are held at once, whatever the level's size.
+void simplifySerial(const LevelSource& level, uint32_t blockSize, const std::function<void(voxel::VoxelBlock&&)>& emit);
 
 /// `level`: the blocks of one level, in Morton order of their coordinates, each of size
 /// blockSize with voxels in Morton order (as the voxelizer writes them). Returns the next level's

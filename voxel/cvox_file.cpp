@@ -1,11 +1,14 @@
 #include "voxel/cvox_file.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
 
-#include "scene/ply_loader.h"
 #include "voxel/binary_io.h"
 
 namespace cuberille::voxel {
@@ -70,17 +73,36 @@ void writeCvox(const VoxelModel& model, std::ostream& out) {
     if (!out) throw std::runtime_error("writing the voxel file failed");
 }
 
-VoxelModel readCvox(const std::filesystem::path& path) {
-    const std::string bytes = scene::readFileBytes(path);
-    const std::string name = path.string();
-    ByteReader h(bytes, name);
-    if (bytes.size() < kHeaderBytes)
-        h.fail("header", "truncated: " + std::to_string(bytes.size()) + " bytes, shorter than the 96-byte header");
+namespace {
+
+/// Reads exactly n bytes at offset, or throws naming the file and offset.
+void readAt(int fd, uint64_t offset, char* out, size_t n, const std::string& where) {
+    size_t done = 0;
+    while (done < n) {
+        const ssize_t got = ::pread(fd, out + done, n - done, off_t(offset + done));
+        if (got <= 0)
+            throw scene::InputError(where + " at byte " + std::to_string(offset + done) + ": " +
+                                    (got == 0 ? "truncated: unexpected end of file" : std::strerror(errno)));
+        done += size_t(got);
+    }
+}
+
+}  // namespace
+
+CvoxReader::CvoxReader(const std::filesystem::path& path) : name_(path.string()) {
+    fd_ = ::open(name_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) throw scene::InputError(name_ + ": cannot open: " + std::strerror(errno));
+    fileBytes_ = uint64_t(::lseek(fd_, 0, SEEK_END));
+    std::string head(kHeaderBytes, '\0');
+    ByteReader h(head, name_);
+    if (fileBytes_ < kHeaderBytes)
+        h.fail("header", "truncated: " + std::to_string(fileBytes_) + " bytes, shorter than the 96-byte header");
+    readAt(fd_, 0, head.data(), head.size(), name_);
     const auto magic = h.get<std::array<char, 4>>("magic");
     if (std::memcmp(magic.data(), kMagic, 4) != 0) h.fail("magic", "not a voxel file (no CVOX magic)");
     const uint32_t version = h.get<uint32_t>("version");
     if (version != kVersion) h.fail("version", "unsupported version " + std::to_string(version));
-    VoxelModel m;
+    VoxelModel& m = layout_;
     m.grid.resolution = h.get<uint32_t>("resolution");
     if (!isValidResolution(m.grid.resolution)) h.fail("resolution", "not a power of two from 2 to 65536");
     m.blockSize = h.get<uint32_t>("block size");
@@ -98,16 +120,19 @@ VoxelModel readCvox(const std::filesystem::path& path) {
     const uint64_t blockCount = h.get<uint64_t>("block count");
     const uint64_t voxelCount = h.get<uint64_t>("voxel count");
     const uint64_t triangleCount = h.get<uint64_t>("triangle count");
-    ByteReader table(std::string_view(bytes).substr(kHeaderBytes), name + ": block table", kHeaderBytes);
-    if (blockCount > table.remaining() / kBlockEntryBytes)
-        table.fail("block count", "truncated: " + std::to_string(blockCount) + " blocks need " +
-                                      std::to_string(blockCount * kBlockEntryBytes) + " bytes of table");
+    if (blockCount > (fileBytes_ - kHeaderBytes) / kBlockEntryBytes)
+        throw scene::InputError(name_ + ": block table at byte 96 (block count): truncated: " +
+                                std::to_string(blockCount) + " blocks need " +
+                                std::to_string(blockCount * kBlockEntryBytes) + " bytes of table");
+    std::string table(blockCount * kBlockEntryBytes, '\0');
+    readAt(fd_, kHeaderBytes, table.data(), table.size(), name_ + ": block table");
     m.blocks.resize(blockCount);
+    offsets_.resize(blockCount);
     uint64_t voxelSum = 0, triangleSum = 0;
     for (uint64_t i = 0; i < blockCount; ++i) {
         VoxelBlock& b = m.blocks[i];
-        const std::string where = name + ": block " + std::to_string(i);
-        ByteReader e(std::string_view(bytes).substr(kHeaderBytes + i * kBlockEntryBytes, kBlockEntryBytes), where,
+        const std::string where = name_ + ": block " + std::to_string(i);
+        ByteReader e(std::string_view(table).substr(i * kBlockEntryBytes, kBlockEntryBytes), where,
                      kHeaderBytes + i * kBlockEntryBytes);
         b.level = e.get<uint32_t>("level");
         if (b.level >= std::max(levels, 1u)) e.fail("level", "beyond the header's level count");
@@ -115,14 +140,15 @@ VoxelModel readCvox(const std::filesystem::path& path) {
         const uint32_t blocksPerAxis = std::max(1u, (m.grid.resolution >> b.level) / m.blockSize);
         if (b.coord.x >= blocksPerAxis || b.coord.y >= blocksPerAxis || b.coord.z >= blocksPerAxis)
             e.fail("coord", "block outside the grid");
-        const uint32_t nv = e.get<uint32_t>("voxel count");
-        const uint32_t nt = e.get<uint32_t>("triangle count");
-        const uint64_t voxelOffset = e.get<uint64_t>("voxel offset");
-        const uint64_t triangleOffset = e.get<uint64_t>("triangle offset");
-        if (voxelOffset > bytes.size() || uint64_t(nv) * 12 > bytes.size() - voxelOffset)
-            e.fail("voxel offset", "truncated: the voxels lie past the end of the file (" + std::to_string(bytes.size()) + " bytes)");
-        if (triangleOffset > bytes.size() || uint64_t(nt) * kSourceTriangleBytes > bytes.size() - triangleOffset)
-            e.fail("triangle offset", "truncated: the triangles lie past the end of the file (" + std::to_string(bytes.size()) + " bytes)");
+        BlockData& d = offsets_[i];
+        d.voxels = e.get<uint32_t>("voxel count");
+        d.triangles = e.get<uint32_t>("triangle count");
+        d.voxelOffset = e.get<uint64_t>("voxel offset");
+        d.triangleOffset = e.get<uint64_t>("triangle offset");
+        if (d.voxelOffset > fileBytes_ || uint64_t(d.voxels) * 12 > fileBytes_ - d.voxelOffset)
+            e.fail("voxel offset", "truncated: the voxels lie past the end of the file (" + std::to_string(fileBytes_) + " bytes)");
+        if (d.triangleOffset > fileBytes_ || uint64_t(d.triangles) * kSourceTriangleBytes > fileBytes_ - d.triangleOffset)
+            e.fail("triangle offset", "truncated: the triangles lie past the end of the file (" + std::to_string(fileBytes_) + " bytes)");
         const auto tight = e.get<std::array<uint8_t, 6>>("tight bounds");
         b.tightMin = {tight[0], tight[1], tight[2]};
         b.tightMax = {tight[3], tight[4], tight[5]};
@@ -133,27 +159,46 @@ VoxelModel readCvox(const std::filesystem::path& path) {
             uint64_t(b.firstChild) + uint64_t(__builtin_popcount(mask)) > blockCount || (mask && b.firstChild <= i))
             e.fail("child mask", "child links outside the block table (corrupt)");
         b.childMask = uint8_t(mask);
-        ByteReader data(std::string_view(bytes).substr(voxelOffset, uint64_t(nv) * 12), where, voxelOffset);
-        b.voxels.resize(nv);
-        b.normals.resize(nv);
-        b.colors.resize(nv);
-        data.getArray(b.voxels.data(), nv, "voxels");
-        data.getArray(b.normals.data(), nv, "normals");
-        data.getArray(b.colors.data(), nv, "colours");
-        for (uint32_t v = 0; v < nv; ++v) {
-            const glm::uvec3 p = voxelPositionInBlock(b.voxels[v]);
-            if (p.x >= m.blockSize || p.y >= m.blockSize || p.z >= m.blockSize || (b.voxels[v] >> 30) != 0)
-                data.fail("voxels", "voxel " + std::to_string(v) + " lies outside its block (corrupt)");
-        }
-        b.triangles.resize(nt);
-        ByteReader tris(std::string_view(bytes).substr(triangleOffset, uint64_t(nt) * kSourceTriangleBytes), where,
-                        triangleOffset);
-        tris.getArray(b.triangles.data(), nt, "triangles");
-        voxelSum += nv;
-        triangleSum += nt;
+        voxelSum += d.voxels;
+        triangleSum += d.triangles;
     }
     if (voxelSum != voxelCount || triangleSum != triangleCount)
-        throw scene::InputError(name + ": the header's voxel or triangle count does not match its blocks (corrupt)");
+        throw scene::InputError(name_ + ": the header's voxel or triangle count does not match its blocks (corrupt)");
+}
+
+CvoxReader::~CvoxReader() {
+    if (fd_ >= 0) ::close(fd_);
+}
+
+VoxelBlock CvoxReader::load(size_t i) const {
+    VoxelBlock b = layout_.blocks[i];
+    const BlockData& d = offsets_[i];
+    const std::string where = name_ + ": block " + std::to_string(i);
+    std::string bytes(size_t(d.voxels) * 12, '\0');
+    readAt(fd_, d.voxelOffset, bytes.data(), bytes.size(), where);
+    ByteReader data(bytes, where, d.voxelOffset);
+    b.voxels.resize(d.voxels);
+    b.normals.resize(d.voxels);
+    b.colors.resize(d.voxels);
+    data.getArray(b.voxels.data(), d.voxels, "voxels");
+    data.getArray(b.normals.data(), d.voxels, "normals");
+    data.getArray(b.colors.data(), d.voxels, "colours");
+    for (uint32_t v = 0; v < d.voxels; ++v) {
+        const glm::uvec3 p = voxelPositionInBlock(b.voxels[v]);
+        if (p.x >= layout_.blockSize || p.y >= layout_.blockSize || p.z >= layout_.blockSize || (b.voxels[v] >> 30) != 0)
+            data.fail("voxels", "voxel " + std::to_string(v) + " lies outside its block (corrupt)");
+    }
+    b.triangles.resize(d.triangles);
+    if (d.triangles)
+        readAt(fd_, d.triangleOffset, reinterpret_cast<char*>(b.triangles.data()), size_t(d.triangles) * kSourceTriangleBytes,
+               where);
+    return b;
+}
+
+VoxelModel readCvox(const std::filesystem::path& path) {
+    const CvoxReader reader(path);
+    VoxelModel m = reader.layout();
+    for (size_t i = 0; i < m.blocks.size(); ++i) m.blocks[i] = reader.load(i);
     return m;
 }
 

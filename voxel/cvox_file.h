@@ -23,8 +23,36 @@ namespace cuberille::voxel {
 /// Throws std::runtime_error when the stream fails.
 void writeCvox(const VoxelModel& model, std::ostream& out);
 
-/// Reads a whole .cvox file. A truncated or corrupted file throws scene::InputError naming the
-/// file, the block or field, and the byte offset.
+/// A .cvox opened for reading blocks on demand: the header and block table are read and checked
+/// when it opens (a truncated or corrupted file throws scene::InputError naming the file, the
+/// block or field, and the byte offset); a block's voxels and triangles are read when asked for,
+/// from any thread (positional reads).
+class CvoxReader {
+public:
+    explicit CvoxReader(const std::filesystem::path& path);
+    ~CvoxReader();
+    CvoxReader(const CvoxReader&) = delete;
+    CvoxReader& operator=(const CvoxReader&) = delete;
+
+    /// The model with every block's metadata (level, coordinates, tight bounds, links) and no
+    /// voxel or triangle data.
+    const VoxelModel& layout() const { return layout_; }
+    size_t blockCount() const { return layout_.blocks.size(); }
+    VoxelBlock load(size_t block) const;
+
+private:
+    struct BlockData {
+        uint32_t voxels = 0, triangles = 0;
+        uint64_t voxelOffset = 0, triangleOffset = 0;
+    };
+    std::string name_;
+    int fd_ = -1;
+    uint64_t fileBytes_ = 0;
+    VoxelModel layout_;
+    std::vector<BlockData> offsets_;
+};
+
+/// Reads a whole .cvox file (through CvoxReader).
 VoxelModel readCvox(const std::filesystem::path& path);
 
 }  // namespace cuberille::voxel

@@ -59,6 +59,40 @@ TEST(Simplify, SerialAndParallelGiveIdenticalPyramids) {
     }
 }
 
+TEST(Simplify, SerialStreamsFromAFileHoldingAtMostEightBlocks) {
+    // Level 0 in a .cvox, read block by block; the source counts the blocks alive at once.
+    const VoxelModel base = sphereModel(512);
+    std::ostringstream out;
+    voxel::writeCvox(base, out);
+    const std::filesystem::path path =
+        std::filesystem::path(::testing::TempDir()) / ("cuberille_stream_" + std::to_string(::getpid()) + ".cvox");
+    std::ofstream(path, std::ios::binary) << out.str();
+    struct FileSource final : lod::LevelSource {
+        voxel::CvoxReader reader;
+        mutable int alive = 0, mostAlive = 0, loads = 0;
+        explicit FileSource(const std::filesystem::path& p) : reader(p) {}
+        size_t blockCount() const override { return reader.blockCount(); }
+        glm::uvec3 blockCoord(size_t i) const override { return reader.layout().blocks[i].coord; }
+        std::shared_ptr<const VoxelBlock> load(size_t i) const override {
+            mostAlive = std::max(mostAlive, ++alive);
+            ++loads;
+            return std::shared_ptr<const VoxelBlock>(new VoxelBlock(reader.load(i)), [this](const VoxelBlock* b) {
+                --alive;
+                delete b;
+            });
+        }
+    } source(path);
+    std::vector<VoxelBlock> streamed;
+    lod::simplifySerial(source, base.blockSize, [&](VoxelBlock&& b) { streamed.push_back(std::move(b)); });
+    EXPECT_LE(source.mostAlive, 8);
+    EXPECT_EQ(source.alive, 0);
+    EXPECT_EQ(size_t(source.loads), base.blocks.size()) << "each block read once";
+    std::vector<const VoxelBlock*> level0;
+    for (const VoxelBlock& b : base.blocks) level0.push_back(&b);
+    EXPECT_TRUE(sameBlocks(streamed, lod::simplifyParallel(level0, base.blockSize)));
+    std::filesystem::remove(path);
+}
+
 TEST(Simplify, ParentFacesAreTheUnionOfTheirChildren) {
     const VoxelModel base = sphereModel(256);
     std::vector<const VoxelBlock*> level0;
