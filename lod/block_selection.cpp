@@ -74,6 +74,7 @@ BlockSelection selectBlocks(const voxel::VoxelModel& model, const glm::dmat4& cl
         blockBounds(model, b, lo, hi);
         if (!frustum.mayContain(lo, hi)) {
             ++s.stats.frustumCulled;
+            s.frustumCulled.push_back(i);
             continue;
         }
         const bool tooCoarse = o.pixelError <= 0.0f || projectedVoxelPixels(model, b, camera, o) > o.pixelError;

@@ -31,6 +31,7 @@ struct SelectionStats {
 struct BlockSelection {
     std::vector<uint32_t> voxelBlocks;     // drawn as voxel faces, front to back
     std::vector<uint32_t> triangleBlocks;  // drawn from their source triangles, front to back
+    std::vector<uint32_t> frustumCulled;   // the nodes culled by the frustum (their subtrees with them)
     SelectionStats stats;
 };
 

@@ -83,21 +83,26 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     t0 = nowMs();
     // Drawn blocks first, then the visibility tests (or, seen from a debug camera, none), then in
     // the visibility view the occlusion-culled blocks themselves: all expand the same way.
-    enum Role : uint8_t { kDraw, kTest, kShowCulled };
+    enum Role : uint8_t { kDraw, kTest, kShowCulled, kShowOutside };
     std::vector<uint32_t> expand = selection.voxelBlocks;
     std::vector<uint8_t> roles(expand.size(), kDraw);
     if (!o.viewFrom)
         for (uint32_t t : tests_) expand.push_back(t), roles.push_back(kTest);
-    if (o.coloring == BlockColoring::Visibility)
+    if (o.coloring == BlockColoring::Visibility) {
         for (size_t slot = selection.voxelBlocks.size(); slot < slotCovers_.size(); ++slot)
             for (uint32_t hidden : slotCovers_[slot]) expand.push_back(hidden), roles.push_back(kShowCulled);
+        if (o.viewFrom)  // from outside, the frustum-culled nodes too (grey)
+            for (uint32_t outside : selection.frustumCulled) expand.push_back(outside), roles.push_back(kShowOutside);
+    }
     faces_.resize(expand.size());
     triangles_.resize(selection.triangleBlocks.size());
     raster::parallelFor(expand.size(), [&](size_t k) {
         const voxel::VoxelBlock& b = model_.blocks[expand[k]];
         glm::vec3 tint = levelColor(b.level);
         if (o.coloring == BlockColoring::Visibility)
-            tint = roles[k] == kShowCulled ? glm::vec3(0.9f, 0.15f, 0.1f) : glm::vec3(0.2f, 0.8f, 0.3f);
+            tint = roles[k] == kShowCulled    ? glm::vec3(0.9f, 0.15f, 0.1f)
+                   : roles[k] == kShowOutside ? glm::vec3(0.45f)
+                                              : glm::vec3(0.2f, 0.8f, 0.3f);
         faces_[k].clear();
         voxel::expandVoxelFaces(model_, b, glm::dvec3(eye.position), faces_[k],
                                 o.coloring == BlockColoring::Model ? nullptr : &tint);
@@ -145,9 +150,10 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     }
     for (size_t k = 0; k < faces_.size(); ++k) {
         const voxel::FaceMesh& f = faces_[k];
-        const bool counted = o.occlusion && !o.viewFrom && roles[k] != kShowCulled;
+        const bool shown = roles[k] == kShowCulled || roles[k] == kShowOutside;
+        const bool counted = o.occlusion && !o.viewFrom && !shown;
         submit(f.positions, f.normals, f.colors, f.indices, counted ? int(k) : -1, roles[k] == kTest);
-        if (roles[k] == kShowCulled) continue;
+        if (shown) continue;
         stats.voxelsExpanded += f.voxels;
         stats.facesEmitted += f.faces;
         ++(roles[k] == kTest ? stats.visibilityTests : stats.voxelBlocksDrawn);

@@ -19,7 +19,8 @@ enum class BlockColoring {
     Model,       // the voxels' own colours
     Level,       // --view lod: each block in its level's colour
     Visibility,  // --view visibility: drawn green, source triangles yellow, occlusion-culled red
-                 // (drawn last, so from the main camera red shows only where culling was wrong)
+                 // (drawn last, so from the main camera red shows only where culling was wrong);
+                 // seen from a debug camera, frustum-culled nodes grey
 };
 
 struct VoxelRenderOptions {
