@@ -1,0 +1,77 @@
+#include "lod/block_loader.h"
+
+#include <chrono>
+
+#include "scene/input_error.h"
+
+namespace cuberille::lod {
+
+BlockLoader::BlockLoader(const voxel::CvoxReader& reader, double throttleMibPerSecond)
+    : reader_(reader), throttleBytesPerSecond_(throttleMibPerSecond * 1024.0 * 1024.0), thread_([this] { run(); }) {}
+
+BlockLoader::~BlockLoader() {
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+}
+
+void BlockLoader::replaceRequests(std::vector<uint32_t> blocks) {
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        queue_.assign(blocks.begin(), blocks.end());
+    }
+    wake_.notify_all();
+}
+
+std::vector<LoadedBlock> BlockLoader::takeCompleted() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<LoadedBlock> out;
+    out.swap(completed_);
+    return out;
+}
+
+bool BlockLoader::idle() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return queue_.empty() && !reading_;
+}
+
+uint64_t BlockLoader::bytesRead() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return bytesRead_;
+}
+
+void BlockLoader::run() {
+    for (;;) {
+        uint32_t block = 0;
+        {
+            std::unique_lock<std::mutex> lock(mutex_);
+            wake_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+            if (stop_) return;
+            block = queue_.front();
+            queue_.pop_front();
+            reading_ = true;
+        }
+        const auto t0 = std::chrono::steady_clock::now();
+        LoadedBlock r;
+        r.block = block;
+        try {
+            r.data = reader_.load(block);
+            r.bytes = r.data->voxels.size() * 12 + r.data->triangles.size() * sizeof(voxel::SourceTriangle);
+        } catch (const scene::InputError& e) {
+            r.error = e.what();
+        }
+        if (throttleBytesPerSecond_ > 0.0) {  // a slow disk: the read takes bytes / rate at least
+            const auto due = t0 + std::chrono::duration<double>(double(r.bytes) / throttleBytesPerSecond_);
+            std::this_thread::sleep_until(due);
+        }
+        std::lock_guard<std::mutex> lock(mutex_);
+        bytesRead_ += r.bytes;
+        completed_.push_back(std::move(r));
+        reading_ = false;
+    }
+}
+
+}  // namespace cuberille::lod
