@@ -3,9 +3,6 @@
 #include <algorithm>
 #include <numeric>
 
-#include <tbb/parallel_scan.h>
-#include <tbb/parallel_sort.h>
-
 #include "raster/parallel.h"
 #include "voxel/packing.h"
 
@@ -152,24 +149,18 @@ std::vector<VoxelBlock> simplifyParallel(const std::vector<const VoxelBlock*>& l
                                         uint32_t(b), v};
     });
     // 1. Parallel sort (keys are unique: one voxel per position).
-    tbb::parallel_sort(children.begin(), children.end(),
-                       [](const ChildRef& a, const ChildRef& b) { return a.key < b.key; });
-    // 2. Run marking and 3. prefix sum: runIndex[i] = number of run starts at or before i, minus 1.
+    raster::parallelSort(children.begin(), children.end(),
+                         [](const ChildRef& a, const ChildRef& b) { return a.key < b.key; });
+    // 2. Run marking and 3. prefix sum: runsSoFar[i] = run starts at or before i, so voxel i belongs
+    // to run runsSoFar[i] - 1.
     const size_t n = children.size();
-    std::vector<uint32_t> runIndex(n);
-    const size_t runs = tbb::parallel_scan(
-        tbb::blocked_range<size_t>(0, n), size_t(0),
-        [&](const tbb::blocked_range<size_t>& r, size_t sum, bool isFinal) {
-            for (size_t i = r.begin(); i < r.end(); ++i) {
-                sum += (i == 0 || children[i].key >> 3 != children[i - 1].key >> 3) ? 1 : 0;
-                if (isFinal) runIndex[i] = uint32_t(sum - 1);
-            }
-            return sum;
-        },
-        [](size_t a, size_t b) { return a + b; });
+    std::vector<uint32_t> runsSoFar;
+    const size_t runs = raster::parallelInclusiveScan<uint32_t>(
+        n, [&](size_t i) { return (i == 0 || children[i].key >> 3 != children[i - 1].key >> 3) ? 1u : 0u; },
+        runsSoFar);
     std::vector<size_t> runStart(runs + 1, n);
     raster::parallelFor(n, [&](size_t i) {
-        if (i == 0 || runIndex[i] != runIndex[i - 1]) runStart[runIndex[i]] = i;
+        if (i == 0 || runsSoFar[i] != runsSoFar[i - 1]) runStart[runsSoFar[i] - 1] = i;
     });
     // 4. Compaction: one parent per run.
     std::vector<ParentVoxel> parents(runs);

@@ -11,6 +11,8 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_scan.h>
+#include <tbb/parallel_sort.h>
 
 namespace cuberille::raster {
 
@@ -42,6 +44,41 @@ void parallelFor(size_t count, Body&& body) {
                       [&](const tbb::blocked_range<size_t>& r) {
                           for (size_t i = r.begin(); i != r.end(); ++i) body(i);
                       });
+#endif
+}
+
+/// Sorts [first, last) by less, in parallel. Keys must be unique (or equal elements identical) for
+/// the result not to depend on scheduling. In the std::thread mode (TSan) it is std::sort, for the
+/// same reason parallelFor avoids TBB there.
+template <class It, class Less>
+void parallelSort(It first, It last, Less less) {
+#if defined(CUBERILLE_PARALLEL_STD_THREADS)
+    std::sort(first, last, less);
+#else
+    tbb::parallel_sort(first, last, less);
+#endif
+}
+
+/// out[i] = value(0) + ... + value(i) for i in [0, count), in parallel; returns the total. value
+/// must be a pure function of i. Integer sums give the same result however the work is split.
+template <class T, class Value>
+T parallelInclusiveScan(size_t count, Value&& value, std::vector<T>& out) {
+    out.resize(count);
+#if defined(CUBERILLE_PARALLEL_STD_THREADS)
+    T sum{};
+    for (size_t i = 0; i < count; ++i) out[i] = sum += value(i);
+    return sum;
+#else
+    return tbb::parallel_scan(
+        tbb::blocked_range<size_t>(0, count), T{},
+        [&](const tbb::blocked_range<size_t>& r, T sum, bool isFinal) {
+            for (size_t i = r.begin(); i < r.end(); ++i) {
+                sum += value(i);
+                if (isFinal) out[i] = sum;
+            }
+            return sum;
+        },
+        [](T a, T b) { return a + b; });
 #endif
 }
 
