@@ -17,6 +17,9 @@
 #include "raster/resolve.h"
 #include "scene/tri_scene.h"
 #include "tests/scene/gltf_builder.h"
+#include "tests/voxel/voxel_test_support.h"
+#include "lod/lod_pyramid.h"
+#include "voxel/cvox_file.h"
 
 namespace cuberille::testing {
 namespace {
@@ -227,6 +230,45 @@ TEST(Golden, ProceduralGltfThroughItsCamera) {
     fs::remove_all(dir);
     compareWithGolden("gltf_procedural", image);
 }
+
+// A voxel model made here: two coloured spheres voxelized at 128³ with their LOD pyramid, rendered
+// through `render model.cvox` in colour (4 samples, the finest level) and in the LOD view at a
+// pixel error that selects the coarser level.
+fs::path goldenVoxelModel() {
+    const fs::path path = fs::temp_directory_path() / ("cuberille_golden_" + std::to_string(::getpid()) + ".cvox");
+    std::mt19937 rng(31);
+    auto tris = icosphere(3, glm::dvec3(0.0), 2.0, randomRotation(rng));
+    const auto small = icosphere(2, glm::dvec3(2.6, 0.8, 0.5), 0.9, randomRotation(rng));
+    tris.insert(tris.end(), small.begin(), small.end());
+    std::vector<glm::vec3> colors;
+    for (size_t i = 0; i < tris.size(); ++i)
+        colors.push_back(glm::vec3(0.3f + 0.6f * float(i % 5) / 4.0f, 0.4f, 0.9f - 0.6f * float(i % 7) / 6.0f));
+    voxel::VoxelizeOptions o;
+    o.resolution = 128;
+    voxel::VoxelModel m = voxel::voxelizeMesh(*viewOf(tris, 200, colors), o);
+    lod::buildLodPyramid(m, {});
+    std::ofstream out(path, std::ios::binary);
+    voxel::writeCvox(m, out);
+    return path;
+}
+
+raster::Image renderVoxels(apps::View view, int msaa, float pixelError) {
+    const fs::path model = goldenVoxelModel();
+    apps::RenderOptions o;
+    o.scene = model.string();
+    o.width = 160;
+    o.height = 100;
+    o.msaa = msaa;
+    o.view = view;
+    o.pixelError = pixelError;
+    o.quiet = true;
+    raster::Image image = apps::renderScene(o).image;
+    fs::remove(model);
+    return image;
+}
+
+TEST(Golden, VoxelModelAt4Samples) { compareWithGolden("voxels_msaa4", renderVoxels(apps::View::Color, 4, 1.0f)); }
+TEST(Golden, VoxelModelLodView) { compareWithGolden("voxels_lod", renderVoxels(apps::View::Lod, 1, 3.2f)); }
 
 }  // namespace
 }  // namespace cuberille::testing
