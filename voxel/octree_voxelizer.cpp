@@ -243,21 +243,38 @@ private:
     uint64_t leafPieces_ = 0, exactTests_ = 0;
 };
 
-/// Walks the merged tree in octant (Morton) order and gathers the kept voxels into blocks,
-/// pairing each block with its source triangles. The top levels are walked once to list the
-/// blocks; the blocks are then filled in parallel, each independently, and kept in list order.
+/// Gathers the kept voxels into blocks straight from the per-thread trees, without merging them
+/// first (Chajdas merges the trees, section 3.1.1; here the merge happens per block, in parallel):
+/// each tree's top levels are walked once to list its block subtrees; subtrees of the same block
+/// are grouped (Morton order of the block, then tree order); each block is then filled on its own
+/// task by reading its subtrees' leaves in Morton order and summing the leaves they share.
+/// Integer sums make the result the same as a merged tree's, for any thread count.
 class BlockEmitter {
 public:
-    BlockEmitter(const VoxelOctree& tree, const VoxelizeOptions& options, std::vector<BlockTriangleBuckets*> triangles,
-                 VoxelModel& model, VoxelizeStats& stats)
-        : tree_(tree), options_(options), triangles_(std::move(triangles)), model_(model), stats_(stats),
-          leafDepth_(tree.leafDepth()), blockDepth_(std::max(0, leafDepth_ - log2OfPowerOfTwo(kBlockSize))) {}
+    BlockEmitter(std::vector<const VoxelOctree*> trees, const VoxelizeOptions& options,
+                 std::vector<BlockTriangleBuckets*> triangles, VoxelModel& model, VoxelizeStats& stats)
+        : trees_(std::move(trees)), options_(options), triangles_(std::move(triangles)), model_(model), stats_(stats),
+          leafDepth_(trees_[0]->leafDepth()), blockDepth_(std::max(0, leafDepth_ - log2OfPowerOfTwo(kBlockSize))),
+          withColors_(trees_[0]->withColors()) {}
 
     void run() {
-        listBlocks(VoxelOctree::root(), 0, glm::uvec3(0));
-        std::vector<VoxelBlock> blocks(roots_.size());
-        std::vector<uint64_t> touched(roots_.size(), 0);  // conservative voxels per block
-        raster::parallelFor(roots_.size(), [&](size_t i) { fillBlock(roots_[i], blocks[i], touched[i]); });
+        std::vector<SubtreeRef> subtrees;
+        for (uint32_t t = 0; t < trees_.size(); ++t) listBlocks(t, VoxelOctree::root(), 0, glm::uvec3(0), subtrees);
+        std::sort(subtrees.begin(), subtrees.end(), [](const SubtreeRef& a, const SubtreeRef& b) {
+            return a.morton != b.morton ? a.morton < b.morton : a.tree < b.tree;
+        });
+        std::vector<std::pair<size_t, size_t>> groups;  // [first, last) of each block's subtrees
+        for (size_t i = 0; i < subtrees.size();) {
+            size_t j = i + 1;
+            while (j < subtrees.size() && subtrees[j].morton == subtrees[i].morton) ++j;
+            groups.push_back({i, j});
+            i = j;
+        }
+        std::vector<VoxelBlock> blocks(groups.size());
+        std::vector<uint64_t> touched(groups.size(), 0);  // conservative voxels per block
+        raster::parallelFor(groups.size(), [&](size_t g) {
+            fillBlock(&subtrees[groups[g].first], groups[g].second - groups[g].first, blocks[g], touched[g]);
+        });
         for (size_t i = 0; i < blocks.size(); ++i) {
             stats_.conservativeVoxels += touched[i];
             if (blocks[i].voxels.empty() && blocks[i].triangles.empty()) continue;
@@ -268,26 +285,56 @@ public:
     }
 
 private:
-    struct BlockRoot {
-        uint32_t node;
+    struct SubtreeRef {
+        uint64_t morton;
+        uint32_t tree, node;
         glm::uvec3 cell;
     };
+    /// One leaf of one tree, with its position's Morton code inside the block.
+    struct LeafRef {
+        uint32_t localMorton;
+        uint32_t tree, leaf;
+        glm::uvec3 local;
+    };
 
-    void listBlocks(uint32_t node, int depth, const glm::uvec3& cell) {
+    void listBlocks(uint32_t t, uint32_t node, int depth, const glm::uvec3& cell, std::vector<SubtreeRef>& out) const {
         if (depth == blockDepth_) {
-            roots_.push_back({node, cell});
+            out.push_back({mortonOf(cell), t, node, cell});
             return;
         }
         for (int octant = 0; octant < 8; ++octant)
-            if (const uint32_t c = tree_.existingChild(node, octant))
-                listBlocks(c, depth + 1, cell * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1));
+            if (const uint32_t c = trees_[t]->existingChild(node, octant))
+                listBlocks(t, c, depth + 1, cell * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1), out);
     }
 
-    void fillBlock(const BlockRoot& root, VoxelBlock& b, uint64_t& touched) {
-        b.coord = root.cell;
+    void fillBlock(const SubtreeRef* subtrees, size_t count, VoxelBlock& b, uint64_t& touched) const {
+        b.coord = subtrees[0].cell;
         b.tightMin = glm::uvec3(model_.blockSize);
-        gather(root.node, blockDepth_, glm::uvec3(0), b, touched);
-        gatherTriangles(mortonOf(root.cell), b);
+        std::vector<LeafRef> leaves;
+        for (size_t s = 0; s < count; ++s) gather(subtrees[s].tree, subtrees[s].node, blockDepth_, glm::uvec3(0), leaves);
+        // Each tree's leaves came in Morton order; with several trees, order them all (tree order
+        // breaks ties) so shared leaves sit side by side.
+        if (count > 1)
+            std::sort(leaves.begin(), leaves.end(), [](const LeafRef& x, const LeafRef& y) {
+                return x.localMorton != y.localMorton ? x.localMorton < y.localMorton : x.tree < y.tree;
+            });
+        for (size_t i = 0; i < leaves.size();) {
+            LeafSums sums = trees_[leaves[i].tree]->leaf(leaves[i].leaf);
+            LeafColorSums colors = withColors_ ? trees_[leaves[i].tree]->leafColor(leaves[i].leaf) : LeafColorSums{};
+            size_t j = i + 1;
+            for (; j < leaves.size() && leaves[j].localMorton == leaves[i].localMorton; ++j) {
+                const LeafSums& o = trees_[leaves[j].tree]->leaf(leaves[j].leaf);
+                for (int k = 0; k < 3; ++k) sums.normal[k] += o.normal[k];
+                sums.weight += o.weight;
+                sums.faceMask |= o.faceMask;
+                sums.targets |= o.targets;
+                if (withColors_)
+                    for (int k = 0; k < 3; ++k) colors.rgb[k] += trees_[leaves[j].tree]->leafColor(leaves[j].leaf).rgb[k];
+            }
+            emitVoxel(sums, colors, leaves[i].local, b, touched);
+            i = j;
+        }
+        gatherTriangles(subtrees[0].morton, b);
         if (b.voxels.empty()) b.tightMin = glm::uvec3(0);
     }
 
@@ -312,17 +359,18 @@ private:
         for (uint32_t i : order) b.triangles.push_back(found[i]);
     }
 
-    void gather(uint32_t node, int depth, const glm::uvec3& local, VoxelBlock& b, uint64_t& touched) const {
+    void gather(uint32_t t, uint32_t node, int depth, const glm::uvec3& local, std::vector<LeafRef>& out) const {
         if (depth == leafDepth_) {
-            emitVoxel(tree_.leaf(node), node, local, b, touched);
+            out.push_back({uint32_t(mortonOf(local)), t, node, local});
             return;
         }
         for (int octant = 0; octant < 8; ++octant)
-            if (const uint32_t c = tree_.existingChild(node, octant))
-                gather(c, depth + 1, local * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1), b, touched);
+            if (const uint32_t c = trees_[t]->existingChild(node, octant))
+                gather(t, c, depth + 1, local * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1), out);
     }
 
-    void emitVoxel(const LeafSums& s, uint32_t leaf, const glm::uvec3& local, VoxelBlock& b, uint64_t& touched) const {
+    void emitVoxel(const LeafSums& s, const LeafColorSums& c, const glm::uvec3& local, VoxelBlock& b,
+                   uint64_t& touched) const {
         if (s.weight == 0) return;  // reached only by pieces the exact test turned away
         ++touched;
         const bool keep = options_.separability == Separability::Conservative ||
@@ -333,8 +381,7 @@ private:
         const double len = glm::length(n);
         b.voxels.push_back(packVoxel(local.x, local.y, local.z, s.faceMask));
         b.normals.push_back(packNormal1010102(len > 0.0 ? glm::vec3(n / len) : glm::vec3(0.0f)));
-        if (tree_.withColors()) {
-            const LeafColorSums& c = tree_.leafColor(leaf);
+        if (withColors_) {
             const double w = double(s.weight);
             b.colors.push_back(packSrgba8(glm::vec3(double(c.rgb[0]) / w, double(c.rgb[1]) / w, double(c.rgb[2]) / w)));
         } else {
@@ -344,13 +391,13 @@ private:
         b.tightMax = glm::max(b.tightMax, local);
     }
 
-    const VoxelOctree& tree_;
+    std::vector<const VoxelOctree*> trees_;
     const VoxelizeOptions& options_;
     std::vector<BlockTriangleBuckets*> triangles_;
     VoxelModel& model_;
     VoxelizeStats& stats_;
     int leafDepth_, blockDepth_;
-    std::vector<BlockRoot> roots_;
+    bool withColors_;
 };
 
 }  // namespace
@@ -413,11 +460,15 @@ VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, Vo
         stats.readMs += b->readMs;
         triangles.push_back(&b->blockTriangles());
     }
-    for (size_t i = 1; i < trees.size(); ++i) trees[0]->tree().mergeFrom(trees[i]->tree());
+    // The trees are merged block by block while emitting (BlockEmitter), not here.
     stats.mergeMs = nowMs() - t0;
 
     t0 = nowMs();
-    if (!trees.empty()) BlockEmitter(trees[0]->tree(), options, std::move(triangles), model, stats).run();
+    if (!trees.empty()) {
+        std::vector<const VoxelOctree*> octrees;
+        for (TreeBuilder* b : trees) octrees.push_back(&b->tree());
+        BlockEmitter(std::move(octrees), options, std::move(triangles), model, stats).run();
+    }
     stats.blocks = model.blocks.size();
     stats.emitMs = nowMs() - t0;
     if (statsOut) *statsOut = stats;

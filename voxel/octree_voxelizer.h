@@ -9,9 +9,10 @@
 //       insertTriangle -> descend: split the piece at the node's mid-planes, recurse per child
 //         at the block depth: keep the piece as a source triangle of that block
 //         at the leaf depth: accumulate area-weighted normal and colour, active faces, targets
-//     merge the per-thread trees (integer sums: any order, same bits)
-//     emit: walk the merged tree in octant order, one block per subtree at the block depth,
-//           keeping the voxels the separability asks for
+//     emit: list each tree's subtrees at the block depth, group them by block; per block, in
+//           parallel, read their leaves in octant (Morton) order and sum the shared ones
+//           (integer sums: the per-thread trees merge with the same bits in any order), keeping
+//           the voxels the separability asks for
 
 #include <cstdint>
 #include <functional>
@@ -49,7 +50,7 @@ struct VoxelizeStats {
     int threads = 0;               // trees built (threads that took at least one chunk)
     double readMs = 0;             // summed over threads: reading and decompressing chunks
     double rasterizeMs = 0;        // wall: reading and inserting every chunk
-    double mergeMs = 0, emitMs = 0;
+    double mergeMs = 0, emitMs = 0;  // merge: collecting the trees (they merge per block in emit)
 };
 
 /// Throws std::invalid_argument for a resolution that is not a power of two in range, and

@@ -7,7 +7,7 @@
 //
 // Leaf payloads are sums in 64-bit fixed point rather than floats: integer addition is
 // associative, so merging per-thread trees gives the same bits whichever thread voxelized which
-// triangle and in whatever order the trees merge (DESIGN.md, determinism).
+// triangle and in whatever order their leaves are summed (DESIGN.md, determinism).
 
 #include <cstdint>
 #include <memory>
@@ -97,35 +97,11 @@ public:
         return interiors_.reservedBytes() + leaves_.reservedBytes() + colors_.reservedBytes();
     }
 
-    /// Adds every leaf of `source` into this tree by a joint traversal (section 3.1.1, merge):
-    /// subtrees this tree lacks are created, and leaves both hold are summed.
-    void mergeFrom(const VoxelOctree& source) { mergeNode(root(), source, VoxelOctree::root(), 0); }
-
 private:
     uint32_t newLeaf() {
         const uint32_t i = leaves_.allocate();
         if (withColors_) colors_.allocate();
         return i;
-    }
-
-    void mergeNode(uint32_t node, const VoxelOctree& source, uint32_t sourceNode, int depth) {
-        for (int octant = 0; octant < 8; ++octant) {
-            const uint32_t s = source.existingChild(sourceNode, octant);
-            if (s == 0) continue;
-            const uint32_t d = childOf(node, depth, octant);
-            if (depth + 1 < leafDepth_) {
-                mergeNode(d, source, s, depth + 1);
-                continue;
-            }
-            LeafSums& to = leaves_[d];
-            const LeafSums& from = source.leaves_[s];
-            for (int k = 0; k < 3; ++k) to.normal[k] += from.normal[k];
-            to.weight += from.weight;
-            to.faceMask |= from.faceMask;
-            to.targets |= from.targets;
-            if (withColors_ && source.withColors_)
-                for (int k = 0; k < 3; ++k) colors_[d].rgb[k] += source.colors_[s].rgb[k];
-        }
     }
 
     int leafDepth_;
