@@ -5,6 +5,7 @@
 
 #include "lod/simplify.h"
 #include "raster/parallel.h"
+#include "voxel/morton.h"
 
 namespace cuberille::lod {
 namespace {
@@ -31,13 +32,13 @@ void linkChildren(std::vector<VoxelBlock>& blocks) {
             parent.childMask = 0;
             parent.firstChild = 0;
             if (level == 0) continue;
-            const uint64_t parentCode = morton3(parent.coord);
-            while (child < blocks.size() && blocks[child].level == level - 1 && morton3(blocks[child].coord) >> 3 < parentCode)
+            const uint64_t parentCode = voxel::mortonOf(parent.coord);
+            while (child < blocks.size() && blocks[child].level == level - 1 && voxel::mortonOf(blocks[child].coord) >> 3 < parentCode)
                 ++child;
             parent.firstChild = uint32_t(child);
             while (child < blocks.size() && blocks[child].level == level - 1 &&
-                   morton3(blocks[child].coord) >> 3 == parentCode) {
-                parent.childMask |= uint8_t(1u << (morton3(blocks[child].coord) & 7));
+                   voxel::mortonOf(blocks[child].coord) >> 3 == parentCode) {
+                parent.childMask |= uint8_t(1u << (voxel::mortonOf(blocks[child].coord) & 7));
                 ++child;
             }
         }

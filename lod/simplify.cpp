@@ -4,22 +4,13 @@
 #include <numeric>
 
 #include "raster/parallel.h"
+#include "voxel/morton.h"
 #include "voxel/packing.h"
 
 namespace cuberille::lod {
 namespace {
 
 using voxel::VoxelBlock;
-
-uint64_t spread3(uint32_t v) {
-    uint64_t x = v & 0x1FFFFF;
-    x = (x | x << 32) & 0x1F00000000FFFFull;
-    x = (x | x << 16) & 0x1F0000FF0000FFull;
-    x = (x | x << 8) & 0x100F00F00F00F00Full;
-    x = (x | x << 4) & 0x10C30C30C30C30C3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-}
 
 /// One voxel of the level being simplified, addressed by its Morton code in the whole level:
 /// key >> 3 is its parent's code, key & 7 its octant in the parent.
@@ -78,12 +69,10 @@ void appendChildren(const std::vector<const VoxelBlock*>& level, uint32_t blockI
                     std::vector<ChildRef>& out) {
     const VoxelBlock& b = *level[blockIndex];
     for (uint32_t v = 0; v < b.voxels.size(); ++v)
-        out.push_back({morton3(b.coord * blockSize + voxel::voxelPositionInBlock(b.voxels[v])), blockIndex, v});
+        out.push_back({voxel::mortonOf(b.coord * blockSize + voxel::voxelPositionInBlock(b.voxels[v])), blockIndex, v});
 }
 
 }  // namespace
-
-uint64_t morton3(const glm::uvec3& p) { return spread3(p.x) | spread3(p.y) << 1 | spread3(p.z) << 2; }
 
 void simplifySerial(const LevelSource& level, uint32_t blockSize, const std::function<void(VoxelBlock&&)>& emit) {
     std::vector<ChildRef> children;
@@ -145,7 +134,7 @@ std::vector<VoxelBlock> simplifyParallel(const std::vector<const VoxelBlock*>& l
     raster::parallelFor(level.size(), [&](size_t b) {
         const VoxelBlock& block = *level[b];
         for (uint32_t v = 0; v < block.voxels.size(); ++v)
-            children[offsets[b] + v] = {morton3(block.coord * blockSize + voxel::voxelPositionInBlock(block.voxels[v])),
+            children[offsets[b] + v] = {voxel::mortonOf(block.coord * blockSize + voxel::voxelPositionInBlock(block.voxels[v])),
                                         uint32_t(b), v};
     });
     // 1. Parallel sort (keys are unique: one voxel per position).

@@ -42,7 +42,4 @@ void simplifySerial(const LevelSource& level, uint32_t blockSize, const std::fun
 std::vector<voxel::VoxelBlock> simplifySerial(const std::vector<const voxel::VoxelBlock*>& level, uint32_t blockSize);
 std::vector<voxel::VoxelBlock> simplifyParallel(const std::vector<const voxel::VoxelBlock*>& level, uint32_t blockSize);
 
-/// Morton code of a 3D position (x in bit 0), up to 21 bits per axis.
-uint64_t morton3(const glm::uvec3& p);
-
 }  // namespace cuberille::lod

@@ -7,21 +7,11 @@
 #include <stdexcept>
 
 #include "raster/parallel.h"
+#include "voxel/morton.h"
 #include "voxel/packing.h"
 
 namespace cuberille::voxel {
 namespace {
-
-uint64_t spread3(uint32_t v) {
-    uint64_t x = v & 0x1FFFFF;
-    x = (x | x << 32) & 0x1F00000000FFFFull;
-    x = (x | x << 16) & 0x1F0000FF0000FFull;
-    x = (x | x << 8) & 0x100F00F00F00F00Full;
-    x = (x | x << 4) & 0x10C30C30C30C30C3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-}
-uint64_t morton(const glm::uvec3& c) { return spread3(c.x) | spread3(c.y) << 1 | spread3(c.z) << 2; }
 
 /// Read access to the samples as doubles, with the two border rules: clamped to the edge (for
 /// gradients) and "outside" beyond the volume (for classification).
@@ -119,7 +109,7 @@ VoxelModel extractIsosurface(std::string_view samples, const VolumeDesc& d, cons
     for (uint32_t z = 0; z < blocks.z; ++z)
         for (uint32_t y = 0; y < blocks.y; ++y)
             for (uint32_t x = 0; x < blocks.x; ++x) order.push_back({x, y, z});
-    std::sort(order.begin(), order.end(), [](auto& a, auto& b) { return morton(a) < morton(b); });
+    std::sort(order.begin(), order.end(), [](auto& a, auto& b) { return mortonOf(a) < mortonOf(b); });
 
     std::vector<VoxelBlock> out(order.size());
     std::vector<uint8_t> skipped(order.size(), 0);
@@ -155,7 +145,7 @@ VoxelModel extractIsosurface(std::string_view samples, const VolumeDesc& d, cons
                                        (faces & kFacePosZ ? 1 : 0) - (faces & kFaceNegZ ? 1 : 0));
                     const double len = glm::length(n);
                     const glm::uvec3 local = glm::uvec3(x, y, z) - glm::uvec3(lo);
-                    found.push_back({morton(local), uint32_t(b.voxels.size())});
+                    found.push_back({mortonOf(local), uint32_t(b.voxels.size())});
                     b.voxels.push_back(packVoxel(local.x, local.y, local.z, faces));
                     b.normals.push_back(packNormal1010102(len > 0.0 ? glm::vec3(n / len) : glm::vec3(0.0f)));
                     b.colors.push_back(0xFFFFFFFFu);

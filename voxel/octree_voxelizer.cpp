@@ -14,6 +14,7 @@
 #include "raster/parallel.h"
 #include "voxel/exact_overlap.h"
 #include "voxel/intersection_targets.h"
+#include "voxel/morton.h"
 #include "voxel/packing.h"
 #include "voxel/voxel_octree.h"
 
@@ -42,19 +43,6 @@ struct BlockTriangles {
     std::vector<SourceTriangle> triangles;
 };
 using BlockTriangleBuckets = std::unordered_map<uint64_t, BlockTriangles>;  // by block Morton code
-
-uint64_t spreadBits3(uint32_t v) {
-    uint64_t x = v & 0x1FFFFF;
-    x = (x | x << 32) & 0x1F00000000FFFFull;
-    x = (x | x << 16) & 0x1F0000FF0000FFull;
-    x = (x | x << 8) & 0x100F00F00F00F00Full;
-    x = (x | x << 4) & 0x10C30C30C30C30C3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-}
-
-/// Octant order (x in bit 0, y in bit 1, z in bit 2) at every level is Morton order.
-uint64_t mortonOf(const glm::uvec3& c) { return spreadBits3(c.x) | spreadBits3(c.y) << 1 | spreadBits3(c.z) << 2; }
 
 uint8_t activeFaces(const glm::dvec3& n, double epsilon) {
     uint8_t m = 0;
