@@ -10,21 +10,13 @@
 
 #include "raster/srgb.h"
 
+#include "scene/file_names.h"
 #include "scene/input_error.h"
 
 namespace cuberille::apps {
-namespace {
-
-std::string lowerExtension(const std::filesystem::path& p) {
-    std::string e = p.extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-    return e;
-}
-
-}  // namespace
 
 ImageFormat imageFormatFor(const std::filesystem::path& path) {
-    const std::string e = lowerExtension(path);
+    const std::string e = scene::lowerExtension(path);
     if (e == ".png") return ImageFormat::Png;
     if (e == ".exr") return ImageFormat::Exr;
     throw scene::InputError(path.string() + ": unsupported output format '" + e +

@@ -10,6 +10,7 @@
 
 #include "apps/atomic_file.h"
 #include "raster/parallel.h"
+#include "scene/file_names.h"
 #include "scene/input_error.h"
 #include "scene/ply_loader.h"
 #include "voxel/cvox_file.h"
@@ -28,11 +29,7 @@ double peakResidentMib() {
     return double(u.ru_maxrss) / 1024.0;  // Linux reports KiB
 }
 
-bool hasExtension(const std::filesystem::path& p, const char* ext) {
-    std::string e = p.extension().string();
-    for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return e == ext;
-}
+bool hasExtension(const std::filesystem::path& p, const char* ext) { return scene::lowerExtension(p) == ext; }
 
 void requireExtension(const std::filesystem::path& p, const char* ext, const char* what) {
     if (!hasExtension(p, ext))

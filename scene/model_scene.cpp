@@ -2,41 +2,26 @@
 
 #include <algorithm>
 
+#include "scene/file_names.h"
 #include "scene/gltf_loader.h"
 #include "scene/input_error.h"
 #include "scene/obj_loader.h"
 #include "scene/ply_loader.h"
 
 namespace cuberille::scene {
-namespace {
-
-std::string lowerName(const std::filesystem::path& path) {
-    std::string n = path.filename().string();
-    std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return std::tolower(c); });
-    return n;
-}
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-}  // namespace
-
 bool isModelFile(const std::filesystem::path& path) {
-    const std::string n = lowerName(path);
-    return endsWith(n, ".ply") || endsWith(n, ".ply.gz") || endsWith(n, ".obj") || endsWith(n, ".gltf") ||
-           endsWith(n, ".glb");
+    return fileNameEndsWith(path, ".ply") || fileNameEndsWith(path, ".ply.gz") || fileNameEndsWith(path, ".obj") ||
+           fileNameEndsWith(path, ".gltf") || fileNameEndsWith(path, ".glb");
 }
 
 Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions& view, const WarningSink& warn) {
     Scene s;
     s.name = path.filename().string();
-    const std::string n = lowerName(path);
     std::vector<Camera> cameras;
     std::vector<raster::Light> lights;
-    if (endsWith(n, ".obj")) {
+    if (fileNameEndsWith(path, ".obj")) {
         s.meshes = loadObj(path, warn);
-    } else if (endsWith(n, ".gltf") || endsWith(n, ".glb")) {
+    } else if (fileNameEndsWith(path, ".gltf") || fileNameEndsWith(path, ".glb")) {
         GltfScene g = loadGltf(path, warn, view.timeSeconds);
         s.meshes = std::move(g.meshes);
         cameras = std::move(g.cameras);
@@ -69,7 +54,7 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     }
     s.background = {0.05f, 0.06f, 0.08f, 1.0f};
     // glTF says which materials are double-sided; PLY and OBJ scans promise no winding.
-    const bool isGltf = endsWith(n, ".gltf") || endsWith(n, ".glb");
+    const bool isGltf = fileNameEndsWith(path, ".gltf") || fileNameEndsWith(path, ".glb");
     s.cull = isGltf ? raster::CullMode::Back : raster::CullMode::None;
     return s;
 }

@@ -4,24 +4,14 @@
 #include <limits>
 #include <unordered_map>
 
+#include "scene/file_names.h"
 #include "scene/gltf_loader.h"
-#include "scene/model_scene.h"
 #include "scene/obj_loader.h"
 #include "scene/ply_loader.h"
 #include "voxel/geometry_stream.h"
 
 namespace cuberille::voxel {
 namespace {
-
-std::string lowerFileName(const std::filesystem::path& path) {
-    std::string n = path.filename().string();
-    std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return std::tolower(c); });
-    return n;
-}
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 /// A range of one mesh's triangles.
 struct ChunkRange {
@@ -124,16 +114,15 @@ std::unique_ptr<MeshView> viewOfMeshes(std::vector<scene::Mesh> meshes, std::str
     return std::make_unique<MeshesView>(std::move(meshes), std::move(sourceName), keepColors, chunkTriangles);
 }
 
-bool isGeometryStreamFile(const std::filesystem::path& path) { return endsWith(lowerFileName(path), ".cgs"); }
+bool isGeometryStreamFile(const std::filesystem::path& path) { return scene::fileNameEndsWith(path, ".cgs"); }
 
 std::unique_ptr<MeshView> openMeshView(const std::filesystem::path& path, const scene::WarningSink& warn,
                                        uint32_t chunkTriangles) {
     if (isGeometryStreamFile(path)) return openGeometryStream(path);
-    const std::string n = lowerFileName(path);
-    if (endsWith(n, ".obj")) return viewOfMeshes(scene::loadObj(path, warn), path.string(), true, chunkTriangles);
-    if (endsWith(n, ".gltf") || endsWith(n, ".glb"))
+    if (scene::fileNameEndsWith(path, ".obj")) return viewOfMeshes(scene::loadObj(path, warn), path.string(), true, chunkTriangles);
+    if (scene::fileNameEndsWith(path, ".gltf") || scene::fileNameEndsWith(path, ".glb"))
         return viewOfMeshes(scene::loadGltf(path, warn, 0.0f).meshes, path.string(), true, chunkTriangles);
-    if (endsWith(n, ".ply") || endsWith(n, ".ply.gz")) {
+    if (scene::fileNameEndsWith(path, ".ply") || scene::fileNameEndsWith(path, ".ply.gz")) {
         scene::Mesh m = scene::loadPly(path);
         const bool colored = !m.colors.empty();
         if (colored) m.color = glm::vec3(1.0f);  // a scan's colours are its own, not tinted
