@@ -3,7 +3,11 @@
 // checked against what the file holds, so a truncated or corrupted file becomes an InputError
 // naming the file, the byte offset and the field, never an out-of-bounds read.
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <bit>
+#include <cerrno>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -90,6 +94,41 @@ private:
     std::string where_;
     uint64_t base_;
     size_t at_ = 0;
+};
+
+/// A file read with positional reads (pread): any number of threads may read it at once, which
+/// is how geometry-stream chunks and voxel blocks are loaded on demand.
+class PositionalFile {
+public:
+    /// Throws scene::InputError naming the file when it cannot be opened.
+    explicit PositionalFile(std::string name) : name_(std::move(name)) {
+        fd_ = ::open(name_.c_str(), O_RDONLY | O_CLOEXEC);
+        if (fd_ < 0) throw scene::InputError(name_ + ": cannot open: " + std::strerror(errno));
+        bytes_ = uint64_t(::lseek(fd_, 0, SEEK_END));
+    }
+    ~PositionalFile() { ::close(fd_); }
+    PositionalFile(const PositionalFile&) = delete;
+    PositionalFile& operator=(const PositionalFile&) = delete;
+
+    const std::string& name() const { return name_; }
+    uint64_t size() const { return bytes_; }
+
+    /// Exactly n bytes at offset, or scene::InputError naming `where` and the offset.
+    void readAt(uint64_t offset, char* out, size_t n, const std::string& where) const {
+        size_t done = 0;
+        while (done < n) {
+            const ssize_t got = ::pread(fd_, out + done, n - done, off_t(offset + done));
+            if (got <= 0)
+                throw scene::InputError(where + " at byte " + std::to_string(offset + done) + ": " +
+                                        (got == 0 ? "truncated: unexpected end of file" : std::strerror(errno)));
+            done += size_t(got);
+        }
+    }
+
+private:
+    std::string name_;
+    int fd_ = -1;
+    uint64_t bytes_ = 0;
 };
 
 }  // namespace cuberille::voxel

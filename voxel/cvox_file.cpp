@@ -1,8 +1,5 @@
 #include "voxel/cvox_file.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -73,31 +70,13 @@ void writeCvox(const VoxelModel& model, std::ostream& out) {
     if (!out) throw std::runtime_error("writing the voxel file failed");
 }
 
-namespace {
-
-/// Reads exactly n bytes at offset, or throws naming the file and offset.
-void readAt(int fd, uint64_t offset, char* out, size_t n, const std::string& where) {
-    size_t done = 0;
-    while (done < n) {
-        const ssize_t got = ::pread(fd, out + done, n - done, off_t(offset + done));
-        if (got <= 0)
-            throw scene::InputError(where + " at byte " + std::to_string(offset + done) + ": " +
-                                    (got == 0 ? "truncated: unexpected end of file" : std::strerror(errno)));
-        done += size_t(got);
-    }
-}
-
-}  // namespace
-
-CvoxReader::CvoxReader(const std::filesystem::path& path) : name_(path.string()) {
-    fd_ = ::open(name_.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) throw scene::InputError(name_ + ": cannot open: " + std::strerror(errno));
-    fileBytes_ = uint64_t(::lseek(fd_, 0, SEEK_END));
+CvoxReader::CvoxReader(const std::filesystem::path& path)
+    : name_(path.string()), file_(std::make_unique<PositionalFile>(name_)), fileBytes_(file_->size()) {
     std::string head(kHeaderBytes, '\0');
     ByteReader h(head, name_);
     if (fileBytes_ < kHeaderBytes)
         h.fail("header", "truncated: " + std::to_string(fileBytes_) + " bytes, shorter than the 96-byte header");
-    readAt(fd_, 0, head.data(), head.size(), name_);
+    file_->readAt(0, head.data(), head.size(), name_);
     const auto magic = h.get<std::array<char, 4>>("magic");
     if (std::memcmp(magic.data(), kMagic, 4) != 0) h.fail("magic", "not a voxel file (no CVOX magic)");
     const uint32_t version = h.get<uint32_t>("version");
@@ -125,7 +104,7 @@ CvoxReader::CvoxReader(const std::filesystem::path& path) : name_(path.string())
                                 std::to_string(blockCount) + " blocks need " +
                                 std::to_string(blockCount * kBlockEntryBytes) + " bytes of table");
     std::string table(blockCount * kBlockEntryBytes, '\0');
-    readAt(fd_, kHeaderBytes, table.data(), table.size(), name_ + ": block table");
+    file_->readAt(kHeaderBytes, table.data(), table.size(), name_ + ": block table");
     m.blocks.resize(blockCount);
     offsets_.resize(blockCount);
     uint64_t voxelSum = 0, triangleSum = 0;
@@ -166,16 +145,14 @@ CvoxReader::CvoxReader(const std::filesystem::path& path) : name_(path.string())
         throw scene::InputError(name_ + ": the header's voxel or triangle count does not match its blocks (corrupt)");
 }
 
-CvoxReader::~CvoxReader() {
-    if (fd_ >= 0) ::close(fd_);
-}
+CvoxReader::~CvoxReader() = default;
 
 VoxelBlock CvoxReader::load(size_t i) const {
     VoxelBlock b = layout_.blocks[i];
     const BlockData& d = offsets_[i];
     const std::string where = name_ + ": block " + std::to_string(i);
     std::string bytes(size_t(d.voxels) * 12, '\0');
-    readAt(fd_, d.voxelOffset, bytes.data(), bytes.size(), where);
+    file_->readAt(d.voxelOffset, bytes.data(), bytes.size(), where);
     ByteReader data(bytes, where, d.voxelOffset);
     b.voxels.resize(d.voxels);
     b.normals.resize(d.voxels);
@@ -190,7 +167,7 @@ VoxelBlock CvoxReader::load(size_t i) const {
     }
     b.triangles.resize(d.triangles);
     if (d.triangles)
-        readAt(fd_, d.triangleOffset, reinterpret_cast<char*>(b.triangles.data()), size_t(d.triangles) * kSourceTriangleBytes,
+        file_->readAt(d.triangleOffset, reinterpret_cast<char*>(b.triangles.data()), size_t(d.triangles) * kSourceTriangleBytes,
                where);
     return b;
 }

@@ -14,11 +14,14 @@
 //               (3 positions float32 x3, 3 normals, 3 colours: 60 bytes each)
 
 #include <filesystem>
+#include <memory>
 #include <ostream>
 
 #include "voxel/voxel_model.h"
 
 namespace cuberille::voxel {
+
+class PositionalFile;
 
 /// Throws std::runtime_error when the stream fails.
 void writeCvox(const VoxelModel& model, std::ostream& out);
@@ -46,7 +49,7 @@ private:
         uint64_t voxelOffset = 0, triangleOffset = 0;
     };
     std::string name_;
-    int fd_ = -1;
+    std::unique_ptr<PositionalFile> file_;
     uint64_t fileBytes_ = 0;
     VoxelModel layout_;
     std::vector<BlockData> offsets_;

@@ -1,8 +1,5 @@
 #include "voxel/geometry_stream.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <array>
 #include <cstring>
 #include <stdexcept>
@@ -91,14 +88,9 @@ struct ChunkLocation {
 
 class GeometryStreamView final : public MeshView {
 public:
-    explicit GeometryStreamView(const std::filesystem::path& path) : name_(path.string()) {
-        fd_ = ::open(name_.c_str(), O_RDONLY | O_CLOEXEC);
-        if (fd_ < 0) throw scene::InputError(name_ + ": cannot open: " + std::strerror(errno));
-        fileBytes_ = uint64_t(::lseek(fd_, 0, SEEK_END));
+    explicit GeometryStreamView(const std::filesystem::path& path)
+        : name_(path.string()), file_(name_), fileBytes_(file_.size()) {
         readHeaders();
-    }
-    ~GeometryStreamView() override {
-        if (fd_ >= 0) ::close(fd_);
     }
 
     size_t chunkCount() const override { return infos_.size(); }
@@ -113,7 +105,7 @@ public:
             throw scene::InputError(where + " at byte " + std::to_string(loc.payloadOffset) + ": " + problem);
         };
         std::vector<char> compressed(loc.compressedBytes);
-        readAt(loc.payloadOffset, compressed.data(), compressed.size(), where);
+        file_.readAt(loc.payloadOffset, compressed.data(), compressed.size(), where);
         const std::vector<char> raw = decompressFrame(compressed, loc.rawBytes, fail);
 
         GeometryChunk c;
@@ -146,23 +138,12 @@ public:
     }
 
 private:
-    void readAt(uint64_t offset, char* out, size_t n, const std::string& where) const {
-        size_t done = 0;
-        while (done < n) {
-            const ssize_t got = ::pread(fd_, out + done, n - done, off_t(offset + done));
-            if (got <= 0)
-                throw scene::InputError(where + " at byte " + std::to_string(offset + done) + ": " +
-                                        (got == 0 ? "unexpected end of file" : std::strerror(errno)));
-            done += size_t(got);
-        }
-    }
-
     void readHeaders() {
         std::array<char, kFileHeaderBytes> head{};
         if (fileBytes_ < kFileHeaderBytes)
             throw scene::InputError(name_ + ": truncated: " + std::to_string(fileBytes_) +
                                     " bytes, shorter than the 32-byte geometry stream header");
-        readAt(0, head.data(), head.size(), name_);
+        file_.readAt(0, head.data(), head.size(), name_);
         ByteReader h(std::string_view(head.data(), head.size()), name_);
         std::array<char, 4> magic = h.get<std::array<char, 4>>("magic");
         if (std::memcmp(magic.data(), kFileMagic, 4) != 0) h.fail("magic", "not a geometry stream (no CGS1 magic)");
@@ -181,7 +162,7 @@ private:
             std::array<char, kChunkHeaderBytes> ch{};
             if (fileBytes_ - at < kChunkHeaderBytes)
                 throw scene::InputError(where + " at byte " + std::to_string(at) + ": truncated: the file ends inside the chunk header");
-            readAt(at, ch.data(), ch.size(), where);
+            file_.readAt(at, ch.data(), ch.size(), where);
             ByteReader r(std::string_view(ch.data(), ch.size()), where, at);
             magic = r.get<std::array<char, 4>>("chunk magic");
             if (std::memcmp(magic.data(), kChunkMagic, 4) != 0) r.fail("chunk magic", "no CHNK magic (corrupt)");
@@ -218,8 +199,8 @@ private:
     }
 
     std::string name_;
-    int fd_ = -1;
-    uint64_t fileBytes_ = 0;
+    PositionalFile file_;
+    uint64_t fileBytes_;
     std::vector<ChunkLocation> locations_;
     std::vector<ChunkInfo> infos_;
 };
