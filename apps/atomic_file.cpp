@@ -31,4 +31,10 @@ void AtomicOutputFile::commit() {
     committed_ = true;
 }
 
+void writeJsonAtomically(const std::filesystem::path& path, const nlohmann::json& json) {
+    AtomicOutputFile f(path);
+    f.stream() << json.dump(2) << "\n";
+    f.commit();
+}
+
 }  // namespace cuberille::apps

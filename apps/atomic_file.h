@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <nlohmann/json.hpp>
+
 namespace cuberille::apps {
 
 class AtomicOutputFile {
@@ -25,5 +27,8 @@ private:
     std::ofstream out_;
     bool committed_ = false;
 };
+
+/// `--stats` files: the JSON, indented, written atomically.
+void writeJsonAtomically(const std::filesystem::path& path, const nlohmann::json& json);
 
 }  // namespace cuberille::apps

@@ -144,12 +144,6 @@ std::filesystem::path frameFileName(const std::filesystem::path& out, int frame)
     return out.parent_path() / (out.stem().string() + suffix + out.extension().string());
 }
 
-void writeStats(const std::filesystem::path& path, const nlohmann::json& json) {
-    AtomicOutputFile f(path);
-    f.stream() << json.dump(2) << "\n";
-    f.commit();
-}
-
 /// A voxel model: blocks selected, expanded and drawn through the same pipeline.
 void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     const double t0 = nowMs();
@@ -301,7 +295,7 @@ int runRenderCommand(const RenderOptions& o) {
     if (o.turntable > 0) return runTurntable(o);
     const RenderResult r = renderScene(o);
     writeImageAtomically(o.out, r.image);
-    if (!o.statsPath.empty()) writeStats(o.statsPath, statsToJson(o, r));
+    if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, statsToJson(o, r));
     if (!o.quiet) printSummary(o, o.out, r);
     return 0;
 }
@@ -329,7 +323,7 @@ int runTurntable(const RenderOptions& o) {
         if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
         if (!o.quiet) printSummary(o, file, r);
     }
-    if (!o.statsPath.empty()) writeStats(o.statsPath, {{"frames", frames}});
+    if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, {{"frames", frames}});
     return 0;
 }
 

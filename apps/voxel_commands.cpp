@@ -50,12 +50,6 @@ std::function<void(size_t, size_t)> terminalProgress(const char* what, const cha
     };
 }
 
-void writeJson(const std::filesystem::path& path, const nlohmann::json& json) {
-    AtomicOutputFile f(path);
-    f.stream() << json.dump(2) << "\n";
-    f.commit();
-}
-
 lod::SimplifyMethod parseSimplify(const std::string& name) {
     if (name == "parallel") return lod::SimplifyMethod::Parallel;
     if (name == "serial") return lod::SimplifyMethod::Serial;
@@ -113,13 +107,13 @@ int runPackCommand(const PackOptions& o) {
                     (unsigned long long)s.chunks, double(s.compressedBytes) / (1 << 20),
                     s.compressedBytes ? double(s.rawBytes) / double(s.compressedBytes) : 0.0, o.out.string().c_str());
     if (!o.statsPath.empty())
-        writeJson(o.statsPath, {{"input", o.input.string()},
-                                {"chunks", s.chunks},
-                                {"triangles", s.triangles},
-                                {"vertices", s.vertices},
-                                {"rawBytes", s.rawBytes},
-                                {"compressedBytes", s.compressedBytes},
-                                {"times", {{"loadMs", loadMs}, {"writeMs", writeMs}}}});
+        writeJsonAtomically(o.statsPath, {{"input", o.input.string()},
+                                          {"chunks", s.chunks},
+                                          {"triangles", s.triangles},
+                                          {"vertices", s.vertices},
+                                          {"rawBytes", s.rawBytes},
+                                          {"compressedBytes", s.compressedBytes},
+                                          {"times", {{"loadMs", loadMs}, {"writeMs", writeMs}}}});
     return 0;
 }
 
@@ -159,7 +153,7 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
                     o.out.string().c_str());
     if (!o.statsPath.empty()) {
         const double seconds = totalMs / 1000.0;
-        writeJson(o.statsPath,
+        writeJsonAtomically(o.statsPath,
                   {{"input", o.input.string()},
                    {"resolution", o.resolution},
                    {"separability", voxel::separabilityName(vo.separability)},
@@ -233,14 +227,14 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
                     (unsigned long long)s.blocksSkipped, (unsigned long long)s.blocks, nowMs() - t0, readMs,
                     s.extractMs, writeMs, o.out.string().c_str());
     if (!o.statsPath.empty())
-        writeJson(o.statsPath, {{"input", o.volume.string()},
-                                {"samples", s.samples},
-                                {"voxels", s.voxels},
-                                {"blocks", s.blocks},
-                                {"blocksSkipped", s.blocksSkipped},
-                                {"lod", pyramidJson(ps)},
-                                {"peakResidentMib", peakResidentMib()},
-                                {"times", {{"readMs", readMs}, {"extractMs", s.extractMs}, {"writeMs", writeMs}}}});
+        writeJsonAtomically(o.statsPath, {{"input", o.volume.string()},
+                                          {"samples", s.samples},
+                                          {"voxels", s.voxels},
+                                          {"blocks", s.blocks},
+                                          {"blocksSkipped", s.blocksSkipped},
+                                          {"lod", pyramidJson(ps)},
+                                          {"peakResidentMib", peakResidentMib()},
+                                          {"times", {{"readMs", readMs}, {"extractMs", s.extractMs}, {"writeMs", writeMs}}}});
     return 0;
 }
 
