@@ -1,12 +1,12 @@
 #include "apps/render_command.h"
 
-#include <chrono>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 
+#include "raster/clock.h"
 #include "apps/atomic_file.h"
 #include "apps/image_io.h"
 #include "raster/parallel.h"
@@ -20,11 +20,6 @@
 
 namespace cuberille::apps {
 namespace {
-
-double nowMs() {
-    using namespace std::chrono;
-    return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
-}
 
 void validate(const RenderOptions& o) {
     using scene::InputError;
@@ -53,7 +48,7 @@ raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) 
 
 // Resolves only what the view shows: the colour resolve runs for color and tiles alone.
 void finishView(const raster::Pipeline& p, View view, raster::Image& image, double& resolveMs) {
-    const double t0 = nowMs();
+    const double t0 = raster::nowMs();
     switch (view) {
         case View::Color:
         case View::Lod:
@@ -67,7 +62,7 @@ void finishView(const raster::Pipeline& p, View view, raster::Image& image, doub
             break;
         }
     }
-    resolveMs = nowMs() - t0;
+    resolveMs = raster::nowMs() - t0;
 }
 
 const char* viewName(View v) {
@@ -146,9 +141,9 @@ std::filesystem::path frameFileName(const std::filesystem::path& out, int frame)
 
 /// A voxel model: blocks selected, expanded and drawn through the same pipeline.
 void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
-    const double t0 = nowMs();
+    const double t0 = raster::nowMs();
     lod::VoxelScene s(voxel::readCvox(o.scene), o.azimuth, o.elevation);
-    result.loadMs = nowMs() - t0;
+    result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.model().triangleCount();
     lod::VoxelRenderOptions vo;
     vo.selection.pixelError = o.pixelError;
@@ -187,16 +182,16 @@ RenderResult renderScene(const RenderOptions& o) {
         renderVoxelModel(o, result);
         return result;
     }
-    const double t0 = nowMs();
+    const double t0 = raster::nowMs();
     if (!isTriFile(o)) {
         const scene::Scene s = load3dScene(o);
-        result.loadMs = nowMs() - t0;
+        result.loadMs = raster::nowMs() - t0;
         result.load = s.loadStats;
         renderFrame(s, o, result);
         return result;
     }
     const scene::TriScene s = scene::loadTriScene(o.scene);
-    result.loadMs = nowMs() - t0;
+    result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.triangleCount();
     renderFrame(o, glm::vec4(0.0f), [&](raster::Pipeline& p) { p.draw(s.drawCall()); }, result);
     return result;
@@ -307,9 +302,9 @@ int runTurntable(const RenderOptions& o) {
     if (o.turntable > 3600) throw scene::InputError("--turntable: at most 3600 frames");
     validate(o);
     raster::ThreadLimit threadLimit(o.threads);
-    const double t0 = nowMs();
+    const double t0 = raster::nowMs();
     scene::Scene s = load3dScene(o);
-    const double loadMs = nowMs() - t0;
+    const double loadMs = raster::nowMs() - t0;
     const scene::Camera start = s.camera;
     nlohmann::json frames = nlohmann::json::array();
     for (int i = 0; i < o.turntable; ++i) {

@@ -3,11 +3,11 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdio>
 
 #include <nlohmann/json.hpp>
 
+#include "raster/clock.h"
 #include "apps/atomic_file.h"
 #include "raster/parallel.h"
 #include "scene/file_names.h"
@@ -18,10 +18,6 @@
 
 namespace cuberille::apps {
 namespace {
-
-double nowMs() {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 double peakResidentMib() {
     rusage u{};
@@ -42,7 +38,7 @@ void warnToStderr(const std::string& message) { std::fprintf(stderr, "cuberille:
 std::function<void(size_t, size_t)> terminalProgress(const char* what, const char* unit, bool quiet) {
     if (quiet || !::isatty(STDERR_FILENO)) return {};
     return [what, unit, last = 0.0](size_t done, size_t total) mutable {
-        const double now = nowMs();
+        const double now = raster::nowMs();
         if (done != total && now - last < 100.0) return;
         last = now;
         std::fprintf(stderr, "\r%s: %zu/%zu %s%s", what, done, total, unit, done == total ? "\n" : "");
@@ -66,7 +62,7 @@ nlohmann::json pyramidJson(const lod::PyramidStats& p) {
 
 void writeModelFiles(const voxel::VoxelModel& model, const std::filesystem::path& out,
                      const std::filesystem::path& exportPath, double& writeMs) {
-    const double t0 = nowMs();
+    const double t0 = raster::nowMs();
     // Both files are complete before either is renamed into place.
     AtomicOutputFile cvox(out);
     voxel::writeCvox(model, cvox.stream());
@@ -77,7 +73,7 @@ void writeModelFiles(const voxel::VoxelModel& model, const std::filesystem::path
     }
     cvox.commit();
     if (text) text->commit();
-    writeMs = nowMs() - t0;
+    writeMs = raster::nowMs() - t0;
 }
 
 }  // namespace
@@ -92,15 +88,15 @@ voxel::Separability parseSeparability(const std::string& name) {
 int runPackCommand(const PackOptions& o) {
     requireExtension(o.out, ".cgs", "the geometry stream");
     if (o.chunkTriangles == 0) throw scene::InputError("--chunk-triangles must be at least 1");
-    const double t0 = nowMs();
+    const double t0 = raster::nowMs();
     // A geometry stream is re-written with its own chunks; other files are cut at the asked size.
     const std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr, o.chunkTriangles);
-    const double loadMs = nowMs() - t0;
-    const double w0 = nowMs();
+    const double loadMs = raster::nowMs() - t0;
+    const double w0 = raster::nowMs();
     AtomicOutputFile out(o.out);
     const voxel::GeometryStreamWriteStats s = voxel::writeGeometryStream(*view, out.stream());
     out.commit();
-    const double writeMs = nowMs() - w0;
+    const double writeMs = raster::nowMs() - w0;
     if (!o.quiet)
         std::printf("packed %s: %llu triangles, %llu vertices in %llu chunks, %.1f MiB (LZ4 %.2fx) -> %s\n",
                     o.input.string().c_str(), (unsigned long long)s.triangles, (unsigned long long)s.vertices,
@@ -132,16 +128,16 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
     po.maxLevels = o.levels;
     raster::ThreadLimit threadLimit(o.threads);
 
-    const double t0 = nowMs();
+    const double t0 = raster::nowMs();
     const std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr);
-    const double openMs = nowMs() - t0;
+    const double openMs = raster::nowMs() - t0;
     voxel::VoxelizeStats s;
     voxel::VoxelModel model = voxel::voxelizeMesh(*view, vo, &s);
     lod::PyramidStats ps;
     lod::buildLodPyramid(model, po, &ps);
     double writeMs = 0;
     writeModelFiles(model, o.out, o.exportVoxels, writeMs);
-    const double totalMs = nowMs() - t0;
+    const double totalMs = raster::nowMs() - t0;
 
     if (!o.quiet)
         std::printf("voxelized %s at %u^3 (%s): %llu triangles -> %llu voxels in %llu blocks, %.0f ms "
@@ -201,7 +197,7 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
     else throw scene::InputError("--normals " + o.normals + ": expected regression or central");
     raster::ThreadLimit threadLimit(o.threads);
 
-    const double t0 = nowMs();
+    const double t0 = raster::nowMs();
     const uint64_t expected = uint64_t(d.dims.x) * d.dims.y * d.dims.z * voxel::sampleBytes(d.type);
     std::error_code ec;
     const uintmax_t size = std::filesystem::file_size(o.volume, ec);
@@ -211,7 +207,7 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
                                 "x" + std::to_string(d.dims.y) + "x" + std::to_string(d.dims.z) + " " + o.type +
                                 " samples need " + std::to_string(expected) + (size < expected ? " (truncated)" : ""));
     const std::string bytes = scene::readFileBytes(o.volume);
-    const double readMs = nowMs() - t0;
+    const double readMs = raster::nowMs() - t0;
     voxel::IsosurfaceStats s;
     voxel::VoxelModel model = voxel::extractIsosurface(bytes, d, io, &s);
     lod::PyramidOptions po;
@@ -224,7 +220,7 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
         std::printf("isosurface of %s at %g: %llu voxels in %zu blocks (%llu of %llu blocks skipped), %.0f ms "
                     "(read %.0f, extract %.0f, write %.0f) -> %s\n",
                     o.volume.string().c_str(), o.iso, (unsigned long long)s.voxels, model.blocks.size(),
-                    (unsigned long long)s.blocksSkipped, (unsigned long long)s.blocks, nowMs() - t0, readMs,
+                    (unsigned long long)s.blocksSkipped, (unsigned long long)s.blocks, raster::nowMs() - t0, readMs,
                     s.extractMs, writeMs, o.out.string().c_str());
     if (!o.statsPath.empty())
         writeJsonAtomically(o.statsPath, {{"input", o.volume.string()},

@@ -11,7 +11,6 @@
 //             [--pixel-error 1]
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -21,6 +20,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "raster/clock.h"
 #include "bench/llvmpipe_peer.h"
 #include "bench/procedural_meshes.h"
 #include "lod/lod_pyramid.h"
@@ -35,10 +35,6 @@ namespace {
 
 using namespace cuberille;
 namespace fs = std::filesystem;
-
-double nowMs() {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -90,12 +86,12 @@ Frame timedFrames(int width, int height, int msaa, glm::vec4 background, int fra
         raster::Pipeline p;
         raster::FramebufferDesc d;
         d.widthPixels = width, d.heightPixels = height, d.samples = msaa, d.clearColor = background;
-        const double t0 = nowMs();
+        const double t0 = raster::nowMs();
         p.beginFrame(d);
         submit(p);
         p.endFrame();
         raster::resolveColor(p.framebuffer(), f.image);
-        times.push_back(nowMs() - t0);
+        times.push_back(raster::nowMs() - t0);
         submit.after(p);
     }
     f.ms = median(times);

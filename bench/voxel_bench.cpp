@@ -12,7 +12,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,6 +25,7 @@
 #include <openvdb/tools/MeshToVolume.h>
 #include <tbb/global_control.h>
 
+#include "raster/clock.h"
 #include "bench/procedural_meshes.h"
 #include "raster/parallel.h"
 #include "voxel/cvox_file.h"
@@ -36,10 +36,6 @@ namespace {
 
 using namespace cuberille;
 namespace fs = std::filesystem;
-
-double nowMs() {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 /// What a child reports back through its pipe.
 struct RunResult {
@@ -85,20 +81,20 @@ fs::path modelPath(const std::string& name) {
 RunResult runOurs(const fs::path& cgs, uint32_t resolution, int threads, const fs::path& out) {
     return inChild([&] {
         raster::ThreadLimit limit(threads);
-        const double t0 = nowMs();
+        const double t0 = raster::nowMs();
         const auto view = voxel::openMeshView(cgs, nullptr);
         voxel::VoxelizeOptions o;
         o.resolution = resolution;
         voxel::VoxelizeStats s;
         const voxel::VoxelModel model = voxel::voxelizeMesh(*view, o, &s);
-        const double w0 = nowMs();
+        const double w0 = raster::nowMs();
         {
             std::ofstream f(out, std::ios::binary);
             voxel::writeCvox(model, f);
         }
         RunResult r;
-        r.writeMs = nowMs() - w0;
-        r.totalMs = nowMs() - t0;
+        r.writeMs = raster::nowMs() - w0;
+        r.totalMs = raster::nowMs() - t0;
         r.readMs = s.readMs;
         r.rasterizeMs = s.rasterizeMs;
         r.mergeMs = s.mergeMs;
@@ -126,11 +122,11 @@ RunResult runOpenVdb(const voxel::MeshView& view, uint32_t resolution, int threa
         }
         const voxel::VoxelGrid grid = voxel::gridFor(view, resolution);
         const auto transform = openvdb::math::Transform::createLinearTransform(grid.voxelSize());
-        const double t0 = nowMs();
+        const double t0 = raster::nowMs();
         const openvdb::FloatGrid::Ptr levelSet =
             openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
         RunResult r;
-        r.rasterizeMs = r.totalMs = nowMs() - t0;
+        r.rasterizeMs = r.totalMs = raster::nowMs() - t0;
         r.voxels = levelSet->activeVoxelCount();
         r.structureMib = double(levelSet->memUsage()) / (1 << 20);
         return r;

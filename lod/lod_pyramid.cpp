@@ -1,9 +1,9 @@
 #include "lod/lod_pyramid.h"
 
 #include <algorithm>
-#include <chrono>
 
 #include "lod/simplify.h"
+#include "raster/clock.h"
 #include "raster/parallel.h"
 #include "voxel/morton.h"
 
@@ -73,7 +73,7 @@ uint32_t pyramidLevels(uint32_t resolution, uint32_t blockSize) {
 }
 
 void buildLodPyramid(voxel::VoxelModel& model, const PyramidOptions& options, PyramidStats* statsOut) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const double t0 = raster::nowMs();
     PyramidStats stats;
     uint32_t levels = pyramidLevels(model.grid.resolution, model.blockSize);
     if (options.maxLevels > 0) levels = std::min(levels, options.maxLevels);
@@ -99,7 +99,7 @@ void buildLodPyramid(voxel::VoxelModel& model, const PyramidOptions& options, Py
     raster::parallelFor(model.blocks.size(), [&](size_t i) { skirts[i] = addSkirts(model.blocks[i], model.blockSize); });
     for (uint64_t s : skirts) stats.skirtFaces += s;
     stats.levels = levels;
-    stats.simplifyMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    stats.simplifyMs = raster::nowMs() - t0;
     if (statsOut) *statsOut = stats;
 }
 

@@ -1,21 +1,14 @@
 #include "lod/voxel_scene.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 
+#include "raster/clock.h"
 #include "raster/parallel.h"
 #include "voxel/packing.h"
 
 namespace cuberille::lod {
-namespace {
-
-double nowMs() {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-}  // namespace
 
 glm::vec3 levelColor(uint32_t level) {
     static const glm::vec3 palette[8] = {{0.9f, 0.2f, 0.2f}, {0.95f, 0.6f, 0.1f}, {0.9f, 0.9f, 0.2f}, {0.3f, 0.85f, 0.3f},
@@ -68,19 +61,19 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     so.verticalFovRadians = glm::radians(camera.verticalFovDegrees);
     so.orthographic = camera.orthographic;
     so.orthographicHalfHeight = camera.orthographicHalfHeight;
-    double t0 = nowMs();
+    double t0 = raster::nowMs();
     BlockSelection selection =
         selectBlocks(model_, glm::dmat4(camera.clipFromWorld(aspect)), glm::dvec3(camera.position), so);
     slotBlocks_.clear();
     slotCovers_.clear();
     tests_.clear();
     if (o.occlusion) planOcclusion(selection.voxelBlocks, stats);
-    stats.selectMs = nowMs() - t0;
+    stats.selectMs = raster::nowMs() - t0;
     stats.selection = selection.stats;
 
     // Expansion, block by block in parallel; each block's geometry is its own, so the draws (and
     // the image) do not depend on the thread count.
-    t0 = nowMs();
+    t0 = raster::nowMs();
     // Drawn blocks first, then the visibility tests (or, seen from a debug camera, none), then in
     // the visibility view the occlusion-culled blocks themselves: all expand the same way.
     enum Role : uint8_t { kDraw, kTest, kShowCulled, kShowOutside };
@@ -119,7 +112,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
                 m.colors.push_back(o.coloring == BlockColoring::Model ? voxel::unpackSrgba8Rgb(t.color[v]) : tint);
             }
     });
-    stats.expandMs = nowMs() - t0;
+    stats.expandMs = raster::nowMs() - t0;
 
     auto submit = [&](std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
                       std::span<const glm::vec3> colors, std::span<const uint32_t> indices, int slot, bool testOnly) {

@@ -1,20 +1,15 @@
 #include "raster/pipeline.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
+#include "raster/clock.h"
 #include "raster/clip.h"
 #include "raster/parallel.h"
 #include "raster/setup.h"
 
 namespace cuberille::raster {
 namespace {
-
-double nowMs() {
-    using namespace std::chrono;
-    return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
-}
 
 struct TriangleInput {
     const VertexStageOutput& vertices;

@@ -1,11 +1,11 @@
 #include "voxel/isosurface.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
 
+#include "raster/clock.h"
 #include "raster/parallel.h"
 #include "voxel/morton.h"
 #include "voxel/packing.h"
@@ -95,7 +95,7 @@ VoxelModel extractIsosurface(std::string_view samples, const VolumeDesc& d, cons
     const uint64_t count = uint64_t(d.dims.x) * d.dims.y * d.dims.z;
     if (count == 0 || samples.size() != count * sampleBytes(d.type))
         throw std::invalid_argument("volume size does not match its dimensions");
-    const auto t0 = std::chrono::steady_clock::now();
+    const double t0 = raster::nowMs();
     uint32_t resolution = kMinResolution;
     while (resolution < std::max({d.dims.x, d.dims.y, d.dims.z})) resolution *= 2;
     if (resolution > kMaxResolution) throw std::invalid_argument("volume larger than the largest grid (65536)");
@@ -171,7 +171,7 @@ VoxelModel extractIsosurface(std::string_view samples, const VolumeDesc& d, cons
         if (!out[i].voxels.empty()) model.blocks.push_back(std::move(out[i]));
     }
     stats.voxels = model.voxelCount();
-    stats.extractMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    stats.extractMs = raster::nowMs() - t0;
     if (statsOut) *statsOut = stats;
     return model;
 }

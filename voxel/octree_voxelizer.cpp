@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <numeric>
@@ -11,6 +10,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include "raster/clock.h"
 #include "raster/parallel.h"
 #include "voxel/exact_overlap.h"
 #include "voxel/intersection_targets.h"
@@ -20,10 +20,6 @@
 
 namespace cuberille::voxel {
 namespace {
-
-double nowMs() {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 /// What a leaf needs of the triangle a piece came from.
 struct TriangleContext {
@@ -419,13 +415,13 @@ VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, Vo
     tbb::enumerable_thread_specific<std::unique_ptr<TreeBuilder>> builders;
     std::atomic<size_t> done{0};
     std::mutex progressMutex;
-    double t0 = nowMs();
+    double t0 = raster::nowMs();
     raster::parallelFor(mesh.chunkCount(), [&](size_t chunk) {
         std::unique_ptr<TreeBuilder>& b = builders.local();
         if (!b) b = std::make_unique<TreeBuilder>(model.grid, options, model.hasColors);
-        const double r0 = nowMs();
+        const double r0 = raster::nowMs();
         const GeometryChunk c = mesh.readChunk(chunk);
-        b->readMs += nowMs() - r0;
+        b->readMs += raster::nowMs() - r0;
         b->insertChunk(c, firstTriangle[chunk]);
         const size_t n = ++done;
         if (options.progress) {
@@ -433,9 +429,9 @@ VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, Vo
             options.progress(n, mesh.chunkCount());
         }
     });
-    stats.rasterizeMs = nowMs() - t0;
+    stats.rasterizeMs = raster::nowMs() - t0;
 
-    t0 = nowMs();
+    t0 = raster::nowMs();
     std::vector<TreeBuilder*> trees;
     for (auto& b : builders)
         if (b) trees.push_back(b.get());
@@ -449,16 +445,16 @@ VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, Vo
         triangles.push_back(&b->blockTriangles());
     }
     // The trees are merged block by block while emitting (BlockEmitter), not here.
-    stats.mergeMs = nowMs() - t0;
+    stats.mergeMs = raster::nowMs() - t0;
 
-    t0 = nowMs();
+    t0 = raster::nowMs();
     if (!trees.empty()) {
         std::vector<const VoxelOctree*> octrees;
         for (TreeBuilder* b : trees) octrees.push_back(&b->tree());
         BlockEmitter(std::move(octrees), options, std::move(triangles), model, stats).run();
     }
     stats.blocks = model.blocks.size();
-    stats.emitMs = nowMs() - t0;
+    stats.emitMs = raster::nowMs() - t0;
     if (statsOut) *statsOut = stats;
     return model;
 }
