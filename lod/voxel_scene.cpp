@@ -64,7 +64,6 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     double t0 = raster::nowMs();
     BlockSelection selection =
         selectBlocks(model_, glm::dmat4(camera.clipFromWorld(aspect)), glm::dvec3(camera.position), so);
-    slotBlocks_.clear();
     slotCovers_.clear();
     tests_.clear();
     if (o.occlusion) planOcclusion(selection.voxelBlocks, stats);
@@ -164,21 +163,16 @@ void VoxelScene::planOcclusion(std::vector<uint32_t>& voxelBlocks, VoxelFrameSta
         else drawn.push_back(i);
     }
     stats.occlusionCulled = voxelBlocks.size() - drawn.size();
-    for (uint32_t i : drawn) {
-        slotBlocks_.push_back(i);
-        slotCovers_.push_back({i});
-    }
+    for (uint32_t i : drawn) slotCovers_.push_back({i});
     for (auto& [parent, hidden] : hiddenByParent) {
         // Every selected block under the parent was hidden: the parent's faces bound them all.
         if (parent != hidden.front() && int(hidden.size()) == selectedUnderParent[parent]) {
             tests_.push_back(parent);
-            slotBlocks_.push_back(parent);
             slotCovers_.push_back(hidden);
             continue;
         }
         for (uint32_t i : hidden) {
             tests_.push_back(i);
-            slotBlocks_.push_back(i);
             slotCovers_.push_back({i});
         }
     }

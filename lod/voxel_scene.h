@@ -78,7 +78,6 @@ private:
     voxel::VoxelModel model_;
     std::vector<uint32_t> parent_;           // block -> parent block (the root: itself)
     std::vector<uint8_t> visibility_;        // per block, from the last frame
-    std::vector<uint32_t> slotBlocks_;       // this frame: occlusion slot -> block drawn or tested
     std::vector<std::vector<uint32_t>> slotCovers_;  // slot -> selected blocks its result speaks for
     std::vector<uint32_t> tests_;            // this frame's visibility-only blocks (slots follow the drawn ones)
     std::vector<voxel::FaceMesh> faces_;
