@@ -18,10 +18,10 @@ BlockLoader::~BlockLoader() {
     thread_.join();
 }
 
-void BlockLoader::replaceRequests(std::vector<uint32_t> blocks) {
+void BlockLoader::replaceRequests(std::vector<BlockRequest> requests) {
     {
         std::lock_guard<std::mutex> lock(mutex_);
-        queue_.assign(blocks.begin(), blocks.end());
+        queue_.assign(requests.begin(), requests.end());
     }
     wake_.notify_all();
 }
@@ -35,7 +35,7 @@ std::vector<LoadedBlock> BlockLoader::takeCompleted() {
 
 bool BlockLoader::idle() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return queue_.empty() && !reading_;
+    return queue_.empty() && !reading_ && completed_.empty();
 }
 
 uint64_t BlockLoader::bytesRead() const {
@@ -45,21 +45,22 @@ uint64_t BlockLoader::bytesRead() const {
 
 void BlockLoader::run() {
     for (;;) {
-        uint32_t block = 0;
+        BlockRequest request;
         {
             std::unique_lock<std::mutex> lock(mutex_);
             wake_.wait(lock, [&] { return stop_ || !queue_.empty(); });
             if (stop_) return;
-            block = queue_.front();
+            request = queue_.front();
             queue_.pop_front();
             reading_ = true;
         }
         const auto t0 = std::chrono::steady_clock::now();
         LoadedBlock r;
-        r.block = block;
+        r.block = request.block;
+        r.parts = request.parts;
         try {
-            r.data = reader_.load(block);
-            r.bytes = r.data->voxels.size() * 12 + r.data->triangles.size() * sizeof(voxel::SourceTriangle);
+            r.data = reader_.load(request.block, request.parts);
+            r.bytes = reader_.partBytes(request.block, request.parts);
         } catch (const scene::InputError& e) {
             r.error = e.what();
         }

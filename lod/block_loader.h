@@ -15,12 +15,14 @@
 #include <thread>
 #include <vector>
 
+#include "lod/block_source.h"
 #include "voxel/cvox_file.h"
 
 namespace cuberille::lod {
 
 struct LoadedBlock {
     uint32_t block = 0;
+    BlockParts parts = BlockParts::kAllParts;
     std::optional<voxel::VoxelBlock> data;  // empty when the read failed
     std::string error;                      // why, naming the file and place
     uint64_t bytes = 0;                     // read from the file
@@ -35,10 +37,10 @@ public:
     BlockLoader& operator=(const BlockLoader&) = delete;
 
     /// This frame's requests, most important first; queued requests not among them are dropped.
-    void replaceRequests(std::vector<uint32_t> blocks);
+    void replaceRequests(std::vector<BlockRequest> requests);
     /// Everything read since the last call, in the order it was read.
     std::vector<LoadedBlock> takeCompleted();
-    /// True when nothing is queued or being read.
+    /// True when nothing is queued, being read, or read and not yet taken.
     bool idle() const;
     uint64_t bytesRead() const;
 
@@ -49,7 +51,7 @@ private:
     double throttleBytesPerSecond_;
     mutable std::mutex mutex_;
     std::condition_variable wake_;
-    std::deque<uint32_t> queue_;
+    std::deque<BlockRequest> queue_;
     std::vector<LoadedBlock> completed_;
     bool reading_ = false, stop_ = false;
     uint64_t bytesRead_ = 0;

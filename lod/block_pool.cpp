@@ -7,7 +7,9 @@
 namespace cuberille::lod {
 
 BlockPool::BlockPool(uint64_t capacityBytes, double highWaterMark)
-    : memory_(capacityBytes), highWaterBytes_(uint64_t(double(capacityBytes) * std::clamp(highWaterMark, 0.0, 1.0))) {}
+    : memory_(new std::byte[capacityBytes]),
+      capacityBytes_(capacityBytes),
+      highWaterBytes_(uint64_t(double(capacityBytes) * std::clamp(highWaterMark, 0.0, 1.0))) {}
 
 std::optional<std::span<std::byte>> BlockPool::allocate(uint32_t block, uint64_t bytes) {
     if (entries_.count(block)) throw std::logic_error("BlockPool::allocate: block already in the pool");
@@ -25,7 +27,7 @@ std::optional<std::span<std::byte>> BlockPool::allocate(uint32_t block, uint64_t
     stats_.topBytes += bytes;
     stats_.residentBytes += bytes;
     ++stats_.allocations;
-    return std::span<std::byte>(memory_.data() + e.offset, bytes);
+    return std::span<std::byte>(memory_.get() + e.offset, bytes);
 }
 
 void BlockPool::release(uint32_t block) {
@@ -67,6 +69,13 @@ bool BlockPool::isResident(uint32_t block) const {
     return it != entries_.end() && it->second.resident;
 }
 
+std::vector<uint32_t> BlockPool::residentBlocks() const {
+    std::vector<uint32_t> out;
+    for (const auto& [id, e] : entries_)
+        if (e.resident) out.push_back(id);
+    return out;
+}
+
 bool BlockPool::isOnFreeList(uint32_t block) const {
     const auto it = entries_.find(block);
     return it != entries_.end() && !it->second.resident;
@@ -74,12 +83,12 @@ bool BlockPool::isOnFreeList(uint32_t block) const {
 
 std::span<std::byte> BlockPool::data(uint32_t block) {
     const Entry& e = entries_.at(block);
-    return {memory_.data() + e.offset, e.bytes};
+    return {memory_.get() + e.offset, e.bytes};
 }
 
 std::span<const std::byte> BlockPool::data(uint32_t block) const {
     const Entry& e = entries_.at(block);
-    return {memory_.data() + e.offset, e.bytes};
+    return {memory_.get() + e.offset, e.bytes};
 }
 
 void BlockPool::evictOldest() {
@@ -99,7 +108,7 @@ void BlockPool::defragment() {
     uint64_t top = 0;
     for (Entry* e : order) {
         if (e->offset != top) {
-            std::memmove(memory_.data() + top, memory_.data() + e->offset, e->bytes);
+            std::memmove(memory_.get() + top, memory_.get() + e->offset, e->bytes);
             stats_.bytesMoved += e->bytes;
             e->offset = top;
         }

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -29,7 +30,7 @@ class BlockPool {
 public:
     explicit BlockPool(uint64_t capacityBytes, double highWaterMark = 0.95);
 
-    uint64_t capacityBytes() const { return memory_.size(); }
+    uint64_t capacityBytes() const { return capacityBytes_; }
 
     /// Space for a block not in the pool: its bytes (to be filled by the caller), or nullopt when
     /// even after evicting every free-list block and defragmenting it cannot fit beside the
@@ -44,6 +45,8 @@ public:
     void discard(uint32_t block);
 
     bool isResident(uint32_t block) const;
+    /// The resident blocks, in id order.
+    std::vector<uint32_t> residentBlocks() const;
     bool isOnFreeList(uint32_t block) const;
     std::span<std::byte> data(uint32_t block);
     std::span<const std::byte> data(uint32_t block) const;
@@ -60,7 +63,8 @@ private:
     void evictOldest();
     void defragment();
 
-    std::vector<std::byte> memory_;
+    std::unique_ptr<std::byte[]> memory_;  // not zeroed: pages are touched only as blocks arrive
+    uint64_t capacityBytes_;
     uint64_t highWaterBytes_;
     std::map<uint32_t, Entry> entries_;
     std::map<uint64_t, uint32_t> freeList_;  // release counter -> block: the oldest first

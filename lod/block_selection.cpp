@@ -40,7 +40,7 @@ void blockBounds(const voxel::VoxelModel& model, const voxel::VoxelBlock& block,
     const voxel::VoxelBoxes boxes(model, block);
     lo = boxes.lowCorner(block.tightMin);
     hi = boxes.lowCorner(block.tightMax) + boxes.voxelSize;
-    if (block.voxels.empty()) {  // triangles only: the whole block cell
+    if (!block.hasVoxels()) {  // triangles only: the whole block cell
         lo = boxes.lowCorner(glm::uvec3(0));
         hi = boxes.lowCorner(glm::uvec3(model.blockSize));
     }
@@ -82,12 +82,12 @@ BlockSelection selectBlocks(const voxel::VoxelModel& model, const glm::dmat4& cl
             for (int k = __builtin_popcount(b.childMask); k-- > 0;) stack.push_back(b.firstChild + uint32_t(k));
             continue;
         }
-        if (tooCoarse && o.hybrid && !b.triangles.empty()) {
+        if (tooCoarse && o.hybrid && b.hasTriangles()) {
             s.triangleBlocks.push_back(i);
             ++s.stats.hybridBlocks;
             continue;
         }
-        if (!b.voxels.empty()) {
+        if (b.hasVoxels()) {
             s.voxelBlocks.push_back(i);
             ++s.stats.drawnPerLevel[b.level];
         }

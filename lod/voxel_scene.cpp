@@ -29,23 +29,33 @@ scene::Camera debugCameraFor(const scene::Camera& main) {
     return c;
 }
 
-VoxelScene::VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elevationDegrees) : model_(std::move(model)) {
+VoxelScene::VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elevationDegrees)
+    : owned_(std::make_unique<ModelBlocks>(std::move(model))), source_(owned_.get()) {
+    initialise(azimuthDegrees, elevationDegrees);
+}
+
+VoxelScene::VoxelScene(BlockSource& source, float azimuthDegrees, float elevationDegrees) : source_(&source) {
+    initialise(azimuthDegrees, elevationDegrees);
+}
+
+void VoxelScene::initialise(float azimuthDegrees, float elevationDegrees) {
+    const voxel::VoxelModel& model = source_->layout();
     glm::dvec3 lo(1e300), hi(-1e300);
-    for (const voxel::VoxelBlock& b : model_.blocks) {
+    for (const voxel::VoxelBlock& b : model.blocks) {
         glm::dvec3 blo, bhi;
-        blockBounds(model_, b, blo, bhi);
+        blockBounds(model, b, blo, bhi);
         lo = glm::min(lo, blo);
         hi = glm::max(hi, bhi);
     }
-    if (model_.blocks.empty()) lo = model_.grid.origin, hi = model_.grid.origin + model_.grid.extent;
+    if (model.blocks.empty()) lo = model.grid.origin, hi = model.grid.origin + model.grid.extent;
     camera = scene::frameBounds(glm::vec3(lo), glm::vec3(hi), azimuthDegrees, elevationDegrees);
-    parent_.resize(model_.blocks.size());
-    for (uint32_t i = 0; i < model_.blocks.size(); ++i) parent_[i] = i;
-    for (uint32_t i = 0; i < model_.blocks.size(); ++i) {
-        const voxel::VoxelBlock& b = model_.blocks[i];
+    parent_.resize(model.blocks.size());
+    for (uint32_t i = 0; i < model.blocks.size(); ++i) parent_[i] = i;
+    for (uint32_t i = 0; i < model.blocks.size(); ++i) {
+        const voxel::VoxelBlock& b = model.blocks[i];
         for (int k = 0; k < __builtin_popcount(b.childMask); ++k) parent_[b.firstChild + uint32_t(k)] = i;
     }
-    visibility_.assign(model_.blocks.size(), kUnknown);
+    visibility_.assign(model.blocks.size(), kUnknown);
     const glm::vec3 toCamera = glm::normalize(camera.position - camera.target);
     lighting = raster::Lighting::directional(glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f)), glm::vec3(0.85f),
                                              glm::vec3(0.12f));
@@ -53,6 +63,8 @@ VoxelScene::VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elev
 
 VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int height, const VoxelRenderOptions& o) {
     VoxelFrameStats stats;
+    BlockSource& source = *source_;
+    const voxel::VoxelModel& model = source.layout();
     const float aspect = float(width) / float(height);
     const scene::Camera& eye = o.viewFrom ? *o.viewFrom : camera;  // where the frame is seen from
     const glm::mat4 clipFromWorld = eye.clipFromWorld(aspect);
@@ -63,10 +75,37 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     so.orthographicHalfHeight = camera.orthographicHalfHeight;
     double t0 = raster::nowMs();
     BlockSelection selection =
-        selectBlocks(model_, glm::dmat4(camera.clipFromWorld(aspect)), glm::dvec3(camera.position), so);
+        selectBlocks(model, glm::dmat4(camera.clipFromWorld(aspect)), glm::dvec3(camera.position), so);
+    source.beginFrame();
+    missing_.clear();
+    // Source triangles not resident yet: the block's voxels show meanwhile.
+    std::vector<uint32_t> triangleBlocks;
+    for (uint32_t t : selection.triangleBlocks) {
+        if (source.acquire(t, BlockParts::kTriangles)) {
+            triangleBlocks.push_back(t);
+            continue;
+        }
+        if (!source.failed(t)) missing_.push_back({0, missing_.size(), {t, BlockParts::kTriangles}});
+        selection.voxelBlocks.push_back(t);
+    }
     slotCovers_.clear();
     tests_.clear();
     if (o.occlusion) planOcclusion(selection.voxelBlocks, stats);
+    std::vector<VoxelDraw> draws;
+    for (uint32_t b : selection.voxelBlocks) resolve(b, o.refine, draws, slotCovers_, stats);
+    // Visibility tests need their block's voxels; a test that cannot be drawn turns back into
+    // draws of the blocks it answers for.
+    std::vector<VoxelDraw> testDraws;
+    std::vector<std::vector<uint32_t>> testCovers;
+    for (VisibilityTest& t : tests_) {
+        if (source.acquire(t.block, BlockParts::kVoxels)) {
+            testDraws.push_back({t.block, false, {}});
+            testCovers.push_back(std::move(t.covers));
+        } else {
+            for (uint32_t b : t.covers) resolve(b, o.refine, draws, slotCovers_, stats);
+        }
+    }
+    slotCovers_.insert(slotCovers_.end(), testCovers.begin(), testCovers.end());
     stats.selectMs = raster::nowMs() - t0;
     stats.selection = selection.stats;
 
@@ -76,41 +115,38 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     // Drawn blocks first, then the visibility tests (or, seen from a debug camera, none), then in
     // the visibility view the occlusion-culled blocks themselves: all expand the same way.
     enum Role : uint8_t { kDraw, kTest, kShowCulled, kShowOutside };
-    std::vector<uint32_t> expand = selection.voxelBlocks;
+    std::vector<VoxelDraw> expand = draws;
     std::vector<uint8_t> roles(expand.size(), kDraw);
     if (!o.viewFrom)
-        for (uint32_t t : tests_) expand.push_back(t), roles.push_back(kTest);
+        for (const VoxelDraw& t : testDraws) expand.push_back(t), roles.push_back(kTest);
     if (o.coloring == BlockColoring::Visibility) {
-        for (size_t slot = selection.voxelBlocks.size(); slot < slotCovers_.size(); ++slot)
-            for (uint32_t hidden : slotCovers_[slot]) expand.push_back(hidden), roles.push_back(kShowCulled);
+        for (size_t slot = draws.size(); slot < slotCovers_.size(); ++slot)
+            for (uint32_t hidden : slotCovers_[slot])
+                if (source.acquire(hidden, BlockParts::kVoxels))
+                    expand.push_back({hidden, false, {}}), roles.push_back(kShowCulled);
         if (o.viewFrom)  // from outside, the frustum-culled nodes too (grey)
-            for (uint32_t outside : selection.frustumCulled) expand.push_back(outside), roles.push_back(kShowOutside);
+            for (uint32_t outside : selection.frustumCulled)
+                if (source.acquire(outside, BlockParts::kVoxels))
+                    expand.push_back({outside, false, {}}), roles.push_back(kShowOutside);
     }
     faces_.resize(expand.size());
-    triangles_.resize(selection.triangleBlocks.size());
     raster::parallelFor(expand.size(), [&](size_t k) {
-        const voxel::VoxelBlock& b = model_.blocks[expand[k]];
-        glm::vec3 tint = levelColor(b.level);
+        const VoxelDraw& d = expand[k];
+        const voxel::BlockVoxels voxels = source.voxels(d.block);
+        glm::vec3 tint = levelColor(voxels.level);
         if (o.coloring == BlockColoring::Visibility)
             tint = roles[k] == kShowCulled    ? glm::vec3(0.9f, 0.15f, 0.1f)
                    : roles[k] == kShowOutside ? glm::vec3(0.45f)
                                               : glm::vec3(0.2f, 0.8f, 0.3f);
         faces_[k].clear();
-        voxel::expandVoxelFaces(model_, b, glm::dvec3(eye.position), faces_[k],
-                                o.coloring == BlockColoring::Model ? nullptr : &tint);
+        voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[k],
+                                o.coloring == BlockColoring::Model ? nullptr : &tint, d.standIn ? &d.region : nullptr);
     });
-    raster::parallelFor(selection.triangleBlocks.size(), [&](size_t k) {
-        const voxel::VoxelBlock& b = model_.blocks[selection.triangleBlocks[k]];
-        TriangleMesh& m = triangles_[k];
-        m.positions.clear(), m.normals.clear(), m.colors.clear();
+    triangleTints_.resize(o.coloring == BlockColoring::Model ? 0 : triangleBlocks.size());
+    for (size_t k = 0; k < triangleTints_.size(); ++k) {
         const glm::vec3 tint = o.coloring == BlockColoring::Level ? levelColor(0) * 0.6f : glm::vec3(0.95f, 0.85f, 0.2f);
-        for (const voxel::SourceTriangle& t : b.triangles)
-            for (int v = 0; v < 3; ++v) {
-                m.positions.push_back(t.position[v]);
-                m.normals.push_back(voxel::unpackNormal1010102(t.normal[v]));
-                m.colors.push_back(o.coloring == BlockColoring::Model ? voxel::unpackSrgba8Rgb(t.color[v]) : tint);
-            }
-    });
+        triangleTints_[k].assign(source.triangles(triangleBlocks[k]).positions.size(), tint);
+    }
     stats.expandMs = raster::nowMs() - t0;
 
     auto submit = [&](std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
@@ -135,9 +171,11 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
         }
         pipeline.draw(d);
     };
-    for (const TriangleMesh& m : triangles_) {
-        submit(m.positions, m.normals, m.colors, {}, -1, false);
-        stats.hybridTriangles += m.positions.size() / 3;
+    for (size_t k = 0; k < triangleBlocks.size(); ++k) {
+        const TriangleView t = source.triangles(triangleBlocks[k]);
+        submit(t.positions, t.normals, triangleTints_.empty() ? t.colors : std::span<const glm::vec3>(triangleTints_[k]),
+               t.indices, -1, false);
+        stats.hybridTriangles += t.indices.size() / 3;
         ++stats.triangleBlocksDrawn;
     }
     for (size_t k = 0; k < faces_.size(); ++k) {
@@ -150,7 +188,53 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
         stats.facesEmitted += f.faces;
         ++(roles[k] == kTest ? stats.visibilityTests : stats.voxelBlocksDrawn);
     }
+
+    // The worst-served first: a hole, then the coarsest stand-in; among equals, front to back.
+    std::stable_sort(missing_.begin(), missing_.end(), [](const MissingBlock& a, const MissingBlock& b) {
+        return a.gap != b.gap ? a.gap > b.gap : a.order < b.order;
+    });
+    std::vector<BlockRequest> requests;
+    for (const MissingBlock& m : missing_) requests.push_back(m.request);
+    source.endFrame(std::move(requests));
     return stats;
+}
+
+void VoxelScene::resolve(uint32_t block, Refinement refine, std::vector<VoxelDraw>& draws,
+                         std::vector<std::vector<uint32_t>>& covers, VoxelFrameStats& stats) {
+    BlockSource& source = *source_;
+    const voxel::VoxelModel& model = source.layout();
+    if (source.acquire(block, BlockParts::kVoxels)) {
+        draws.push_back({block, false, {}});
+        covers.push_back({block});
+        return;
+    }
+    ++stats.missingBlocks;
+    const bool failed = source.failed(block);
+    const int levels = int(model.blocks.front().level) + 1;
+    if (refine == Refinement::Partial && !failed) {
+        ++stats.holes;
+        missing_.push_back({levels, missing_.size(), {block, BlockParts::kVoxels}});
+        return;
+    }
+    uint32_t ancestor = block;
+    do ancestor = parent_[ancestor];
+    while (ancestor != 0 && (source.failed(ancestor) || !source.acquire(ancestor, BlockParts::kVoxels)));
+    const voxel::VoxelBlock& b = model.blocks[block];
+    const voxel::VoxelBlock& a = model.blocks[ancestor];
+    if (!failed) missing_.push_back({int(a.level - b.level), missing_.size(), {block, BlockParts::kVoxels}});
+    if (ancestor == block || !source.acquire(ancestor, BlockParts::kVoxels)) {  // nothing resident above
+        ++stats.holes;
+        return;
+    }
+    // The block's cell in the ancestor's voxels (rounded outwards when it is under one voxel).
+    const uint32_t shift = a.level - b.level, size = model.blockSize;
+    const glm::uvec3 cellLo = b.coord * size, cellHi = cellLo + size;
+    VoxelDraw d{ancestor, true, {}};
+    d.region.lo = (cellLo >> shift) - a.coord * size;
+    d.region.hi = ((cellHi + ((1u << shift) - 1u)) >> shift) - a.coord * size;
+    draws.push_back(d);
+    covers.push_back({block});
+    ++stats.standIns;
 }
 
 void VoxelScene::planOcclusion(std::vector<uint32_t>& voxelBlocks, VoxelFrameStats& stats) {
@@ -163,18 +247,13 @@ void VoxelScene::planOcclusion(std::vector<uint32_t>& voxelBlocks, VoxelFrameSta
         else drawn.push_back(i);
     }
     stats.occlusionCulled = voxelBlocks.size() - drawn.size();
-    for (uint32_t i : drawn) slotCovers_.push_back({i});
     for (auto& [parent, hidden] : hiddenByParent) {
         // Every selected block under the parent was hidden: the parent's faces bound them all.
         if (parent != hidden.front() && int(hidden.size()) == selectedUnderParent[parent]) {
-            tests_.push_back(parent);
-            slotCovers_.push_back(hidden);
+            tests_.push_back({parent, hidden});
             continue;
         }
-        for (uint32_t i : hidden) {
-            tests_.push_back(i);
-            slotCovers_.push_back({i});
-        }
+        for (uint32_t i : hidden) tests_.push_back({i, {i}});
     }
     voxelBlocks = std::move(drawn);
 }

@@ -1,12 +1,20 @@
 #pragma once
 // A voxel model as a scene for the rasterizer (Chajdas 2015, chapter 4): each frame selects blocks
-// (lod/block_selection.h), expands the selected blocks' voxels into camera-facing quads
+// (lod/block_selection.h), asks the block source for their data (lod/block_source.h: all in
+// memory, or streamed), expands the selected blocks' voxels into camera-facing quads
 // (voxel/face_expansion.h) and submits one draw per block, source-triangle blocks first, then
 // voxel blocks, each list front to back. Model space is world space.
+//
+// A selected block whose data is not resident is drawn according to the refinement strategy
+// (section 4.6, figures 31 and 32): `Full` lets its nearest resident ancestor stand in, drawing
+// only the ancestor's voxels over the missing block's cell, so the model stays closed; `Partial`
+// leaves a hole until the block arrives. A block that failed to load always gets its stand-in.
 
+#include <memory>
 #include <vector>
 
 #include "lod/block_selection.h"
+#include "lod/block_source.h"
 #include "raster/pipeline.h"
 #include "scene/camera.h"
 #include "voxel/face_expansion.h"
@@ -23,10 +31,14 @@ enum class BlockColoring {
                  // seen from a debug camera, frustum-culled nodes grey
 };
 
+/// What is drawn for a selected block that is not resident (--refine).
+enum class Refinement { Full, Partial };
+
 struct VoxelRenderOptions {
     SelectionOptions selection;
     BlockColoring coloring = BlockColoring::Model;
     bool occlusion = true;  // skip blocks hidden last frame; test them with colour writes off
+    Refinement refine = Refinement::Full;
     /// --debug-camera: select (LOD, frustum, occlusion) for `camera` as usual, but draw what it
     /// selected as seen from this one. No visibility tests are drawn (they would answer for the
     /// wrong view); do not call readOcclusion after such a frame.
@@ -43,6 +55,9 @@ struct VoxelFrameStats {
     uint64_t occlusionCulled = 0;    // selected voxel blocks skipped: hidden in the last frame
     uint64_t visibilityTests = 0;    // blocks drawn with colour writes off to test them
     uint64_t voxelsExpanded = 0, facesEmitted = 0, hybridTriangles = 0;
+    uint64_t missingBlocks = 0;  // selected but not resident (asked for)
+    uint64_t standIns = 0;       // missing blocks an ancestor was drawn for
+    uint64_t holes = 0;          // missing blocks nothing was drawn for (partial refinement)
     double selectMs = 0, expandMs = 0;
 };
 
@@ -52,13 +67,17 @@ glm::vec3 levelColor(uint32_t level);
 class VoxelScene {
 public:
     /// Frames the model from the given angles, lit like a mesh file (a key light above the camera).
+    /// The whole model in memory.
     VoxelScene(voxel::VoxelModel model, float azimuthDegrees, float elevationDegrees);
+    /// Blocks from `source`, which must outlive the scene (a streamed model).
+    VoxelScene(BlockSource& source, float azimuthDegrees, float elevationDegrees);
 
     scene::Camera camera;
     raster::Lighting lighting;
     glm::vec4 background{0.05f, 0.06f, 0.08f, 1.0f};
 
-    const voxel::VoxelModel& model() const { return model_; }
+    /// The model's layout (with its data when it is all in memory).
+    const voxel::VoxelModel& model() const { return source_->layout(); }
 
     /// Records one frame's draws into the pipeline (between its beginFrame and endFrame). The
     /// expanded geometry lives in this object until the next call.
@@ -68,23 +87,45 @@ public:
     void readOcclusion(const raster::PipelineStats& stats);
 
 private:
+    /// A voxel draw: a block's faces, or only those over a missing descendant's cell.
+    struct VoxelDraw {
+        uint32_t block = 0;
+        bool standIn = false;
+        voxel::VoxelRegion region;
+    };
+    /// A selected block as drawn this frame: itself when resident, else per the refinement, its
+    /// nearest resident ancestor over its cell (appended to `draws`) or nothing. Missing blocks are
+    /// added to `missing` with how badly they are missed (the levels between block and stand-in).
+    void resolve(uint32_t block, Refinement refine, std::vector<VoxelDraw>& draws,
+                 std::vector<std::vector<uint32_t>>& covers, VoxelFrameStats& stats);
     /// Occlusion culling (Chajdas 2015, section 4.5): the selected blocks that were hidden in the
     /// last frame are not drawn; after everything visible, each is tested by drawing, with colour
     /// and depth writes off, either itself or, when every selected block under its parent was
     /// hidden, the parent once for all of them (a parent's faces bound its children's).
     void planOcclusion(std::vector<uint32_t>& voxelBlocks, VoxelFrameStats& stats);
+    /// The visibility tests planned, each a block to draw and the selected blocks it answers for.
+    struct VisibilityTest {
+        uint32_t block;
+        std::vector<uint32_t> covers;
+    };
 
     enum Visibility : uint8_t { kUnknown = 0, kVisible = 1, kHidden = 2 };
-    voxel::VoxelModel model_;
+    void initialise(float azimuthDegrees, float elevationDegrees);
+
+    std::unique_ptr<BlockSource> owned_;  // a model in memory
+    BlockSource* source_;
     std::vector<uint32_t> parent_;           // block -> parent block (the root: itself)
     std::vector<uint8_t> visibility_;        // per block, from the last frame
     std::vector<std::vector<uint32_t>> slotCovers_;  // slot -> selected blocks its result speaks for
-    std::vector<uint32_t> tests_;            // this frame's visibility-only blocks (slots follow the drawn ones)
-    std::vector<voxel::FaceMesh> faces_;
-    struct TriangleMesh {
-        std::vector<glm::vec3> positions, normals, colors;
+    std::vector<VisibilityTest> tests_;      // this frame's visibility-only draws (slots follow the drawn ones)
+    struct MissingBlock {
+        int gap;  // levels between the block and what stands in for it (all levels: nothing does)
+        size_t order;
+        BlockRequest request;
     };
-    std::vector<TriangleMesh> triangles_;
+    std::vector<MissingBlock> missing_;
+    std::vector<voxel::FaceMesh> faces_;
+    std::vector<std::vector<glm::vec3>> triangleTints_;  // debug views: one colour per vertex
 };
 
 }  // namespace cuberille::lod

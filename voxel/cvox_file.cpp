@@ -138,6 +138,8 @@ CvoxReader::CvoxReader(const std::filesystem::path& path)
             uint64_t(b.firstChild) + uint64_t(__builtin_popcount(mask)) > blockCount || (mask && b.firstChild <= i))
             e.fail("child mask", "child links outside the block table (corrupt)");
         b.childMask = uint8_t(mask);
+        b.layoutVoxels = d.voxels;
+        b.layoutTriangles = d.triangles;
         voxelSum += d.voxels;
         triangleSum += d.triangles;
     }
@@ -147,10 +149,24 @@ CvoxReader::CvoxReader(const std::filesystem::path& path)
 
 CvoxReader::~CvoxReader() = default;
 
-VoxelBlock CvoxReader::load(size_t i) const {
+uint64_t CvoxReader::partBytes(size_t i, Parts parts) const {
+    const BlockData& d = offsets_.at(i);
+    return ((parts & kVoxels) ? uint64_t(d.voxels) * 12 : 0) +
+           ((parts & kTriangles) ? uint64_t(d.triangles) * kSourceTriangleBytes : 0);
+}
+
+VoxelBlock CvoxReader::load(size_t i, Parts parts) const {
     VoxelBlock b = layout_.blocks[i];
+    b.layoutVoxels = b.layoutTriangles = 0;  // a loaded block's counts are its arrays'
     const BlockData& d = offsets_[i];
     const std::string where = name_ + ": block " + std::to_string(i);
+    if (parts & kTriangles) {
+        b.triangles.resize(d.triangles);
+        if (d.triangles)
+            file_->readAt(d.triangleOffset, reinterpret_cast<char*>(b.triangles.data()),
+                          size_t(d.triangles) * kSourceTriangleBytes, where);
+    }
+    if (!(parts & kVoxels)) return b;
     std::string bytes(size_t(d.voxels) * 12, '\0');
     file_->readAt(d.voxelOffset, bytes.data(), bytes.size(), where);
     ByteReader data(bytes, where, d.voxelOffset);
@@ -165,17 +181,13 @@ VoxelBlock CvoxReader::load(size_t i) const {
         if (p.x >= layout_.blockSize || p.y >= layout_.blockSize || p.z >= layout_.blockSize || (b.voxels[v] >> 30) != 0)
             data.fail("voxels", "voxel " + std::to_string(v) + " lies outside its block (corrupt)");
     }
-    b.triangles.resize(d.triangles);
-    if (d.triangles)
-        file_->readAt(d.triangleOffset, reinterpret_cast<char*>(b.triangles.data()), size_t(d.triangles) * kSourceTriangleBytes,
-               where);
     return b;
 }
 
 VoxelModel readCvox(const std::filesystem::path& path) {
     const CvoxReader reader(path);
     VoxelModel m = reader.layout();
-    for (size_t i = 0; i < m.blocks.size(); ++i) m.blocks[i] = reader.load(i);
+    for (size_t i = 0; i < m.blocks.size(); ++i) m.blocks[i] = reader.load(i);  // counts cleared by load
     return m;
 }
 

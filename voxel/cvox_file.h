@@ -41,7 +41,12 @@ public:
     /// voxel or triangle data.
     const VoxelModel& layout() const { return layout_; }
     size_t blockCount() const { return layout_.blocks.size(); }
-    VoxelBlock load(size_t block) const;
+    /// The parts of a block to read: streaming reads a block's voxels and its source triangles
+    /// when each is needed (lod/streaming_blocks.h).
+    enum Parts : uint8_t { kVoxels = 1, kTriangles = 2, kAllParts = 3 };
+    VoxelBlock load(size_t block, Parts parts = kAllParts) const;
+    /// Bytes a block's parts take in the file (voxels: 12 per voxel; triangles: 60 each).
+    uint64_t partBytes(size_t block, Parts parts) const;
 
 private:
     struct BlockData {

@@ -24,17 +24,33 @@ void faceCorners(const glm::dvec3& lo, const glm::dvec3& hi, int axis, bool posi
     }
 }
 
+/// The faces of a voxel on the sides of a region: the skirt of a stand-in.
+uint8_t regionSideFaces(const glm::uvec3& p, const VoxelRegion& r) {
+    uint8_t faces = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        if (p[axis] + 1 == r.hi[axis]) faces |= uint8_t(1u << (2 * axis));
+        if (p[axis] == r.lo[axis]) faces |= uint8_t(2u << (2 * axis));
+    }
+    return faces;
+}
+
 }  // namespace
 
-void expandVoxelFaces(const VoxelModel& model, const VoxelBlock& block, const glm::dvec3& camera, FaceMesh& out,
-                      const glm::vec3* overrideColor) {
-    const VoxelBoxes boxes(model, block);
+void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& camera, FaceMesh& out,
+                      const glm::vec3* overrideColor, const VoxelRegion* region) {
+    const VoxelBoxes boxes(model, block.level, block.coord);
     for (size_t i = 0; i < block.voxels.size(); ++i) {
         const uint32_t packed = block.voxels[i];
-        const glm::dvec3 lo = boxes.lowCorner(voxelPositionInBlock(packed));
+        const glm::uvec3 position = voxelPositionInBlock(packed);
+        uint8_t mask = voxelFaceMask(packed);
+        if (region) {
+            if (glm::any(glm::lessThan(position, region->lo)) || glm::any(glm::greaterThanEqual(position, region->hi)))
+                continue;
+            mask |= regionSideFaces(position, *region);
+        }
+        const glm::dvec3 lo = boxes.lowCorner(position);
         const glm::dvec3 hi = lo + boxes.voxelSize;
         // Active faces the camera is in front of: at most one per axis.
-        const uint8_t mask = voxelFaceMask(packed);
         uint8_t facing = 0;
         if (camera.x > hi.x) facing |= kFacePosX;
         if (camera.x < lo.x) facing |= kFaceNegX;

@@ -7,6 +7,7 @@
 // across a face (flat attributes, as the paper's geometry shader emits them).
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -28,16 +29,38 @@ struct VoxelBoxes {
     glm::dvec3 blockOrigin;  // model units
     double voxelSize;        // model units, at the block's level
 
-    VoxelBoxes(const VoxelModel& m, const VoxelBlock& b)
-        : voxelSize(m.grid.voxelSize() * double(1u << b.level)) {
-        blockOrigin = m.grid.origin + glm::dvec3(b.coord) * double(m.blockSize) * voxelSize;
+    VoxelBoxes(const VoxelModel& m, uint32_t level, const glm::uvec3& coord)
+        : voxelSize(m.grid.voxelSize() * double(1u << level)) {
+        blockOrigin = m.grid.origin + glm::dvec3(coord) * double(m.blockSize) * voxelSize;
     }
+    VoxelBoxes(const VoxelModel& m, const VoxelBlock& b) : VoxelBoxes(m, b.level, b.coord) {}
     glm::dvec3 lowCorner(const glm::uvec3& local) const { return blockOrigin + glm::dvec3(local) * voxelSize; }
 };
 
-/// Appends the camera-facing active faces of every voxel of the block. overrideColor, when
-/// given, replaces the voxels' colours (debug views).
-void expandVoxelFaces(const VoxelModel& model, const VoxelBlock& block, const glm::dvec3& cameraPosition,
-                      FaceMesh& out, const glm::vec3* overrideColor = nullptr);
+/// A block's voxel arrays wherever they live: in a VoxelBlock, or in a streaming pool (lod/).
+struct BlockVoxels {
+    uint32_t level = 0;
+    glm::uvec3 coord{0};
+    std::span<const uint32_t> voxels, normals, colors;
+
+    static BlockVoxels of(const VoxelBlock& b) { return {b.level, b.coord, b.voxels, b.normals, b.colors}; }
+};
+
+/// Voxel positions [lo, hi) inside a block. When streaming, a resident ancestor stands in for a
+/// missing block by drawing only the voxels over that block's cell; the faces on the cell's sides
+/// are drawn whether active or not (a skirt, as at block boundaries), so the stand-in closes
+/// against the finer blocks around it.
+struct VoxelRegion {
+    glm::uvec3 lo{0}, hi{0};
+};
+
+/// Appends the camera-facing active faces of every voxel of the block (or of the region).
+/// overrideColor, when given, replaces the voxels' colours (debug views).
+void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& cameraPosition,
+                      FaceMesh& out, const glm::vec3* overrideColor = nullptr, const VoxelRegion* region = nullptr);
+inline void expandVoxelFaces(const VoxelModel& model, const VoxelBlock& block, const glm::dvec3& cameraPosition,
+                             FaceMesh& out, const glm::vec3* overrideColor = nullptr) {
+    expandVoxelFaces(model, BlockVoxels::of(block), cameraPosition, out, overrideColor);
+}
 
 }  // namespace cuberille::voxel

@@ -69,8 +69,16 @@ struct VoxelBlock {
     // [firstChild, firstChild + popcount(childMask)) of the model, one per octant bit set.
     uint32_t firstChild = 0;
     uint8_t childMask = 0;
+    // A block's counts as its file states them, set in a layout whose data is not loaded
+    // (CvoxReader::layout): selection asks hasVoxels()/hasTriangles() of either kind of block.
+    uint32_t layoutVoxels = 0, layoutTriangles = 0;
 
     size_t voxelCount() const { return voxels.size(); }
+    /// Counts whether loaded or only stated in the layout.
+    uint64_t totalVoxels() const { return voxels.empty() ? layoutVoxels : voxels.size(); }
+    uint64_t totalTriangles() const { return triangles.empty() ? layoutTriangles : triangles.size(); }
+    bool hasVoxels() const { return !voxels.empty() || layoutVoxels; }
+    bool hasTriangles() const { return !triangles.empty() || layoutTriangles; }
 };
 
 struct VoxelModel {
@@ -82,12 +90,12 @@ struct VoxelModel {
 
     uint64_t voxelCount() const {
         uint64_t n = 0;
-        for (const VoxelBlock& b : blocks) n += b.voxelCount();
+        for (const VoxelBlock& b : blocks) n += b.totalVoxels();
         return n;
     }
     uint64_t triangleCount() const {
         uint64_t n = 0;
-        for (const VoxelBlock& b : blocks) n += b.triangles.size();
+        for (const VoxelBlock& b : blocks) n += b.totalTriangles();
         return n;
     }
     /// The voxel's grid coordinates at its block's level.

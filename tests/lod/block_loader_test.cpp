@@ -53,7 +53,7 @@ TEST(BlockLoader, ReadsTheRequestedBlocksAsTheFileHoldsThem) {
     lod::BlockLoader loader(reader);
     std::vector<uint32_t> wanted;
     for (uint32_t i = 0; i < whole.blocks.size(); i += 3) wanted.push_back(i);
-    loader.replaceRequests(wanted);
+    loader.replaceRequests({wanted.begin(), wanted.end()});
     const std::vector<lod::LoadedBlock> got = waitForAll(loader, wanted.size());
     ASSERT_EQ(got.size(), wanted.size());
     for (size_t k = 0; k < got.size(); ++k) {
@@ -71,7 +71,7 @@ TEST(BlockLoader, ANewFramesRequestsReplaceTheQueue) {
     const auto path = writeTemp("replace.cvox", pyramidBytes());
     const voxel::CvoxReader reader(path);
     lod::BlockLoader loader(reader, 2.0);  // a slow disk: 2 MiB/s
-    std::vector<uint32_t> many;
+    std::vector<lod::BlockRequest> many;
     for (uint32_t i = 1; i < reader.blockCount(); ++i) many.push_back(i);
     loader.replaceRequests(many);
     loader.replaceRequests({0});  // the next frame wants only the root
