@@ -24,6 +24,7 @@ void BlockLoader::replaceRequests(std::vector<BlockRequest> requests) {
         queue_.assign(requests.begin(), requests.end());
     }
     wake_.notify_all();
+    done_.notify_all();  // an emptied queue may be what a waiter waits for
 }
 
 std::vector<LoadedBlock> BlockLoader::takeCompleted() {
@@ -36,6 +37,11 @@ std::vector<LoadedBlock> BlockLoader::takeCompleted() {
 bool BlockLoader::idle() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return queue_.empty() && !reading_ && completed_.empty();
+}
+
+void BlockLoader::waitForCompleted() const {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [&] { return !completed_.empty() || (queue_.empty() && !reading_); });
 }
 
 uint64_t BlockLoader::bytesRead() const {
@@ -68,10 +74,13 @@ void BlockLoader::run() {
             const auto due = t0 + std::chrono::duration<double>(double(r.bytes) / throttleBytesPerSecond_);
             std::this_thread::sleep_until(due);
         }
-        std::lock_guard<std::mutex> lock(mutex_);
-        bytesRead_ += r.bytes;
-        completed_.push_back(std::move(r));
-        reading_ = false;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            bytesRead_ += r.bytes;
+            completed_.push_back(std::move(r));
+            reading_ = false;
+        }
+        done_.notify_all();
     }
 }
 

@@ -42,6 +42,8 @@ public:
     std::vector<LoadedBlock> takeCompleted();
     /// True when nothing is queued, being read, or read and not yet taken.
     bool idle() const;
+    /// Waits until something has been read and not yet taken, or nothing is left to read.
+    void waitForCompleted() const;
     uint64_t bytesRead() const;
 
 private:
@@ -51,6 +53,7 @@ private:
     double throttleBytesPerSecond_;
     mutable std::mutex mutex_;
     std::condition_variable wake_;
+    mutable std::condition_variable done_;
     std::deque<BlockRequest> queue_;
     std::vector<LoadedBlock> completed_;
     bool reading_ = false, stop_ = false;

@@ -65,6 +65,9 @@ scene::Camera CameraPath::at(float t, const scene::Camera& base) const {
     const float f = x - float(i);
     c.position = glm::mix(keys_[i].position, keys_[i + 1].position, f);
     c.target = glm::mix(keys_[i].target, keys_[i + 1].target, f);
+    // A lens framed for the first view would clip a surface the path approaches: the near plane
+    // comes along, at most 1% of the way to the target.
+    c.nearPlane = std::min(base.nearPlane, 0.01f * glm::distance(c.position, c.target));
     return c;
 }
 

@@ -31,7 +31,8 @@ public:
     /// Throws scene::InputError naming the file and line.
     static CameraPath fromFile(const std::filesystem::path& path);
 
-    /// The camera at t in [0, 1], with base's lens (field of view, planes).
+    /// The camera at t in [0, 1], with base's lens (field of view, far plane; the near plane at
+    /// most 1% of the distance to the target, so approaching a surface never clips it).
     scene::Camera at(float t, const scene::Camera& base) const;
     const std::vector<CameraKey>& keys() const { return keys_; }
 

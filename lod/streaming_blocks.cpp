@@ -253,6 +253,12 @@ void StreamingBlocks::noteFailure(uint32_t block, const std::string& error) {
     if (warn_) warn_(error);
 }
 
+double StreamingBlocks::waitForLoads() const {
+    const double t0 = raster::nowMs();
+    loader_->waitForCompleted();
+    return raster::nowMs() - t0;
+}
+
 bool StreamingBlocks::settled() const {
     return lastRequests_.empty() && staging_.empty() && loader_->idle();
 }

@@ -75,6 +75,8 @@ public:
     /// Nothing queued, being read or staged, and the last frame missed nothing: the image will not
     /// change any more for this camera.
     bool settled() const;
+    /// Waits until the I/O thread has read something or has nothing left; milliseconds waited.
+    double waitForLoads() const;
     /// The last completed frame's streaming.
     const StreamingFrameStats& frameStats() const { return frame_; }
     const BlockPool& pool(PoolKind kind) const { return *pools_[kind]; }
