@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "apps/fly_command.h"
 #include "apps/render_command.h"
 #include "apps/voxel_commands.h"
 #include "scene/input_error.h"
@@ -16,6 +17,14 @@ namespace {
 constexpr int kExitFailure = 1;
 constexpr int kExitBadInput = 2;
 
+/// The frame's size, samples and the worker threads, as every rendering command takes them.
+void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int& threads) {
+    command->add_option("--width", width, "Image width in pixels")->capture_default_str();
+    command->add_option("--height", height, "Image height in pixels")->capture_default_str();
+    command->add_option("--msaa", msaa, "Samples per pixel: 1, 2, 4, 8 or 16")->capture_default_str();
+    command->add_option("--threads", threads, "Worker threads (0 = all cores)")->capture_default_str();
+}
+
 void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::string& view) {
     CLI::App* render = app.add_subcommand(
         "render", "Render one frame of a scene to an image (PNG: sRGB 8-bit; EXR: linear float)");
@@ -24,10 +33,7 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_option("scene", o.scene,
                        "A .tri, .ply, .ply.gz, .obj, .gltf, .glb or .cvox file, or a built-in scene:" + scenes)
         ->required();
-    render->add_option("--width", o.width, "Image width in pixels")->capture_default_str();
-    render->add_option("--height", o.height, "Image height in pixels")->capture_default_str();
-    render->add_option("--msaa", o.msaa, "Samples per pixel: 1, 2, 4, 8 or 16")->capture_default_str();
-    render->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    addFrameOptions(render, o.width, o.height, o.msaa, o.threads);
     render->add_option("--out", o.out, "Output image, .png or .exr")->required();
     render->add_option("--stats", o.statsPath, "Write per-stage counters and timings as JSON");
     render->add_option("--view", view, "What to show: color, depth, tiles (coarse block "
@@ -119,6 +125,43 @@ void addInfoCommand(CLI::App& app, cuberille::apps::InfoOptions& o) {
     info->add_option("file", o.file, "A .cgs or .cvox file")->required();
 }
 
+void addFlyCommand(CLI::App& app, cuberille::apps::FlyOptions& o) {
+    CLI::App* fly = app.add_subcommand(
+        "fly", "Fly through a voxel model (.cvox) streamed under a memory budget, recording each frame");
+    fly->add_option("model", o.model, "A .cvox voxel model")->required();
+    fly->add_option("--path", o.path,
+                    "Camera path: orbit (a full turn), zoom (towards the surface) or a keyframe file "
+                    "('px py pz tx ty tz' per line)")
+        ->capture_default_str();
+    fly->add_option("--frames", o.frames, "Frames along the path")->capture_default_str();
+    addFrameOptions(fly, o.width, o.height, o.msaa, o.threads);
+    fly->add_option("--out-dir", o.outDir, "Write final.png (the settled last view) and frames asked for by --save-every");
+    fly->add_option("--save-every", o.saveEvery, "Also write every K-th frame as frame_NNNNN.png (0: none)")
+        ->capture_default_str();
+    fly->add_option("--stats", o.statsPath, "Write one CSV row per frame: times, bytes, pools, blocks per level");
+    fly->add_option("--plot", o.plotPath, "Plot the per-frame statistics as a PNG");
+    fly->add_option("--budget-mib", o.budgetMib, "Memory for resident blocks, all pools together, in MiB")
+        ->capture_default_str();
+    fly->add_option("--upload-limit", o.uploadLimitMib, "MiB made resident per frame at most (0: unlimited)")
+        ->capture_default_str();
+    fly->add_option("--io-throttle", o.ioThrottleMibps, "Simulate a disk this slow, in MiB/s (0: no throttle)")
+        ->capture_default_str();
+    fly->add_option("--refine", o.refine,
+                    "Missing blocks: full (a resident ancestor stands in: always closed) or partial (holes while "
+                    "loading)")
+        ->capture_default_str();
+    fly->add_option("--pixel-error", o.pixelError, "Refine blocks until a voxel projects to at most this many pixels")
+        ->capture_default_str();
+    fly->add_flag("--no-hybrid", o.noHybrid, "Never draw source triangles");
+    fly->add_flag("--no-occlusion", o.noOcclusion, "No occlusion culling");
+    fly->add_option("--settle-frames", o.settleFrames,
+                    "After the path, render its last view until loading settles, at most this many frames (0: stop)")
+        ->capture_default_str();
+    fly->add_option("--azimuth", o.azimuth, "Framing camera azimuth, degrees about +y")->capture_default_str();
+    fly->add_option("--elevation", o.elevation, "Framing camera elevation, degrees")->capture_default_str();
+    fly->add_flag("--quiet", o.quiet, "Print nothing on success");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -135,6 +178,8 @@ int main(int argc, char** argv) {
     addIsosurfaceCommand(app, isosurfaceOptions);
     cuberille::apps::InfoOptions infoOptions;
     addInfoCommand(app, infoOptions);
+    cuberille::apps::FlyOptions flyOptions;
+    addFlyCommand(app, flyOptions);
 
     try {
         app.parse(argc, argv);
@@ -156,6 +201,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("voxelize")) return cuberille::apps::runVoxelizeCommand(voxelizeOptions);
         if (app.got_subcommand("isosurface")) return cuberille::apps::runIsosurfaceCommand(isosurfaceOptions);
         if (app.got_subcommand("info")) return cuberille::apps::runInfoCommand(infoOptions);
+        if (app.got_subcommand("fly")) return cuberille::apps::runFlyCommand(flyOptions);
     } catch (const cuberille::scene::InputError& e) {
         std::fprintf(stderr, "cuberille: %s\n", e.what());
         return kExitBadInput;

@@ -16,15 +16,13 @@ FlightFrame Flight::frame(const scene::Camera& camera, bool settling) {
     scene_.camera = camera;
     pipeline_.beginFrame(framebuffer_);
     f.voxel = scene_.draw(pipeline_, framebuffer_.widthPixels, framebuffer_.heightPixels, options_);
-    const double t1 = raster::nowMs();
     pipeline_.endFrame();
     if (options_.occlusion && !options_.viewFrom) scene_.readOcclusion(pipeline_.stats());
-    const double t2 = raster::nowMs();
+    f.frameMs = raster::nowMs() - t0;
     f.streaming = blocks_.frameStats();
     f.uploadMs = f.streaming.uploadMs;
     f.traversalMs = f.voxel.selectMs - f.uploadMs;  // the upload happens inside the draw's selection step
-    f.rasterMs = f.voxel.expandMs + (t2 - t1);
-    f.frameMs = t2 - t0;
+    f.rasterMs = f.frameMs - f.voxel.selectMs;       // expansion, submission and the pipeline
     return f;
 }
 

@@ -17,11 +17,11 @@ namespace cuberille::lod {
 struct FlightFrame {
     int index = 0;
     bool settling = false;  // after the path: its last view again, until loading settles
-    double frameMs = 0;     // the whole frame: the parts below and the rest (bookkeeping)
+    double frameMs = 0;     // the whole frame: the parts below
     double traversalMs = 0;  // block selection, residency and occlusion planning
     double ioWaitMs = 0;     // waiting for the I/O thread (settling only: frames on the path never wait)
     double uploadMs = 0;     // taking in loaded blocks and copying them into the pools
-    double rasterMs = 0;     // voxel-face expansion and the pipeline
+    double rasterMs = 0;     // voxel-face expansion, the draws and the pipeline
     StreamingFrameStats streaming;
     VoxelFrameStats voxel;
 };

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sys/wait.h>
@@ -264,6 +265,72 @@ TEST_F(Cli, VoxelCommandsRejectBadInputWithExitTwoAndWriteNothing) {
     const auto before = fs::file_size(out);
     EXPECT_EQ(run("voxelize " + cut.string() + " -o " + out.string()).exitCode, 2);
     EXPECT_EQ(fs::file_size(out), before);
+}
+
+TEST_F(Cli, FlyRecordsEveryFrameAndSurvivesACorruptBlock) {
+    const fs::path obj = write("tet.obj", kTetrahedronObj), model = dir_ / "tet.cvox";
+    ASSERT_EQ(run("voxelize " + obj.string() + " --resolution 256 -o " + model.string()).exitCode, 0);
+    const fs::path csv = dir_ / "f.csv", plot = dir_ / "f.png", out = dir_ / "frames";
+    CommandRun r = run("fly " + model.string() + " --path zoom --frames 6 --width 96 --height 64 --msaa 1 --stats " +
+                       csv.string() + " --plot " + plot.string() + " --out-dir " + out.string() +
+                       " --save-every 2 --budget-mib 16 --upload-limit 0.05");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("flew 6 frames"), std::string::npos) << r.output;
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line.rfind("frame,settling,frame_ms,", 0), 0u) << line;
+    int pathRows = 0, settlingRows = 0;
+    while (std::getline(in, line)) ++(line.find(",0,") == line.find(',') ? pathRows : settlingRows);
+    EXPECT_EQ(pathRows, 6);
+    EXPECT_GT(settlingRows, 0) << "the upload limit leaves loading to finish after the path";
+    EXPECT_GT(fs::file_size(plot), 1000u);
+    for (const char* name : {"frame_00000.png", "frame_00002.png", "frame_00004.png", "final.png"})
+        EXPECT_TRUE(fs::exists(out / name)) << name;
+    EXPECT_FALSE(fs::exists(out / "frame_00001.png"));
+    // A keyframe file.
+    const fs::path keys = write("keys.txt", "# from the front, closer\n0.4 0.4 3  0.4 0.4 0.3\n0.4 0.4 1.5  0.4 0.4 0.3\n");
+    r = run("fly " + model.string() + " --path " + keys.string() + " --frames 3 --width 64 --height 48 --quiet");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(r.output.empty()) << r.output;
+    // A corrupt block in the middle of the flight: reported once, the run goes on.
+    std::string bytes;
+    {
+        std::ifstream f(model, std::ios::binary);
+        bytes.assign((std::istreambuf_iterator<char>(f)), {});
+    }
+    uint64_t blocks = 0, offset = 0;
+    std::memcpy(&blocks, bytes.data() + 64, 8);
+    ASSERT_GT(blocks, 2u);
+    std::memcpy(&offset, bytes.data() + 96 + (blocks - 1) * 64 + 24, 8);
+    bytes[offset + 3] = char(0xFF);
+    const fs::path bad = dir_ / "bad.cvox";
+    std::ofstream(bad, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    r = run("fly " + bad.string() + " --path zoom --frames 4 --width 64 --height 48 --pixel-error 0 --no-occlusion");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    const std::string warning = bad.string() + ": block " + std::to_string(blocks - 1);
+    EXPECT_NE(r.output.find(warning), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find(warning), r.output.rfind(warning)) << "reported once: " << r.output;
+    EXPECT_NE(r.output.find("1 block could not be read"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, FlyRejectsBadOptionsWithExitTwoAndWritesNothing) {
+    const fs::path obj = write("tet.obj", kTetrahedronObj), model = dir_ / "tet.cvox";
+    ASSERT_EQ(run("voxelize " + obj.string() + " --resolution 64 -o " + model.string()).exitCode, 0);
+    const fs::path csv = dir_ / "f.csv";
+    const fs::path oneKey = write("one.txt", "0 0 3 0 0 0\n"), badKey = write("bad.txt", "0 0 3 0 0 0\n1 2 x 0 0 0\n");
+    for (const std::string& args :
+         {model.string() + " --refine sometimes", model.string() + " --frames 0", obj.string(),
+          model.string() + " --path " + (dir_ / "missing.txt").string(), model.string() + " --path " + oneKey.string(),
+          model.string() + " --path " + badKey.string(), model.string() + " --save-every 2",
+          model.string() + " --msaa 3", model.string() + " --budget-mib 0", model.string() + " --plot p.bmpx",
+          (dir_ / "absent.cvox").string()}) {
+        const CommandRun r = run("fly " + args + " --stats " + csv.string());
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
+        EXPECT_FALSE(fs::exists(csv)) << args;
+    }
+    const CommandRun r = run("fly " + model.string() + " --path " + badKey.string());
+    EXPECT_NE(r.output.find(badKey.string() + ":2: "), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -1,0 +1,251 @@
+#include "apps/fly_command.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "apps/atomic_file.h"
+#include "apps/frame_plot.h"
+#include "apps/image_io.h"
+#include "lod/camera_path.h"
+#include "raster/clock.h"
+#include "raster/parallel.h"
+#include "raster/pipeline.h"
+#include "raster/resolve.h"
+#include "scene/input_error.h"
+
+namespace cuberille::apps {
+namespace {
+
+constexpr double kMib = 1024.0 * 1024.0;
+
+void validate(const FlyOptions& o) {
+    using scene::InputError;
+    if (!o.model.string().ends_with(".cvox")) throw InputError(o.model.string() + ": fly needs a voxel model (.cvox)");
+    if (o.frames < 1 || o.frames > 1000000) throw InputError("--frames: must be 1 to 1000000");
+    if (o.width < 1 || o.height < 1 || o.width > raster::kMaxFramebufferPixels || o.height > raster::kMaxFramebufferPixels)
+        throw InputError("--width/--height: " + std::to_string(o.width) + "x" + std::to_string(o.height) +
+                         " is outside 1.." + std::to_string(raster::kMaxFramebufferPixels));
+    if (!raster::isSupportedSampleCount(o.msaa))
+        throw InputError("--msaa: " + std::to_string(o.msaa) + " is not 1, 2, 4, 8 or 16");
+    if (o.threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
+    if (o.saveEvery < 0) throw InputError("--save-every: must be 0 (the final image only) or more");
+    if (o.saveEvery > 0 && o.outDir.empty()) throw InputError("--save-every: needs --out-dir");
+    if (!(o.budgetMib >= 1.0 && o.budgetMib <= 1024.0 * 1024.0)) throw InputError("--budget-mib: must be 1 to 1048576");
+    if (!(o.uploadLimitMib >= 0.0 && std::isfinite(o.uploadLimitMib)))
+        throw InputError("--upload-limit: must be 0 (unlimited) or more MiB");
+    if (!(o.ioThrottleMibps >= 0.0 && std::isfinite(o.ioThrottleMibps)))
+        throw InputError("--io-throttle: must be 0 (no throttle) or more MiB/s");
+    if (o.refine != "full" && o.refine != "partial") throw InputError("--refine: '" + o.refine + "' is not full or partial");
+    if (!(o.pixelError >= 0.0f && std::isfinite(o.pixelError))) throw InputError("--pixel-error: must be 0 or more");
+    if (o.settleFrames < 0) throw InputError("--settle-frames: must be 0 or more");
+    if (!o.plotPath.empty()) imageFormatFor(o.plotPath);
+    if (o.path != "orbit" && o.path != "zoom" && !std::filesystem::exists(o.path))
+        throw InputError("--path: '" + o.path + "' is not orbit, zoom or an existing keyframe file");
+}
+
+lod::CameraPath cameraPath(const FlyOptions& o, const scene::Camera& framing) {
+    if (o.path == "orbit") return lod::CameraPath::orbit(framing);
+    if (o.path == "zoom") return lod::CameraPath::zoom(framing);
+    return lod::CameraPath::fromFile(o.path);
+}
+
+std::filesystem::path framePath(const FlyOptions& o, int frame) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.png", frame);
+    return o.outDir / name;
+}
+
+void saveImage(const raster::Pipeline& p, const std::filesystem::path& path) {
+    raster::Image image;
+    raster::resolveColor(p.framebuffer(), image);
+    writeImageAtomically(path, image);
+}
+
+uint64_t heldBytes(const lod::StreamingFrameStats& s) {
+    uint64_t held = 0;
+    for (int k = 0; k < lod::kPoolCount; ++k) held += s.residentBytes[k] + s.freeListBytes[k];
+    return held;
+}
+
+size_t levelCount(const FlyResult& r) {
+    size_t levels = 0;
+    for (const lod::FlightFrame& f : r.frames) levels = std::max(levels, f.voxel.selection.drawnPerLevel.size());
+    return levels;
+}
+
+std::vector<PlotPanel> plotPanels(const FlyResult& r) {
+    auto series = [&](const char* name, glm::vec3 color, auto&& value) {
+        PlotSeries s{name, color, {}};
+        for (const lod::FlightFrame& f : r.frames) s.values.push_back(double(value(f)));
+        return s;
+    };
+    const glm::vec3 black(0.1f), blue(0.15f, 0.35f, 0.8f), orange(0.95f, 0.5f, 0.05f), green(0.1f, 0.6f, 0.2f),
+        red(0.85f, 0.1f, 0.1f), purple(0.55f, 0.25f, 0.7f), grey(0.55f);
+    std::vector<PlotPanel> panels;
+    panels.push_back({"frame time (ms)",
+                      {series("frame", black, [](auto& f) { return f.frameMs; }),
+                       series("raster", blue, [](auto& f) { return f.rasterMs; }),
+                       series("traversal", green, [](auto& f) { return f.traversalMs; }),
+                       series("upload", orange, [](auto& f) { return f.uploadMs; }),
+                       series("I/O wait", red, [](auto& f) { return f.ioWaitMs; })},
+                      {}, ""});
+    panels.push_back({"data per frame (MiB)",
+                      {series("requested", grey, [](auto& f) { return f.streaming.requestedBytes / kMib; }),
+                       series("read from disk", red, [](auto& f) { return f.streaming.loadedBytes / kMib; }),
+                       series("made resident", blue, [](auto& f) { return f.streaming.uploadedBytes / kMib; }),
+                       series("revived", green, [](auto& f) { return f.streaming.revivedBytes / kMib; })},
+                      {}, ""});
+    PlotPanel memory{"held in the pools (MiB)",
+                     {series("voxels", blue, [](auto& f) { return f.streaming.residentBytes[lod::kVoxelPool] / kMib; }),
+                      series("vertices", orange, [](auto& f) { return f.streaming.residentBytes[lod::kVertexPool] / kMib; }),
+                      series("indices", purple, [](auto& f) { return f.streaming.residentBytes[lod::kIndexPool] / kMib; }),
+                      series("free lists", grey, [](auto& f) {
+                          return double(f.streaming.freeListBytes[0] + f.streaming.freeListBytes[1] +
+                                        f.streaming.freeListBytes[2]) / kMib;
+                      }),
+                      series("budget", red, [&](auto&) { return r.budgetBytes / kMib; })},
+                     {}, "defragmentation"};
+    for (const lod::FlightFrame& f : r.frames)
+        if (f.streaming.defragmentations) memory.markers.push_back(f.index);
+    panels.push_back(std::move(memory));
+    PlotPanel drawn{"blocks drawn", {}, {}, ""};
+    const glm::vec3 levelColors[] = {{0.85f, 0.15f, 0.15f}, {0.95f, 0.55f, 0.05f}, {0.75f, 0.7f, 0.0f},
+                                     {0.2f, 0.65f, 0.2f},   {0.1f, 0.6f, 0.8f},    {0.2f, 0.3f, 0.9f},
+                                     {0.6f, 0.25f, 0.8f},   {0.4f, 0.4f, 0.4f}};
+    for (size_t level = 0; level < levelCount(r); ++level) {
+        const std::string name = "level " + std::to_string(level);
+        drawn.series.push_back(series(name.c_str(), levelColors[level % 8], [&](auto& f) {
+            return level < f.voxel.selection.drawnPerLevel.size() ? f.voxel.selection.drawnPerLevel[level] : 0;
+        }));
+    }
+    drawn.series.push_back(series("source triangles", black, [](auto& f) { return f.voxel.triangleBlocksDrawn; }));
+    drawn.series.push_back(series("stood in for", grey, [](auto& f) { return f.voxel.standIns; }));
+    drawn.series.push_back(series("holes", glm::vec3(1.0f, 0.0f, 1.0f), [](auto& f) { return f.voxel.holes; }));
+    panels.push_back(std::move(drawn));
+    return panels;
+}
+
+void printSummary(const FlyOptions& o, const FlyResult& r) {
+    std::vector<double> times;
+    double readMib = 0.0;
+    for (int i = 0; i < r.pathFrames; ++i) times.push_back(r.frames[size_t(i)].frameMs);
+    for (const lod::FlightFrame& f : r.frames) readMib += f.streaming.loadedBytes / kMib;
+    std::sort(times.begin(), times.end());
+    const double median = times[times.size() / 2], p95 = times[std::min(times.size() - 1, times.size() * 95 / 100)];
+    std::printf("flew %d frames along %s through %s (%dx%d, %d sample%s, refine %s)\n", r.pathFrames, o.path.c_str(),
+                o.model.c_str(), o.width, o.height, o.msaa, o.msaa > 1 ? "s" : "", o.refine.c_str());
+    std::printf("  first image after %.1f ms (opening and the root: %.1f ms); frame time median %.1f ms, 95th "
+                "percentile %.1f ms, largest %.1f ms\n",
+                r.timeToFirstImageMs, r.openMs, median, p95, times.back());
+    std::printf("  read %.1f MiB from disk (%.2f MiB a frame); held at most %.1f of %.0f MiB\n",
+                double(r.bytesReadFromDisk) / kMib, readMib / double(r.frames.size()), double(r.peakHeldBytes) / kMib,
+                double(r.budgetBytes) / kMib);
+    const size_t settling = r.frames.size() - size_t(r.pathFrames);
+    if (o.settleFrames > 0)
+        std::printf("  %s after %zu more frame%s of the last view\n", r.settled ? "settled" : "not settled", settling,
+                    settling == 1 ? "" : "s");
+    if (!r.warnings.empty()) std::printf("  %zu block%s could not be read\n", r.warnings.size(), r.warnings.size() == 1 ? "" : "s");
+}
+
+}  // namespace
+
+FlyResult runFly(const FlyOptions& o) {
+    validate(o);
+    raster::ThreadLimit threadLimit(o.threads);
+    FlyResult r;
+    const double start = raster::nowMs();
+    const voxel::CvoxReader reader(o.model);
+    lod::StreamingOptions so;
+    so.budgetBytes = uint64_t(o.budgetMib * kMib);
+    so.uploadLimitBytes = uint64_t(o.uploadLimitMib * kMib);
+    so.ioThrottleMibPerSecond = o.ioThrottleMibps;
+    lod::StreamingBlocks blocks(reader, so, [&](const std::string& w) {
+        r.warnings.push_back(w);
+        std::fprintf(stderr, "cuberille: warning: %s (its parent is drawn instead)\n", w.c_str());
+    });
+    r.budgetBytes = blocks.capacityBytes();
+    lod::VoxelScene scene(blocks, o.azimuth, o.elevation);
+    r.openMs = raster::nowMs() - start;
+    const lod::CameraPath path = cameraPath(o, scene.camera);
+    const scene::Camera lens = scene.camera;
+    lod::VoxelRenderOptions ro;
+    ro.selection.pixelError = o.pixelError;
+    ro.selection.hybrid = !o.noHybrid;
+    ro.occlusion = !o.noOcclusion;
+    ro.refine = o.refine == "partial" ? lod::Refinement::Partial : lod::Refinement::Full;
+    raster::FramebufferDesc fb;
+    fb.widthPixels = o.width, fb.heightPixels = o.height, fb.samples = o.msaa, fb.clearColor = scene.background;
+    lod::Flight flight(scene, blocks, fb, ro);
+    if (!o.outDir.empty()) std::filesystem::create_directories(o.outDir);
+    for (int i = 0; i < o.frames; ++i) {
+        const float t = o.frames > 1 ? float(i) / float(o.frames - 1) : 0.0f;
+        r.frames.push_back(flight.frame(path.at(t, lens)));
+        if (i == 0) r.timeToFirstImageMs = raster::nowMs() - start;
+        if (o.saveEvery > 0 && i % o.saveEvery == 0) saveImage(flight.pipeline(), framePath(o, i));
+    }
+    r.pathFrames = o.frames;
+    if (o.settleFrames > 0) {
+        for (lod::FlightFrame& f : flight.settle(path.at(1.0f, lens), o.settleFrames)) r.frames.push_back(std::move(f));
+        r.settled = blocks.settled();
+    }
+    for (const lod::FlightFrame& f : r.frames) r.peakHeldBytes = std::max(r.peakHeldBytes, heldBytes(f.streaming));
+    r.bytesReadFromDisk = blocks.bytesReadFromDisk();
+    if (!o.outDir.empty()) saveImage(flight.pipeline(), o.outDir / "final.png");
+    return r;
+}
+
+std::string flyCsv(const FlyResult& r) {
+    std::ostringstream csv;
+    const size_t levels = levelCount(r);
+    csv << "frame,settling,frame_ms,traversal_ms,io_wait_ms,upload_ms,raster_ms,requested_bytes,loaded_bytes,"
+           "uploaded_bytes,revived_bytes,dropped_bytes,staged_bytes,resident_voxel_bytes,resident_vertex_bytes,"
+           "resident_index_bytes,free_list_bytes,defragmentations,failed_blocks,requests,missing_blocks,stand_ins,"
+           "holes,triangle_blocks,occlusion_culled,faces";
+    for (size_t l = 0; l < levels; ++l) csv << ",drawn_level_" << l;
+    csv << "\n";
+    char ms[160];
+    for (const lod::FlightFrame& f : r.frames) {
+        const lod::StreamingFrameStats& s = f.streaming;
+        std::snprintf(ms, sizeof ms, "%.3f,%.3f,%.3f,%.3f,%.3f", f.frameMs, f.traversalMs, f.ioWaitMs, f.uploadMs,
+                      f.rasterMs);
+        csv << f.index << ',' << int(f.settling) << ',' << ms << ',' << s.requestedBytes << ',' << s.loadedBytes << ','
+            << s.uploadedBytes << ',' << s.revivedBytes << ',' << s.droppedBytes << ',' << s.stagedBytes << ','
+            << s.residentBytes[0] << ',' << s.residentBytes[1] << ',' << s.residentBytes[2] << ','
+            << s.freeListBytes[0] + s.freeListBytes[1] + s.freeListBytes[2] << ',' << s.defragmentations << ','
+            << s.failedBlocks << ',' << s.requests << ',' << f.voxel.missingBlocks << ',' << f.voxel.standIns << ','
+            << f.voxel.holes << ',' << f.voxel.triangleBlocksDrawn << ',' << f.voxel.occlusionCulled << ','
+            << f.voxel.facesEmitted;
+        for (size_t l = 0; l < levels; ++l)
+            csv << ',' << (l < f.voxel.selection.drawnPerLevel.size() ? f.voxel.selection.drawnPerLevel[l] : 0);
+        csv << "\n";
+    }
+    return csv.str();
+}
+
+int runFlyCommand(const FlyOptions& o) {
+    const FlyResult r = runFly(o);
+    if (!o.statsPath.empty()) {
+        AtomicOutputFile out(o.statsPath);
+        out.stream() << flyCsv(r);
+        out.commit();
+    }
+    if (!o.plotPath.empty()) {
+        PlotLayout layout;
+        layout.title = "cuberille fly " + o.model.filename().string() + " --path " + o.path + "  (" +
+                       std::to_string(o.width) + "x" + std::to_string(o.height) + ", budget " +
+                       std::to_string(int(o.budgetMib)) + " MiB, upload limit " +
+                       (o.uploadLimitMib > 0 ? std::to_string(o.uploadLimitMib).substr(0, 4) + " MiB" : "none") +
+                       ", refine " + o.refine + ")";
+        layout.firstSettlingFrame = r.frames.size() > size_t(r.pathFrames) ? r.pathFrames : -1;
+        std::string warning;
+        const raster::Image plot = plotFrames(plotPanels(r), layout, &warning);
+        if (!warning.empty()) std::fprintf(stderr, "cuberille: warning: %s\n", warning.c_str());
+        writeImageAtomically(o.plotPath, plot);
+    }
+    if (!o.quiet) printSummary(o, r);
+    return 0;
+}
+
+}  // namespace cuberille::apps
