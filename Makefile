@@ -5,7 +5,7 @@ PRESET ?= release
 BUILD_DIR := build/$(PRESET)
 JOBS ?= $(shell nproc)
 
-.PHONY: all setup configure build demo test bench golden format clean
+.PHONY: all setup configure build demo test bench golden fuzz format clean
 
 all: build
 
@@ -32,6 +32,22 @@ bench: build
 # Regenerate reference_images/ from the current renderer (review the diff before committing).
 golden: build
 	@CUBERILLE_UPDATE_GOLDEN=1 ctest --preset $(PRESET) -L golden
+
+# Fuzz every reader (fuzz/, docs/robustness.md): FUZZ_SECONDS each, corpora kept in build/fuzz/corpus.
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS := fuzz_tri fuzz_ply fuzz_obj fuzz_gltf fuzz_cgs fuzz_cvox fuzz_camera_path fuzz_raw_volume
+fuzz: setup
+	@cmake --preset fuzz >/dev/null
+	@cmake --build --preset fuzz -j $(JOBS)
+	@build/fuzz/fuzz/make_seeds build/fuzz/seeds
+	@set -e; for t in $(FUZZ_TARGETS); do \
+	  mkdir -p build/fuzz/corpus/$$t; \
+	  echo "fuzz: $$t for $(FUZZ_SECONDS) s"; \
+	  build/fuzz/fuzz/$$t build/fuzz/corpus/$$t build/fuzz/seeds/$$t -max_total_time=$(FUZZ_SECONDS) \
+	    -rss_limit_mb=4096 -timeout=20 -print_final_stats=1 -artifact_prefix=build/fuzz/$$t- 2>&1 | \
+	    grep -E "^(stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==|SUMMARY|ERROR|Done)" || true; \
+	  if ls build/fuzz/$$t-* >/dev/null 2>&1; then echo "fuzz: $$t found a crash: $$(ls build/fuzz/$$t-*)"; exit 1; fi; \
+	done
 
 format:
 	@clang-format -i $$(git ls-files '*.h' '*.cpp')

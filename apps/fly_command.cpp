@@ -110,7 +110,7 @@ std::vector<PlotPanel> plotPanels(const FlyResult& r) {
     for (const lod::FlightFrame& f : r.frames)
         if (f.streaming.defragmentations) memory.markers.push_back(f.index);
     panels.push_back(std::move(memory));
-    PlotPanel drawn{"blocks drawn", {}, {}, ""};
+    PlotPanel drawn{"blocks selected, per level; missing ones stood in for or left as holes", {}, {}, ""};
     const glm::vec3 levelColors[] = {{0.85f, 0.15f, 0.15f}, {0.95f, 0.55f, 0.05f}, {0.75f, 0.7f, 0.0f},
                                      {0.2f, 0.65f, 0.2f},   {0.1f, 0.6f, 0.8f},    {0.2f, 0.3f, 0.9f},
                                      {0.6f, 0.25f, 0.8f},   {0.4f, 0.4f, 0.4f}};

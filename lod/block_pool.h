@@ -31,6 +31,8 @@ public:
     explicit BlockPool(uint64_t capacityBytes, double highWaterMark = 0.95);
 
     uint64_t capacityBytes() const { return capacityBytes_; }
+    /// What an allocation may take: everything not resident (free-list blocks give way).
+    uint64_t roomBytes() const { return capacityBytes_ - stats_.residentBytes; }
 
     /// Space for a block not in the pool: its bytes (to be filled by the caller), or nullopt when
     /// even after evicting every free-list block and defragmenting it cannot fit beside the

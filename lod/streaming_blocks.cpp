@@ -109,20 +109,34 @@ bool StreamingBlocks::makeResident(const LoadedBlock& loaded) {
         }
     }
     if ((loaded.parts & BlockParts::kTriangles) && !b.triangles.empty() && !isResident(id, BlockParts::kTriangles)) {
-        const IndexedTriangles t = indexSourceTriangles(b.triangles);
-        pools_[kVertexPool]->discard(id);
-        pools_[kIndexPool]->discard(id);
-        const auto vertices = pools_[kVertexPool]->allocate(id, t.positions.size() * kVertexBytes);
-        const auto indices = vertices ? pools_[kIndexPool]->allocate(id, t.indices.size() * 4) : std::nullopt;
-        if (vertices && indices) {
-            std::byte* at = vertices->data();
-            copyInto(at, t.positions), copyInto(at, t.normals), copyInto(at, t.colors);
-            at = indices->data();
-            copyInto(at, t.indices);
-            current_.uploadedBytes += vertices->size() + indices->size();
-        } else {
-            pools_[kVertexPool]->discard(id);
+        // Refused before the (costly) merge when it could not fit: indices are known exactly, and
+        // vertices once the block has been merged before.
+        const uint64_t indexBytes = b.triangles.size() * kTriangleIndexBytes;
+        const auto known = vertexCounts_.find(id);
+        if (indexBytes > pools_[kIndexPool]->roomBytes() ||
+            (known != vertexCounts_.end() && known->second * kVertexBytes > pools_[kVertexPool]->roomBytes())) {
             ok = false;
+        } else {
+            const IndexedTriangles t = indexSourceTriangles(b.triangles);
+            if (known == vertexCounts_.end()) {
+                vertexCounts_[id] = uint32_t(t.positions.size());
+                verticesSeen_ += t.positions.size();
+                trianglesSeen_ += b.triangles.size();
+            }
+            pools_[kVertexPool]->discard(id);
+            pools_[kIndexPool]->discard(id);
+            const auto vertices = pools_[kVertexPool]->allocate(id, t.positions.size() * kVertexBytes);
+            const auto indices = vertices ? pools_[kIndexPool]->allocate(id, t.indices.size() * 4) : std::nullopt;
+            if (vertices && indices) {
+                std::byte* at = vertices->data();
+                copyInto(at, t.positions), copyInto(at, t.normals), copyInto(at, t.colors);
+                at = indices->data();
+                copyInto(at, t.indices);
+                current_.uploadedBytes += vertices->size() + indices->size();
+            } else {
+                pools_[kVertexPool]->discard(id);
+                ok = false;
+            }
         }
     }
     current_.defragmentations += pools_[kVoxelPool]->stats().defragmentations +
@@ -228,22 +242,33 @@ void StreamingBlocks::releaseUnused() {
 }
 
 std::vector<BlockRequest> StreamingBlocks::withinBudget(std::vector<BlockRequest> missing) const {
-    // Ask only for what could be made resident beside this frame's blocks: the pools' room less
-    // what they hold resident (the free lists give way). Voxel and index bytes are known from the
-    // table; vertices are bounded by the indices' share of the same budget.
-    uint64_t voxelRoom = pools_[kVoxelPool]->capacityBytes() - pools_[kVoxelPool]->stats().residentBytes;
-    uint64_t indexRoom = pools_[kIndexPool]->capacityBytes() - pools_[kIndexPool]->stats().residentBytes;
+    // Ask only for what could be made resident beside this frame's blocks (the free lists give
+    // way): a read that could never be uploaded would be read, dropped and asked for again.
+    uint64_t room[kPoolCount];
+    for (int k = 0; k < kPoolCount; ++k) room[k] = pools_[k]->roomBytes();
     std::vector<BlockRequest> kept;
     for (const BlockRequest& r : missing) {
         const voxel::VoxelBlock& b = layout().blocks[r.block];
-        const uint64_t voxelBytes = (r.parts & BlockParts::kVoxels) ? b.totalVoxels() * kVoxelBytes : 0;
-        const uint64_t indexBytes = (r.parts & BlockParts::kTriangles) ? b.totalTriangles() * kTriangleIndexBytes : 0;
-        if (voxelBytes > voxelRoom || indexBytes > indexRoom) continue;
-        voxelRoom -= voxelBytes;
-        indexRoom -= indexBytes;
+        uint64_t need[kPoolCount] = {};
+        if (r.parts & BlockParts::kVoxels) need[kVoxelPool] = b.totalVoxels() * kVoxelBytes;
+        if (r.parts & BlockParts::kTriangles) {
+            need[kVertexPool] = vertexBytes(r.block);
+            need[kIndexPool] = b.totalTriangles() * kTriangleIndexBytes;
+        }
+        if (need[0] > room[0] || need[1] > room[1] || need[2] > room[2]) continue;
+        for (int k = 0; k < kPoolCount; ++k) room[k] -= need[k];
         kept.push_back(r);
     }
     return kept;
+}
+
+uint64_t StreamingBlocks::vertexBytes(uint32_t block) const {
+    if (const auto known = vertexCounts_.find(block); known != vertexCounts_.end()) return known->second * kVertexBytes;
+    const uint64_t triangles = layout().blocks[block].totalTriangles();
+    // Before any block has been merged, one vertex a triangle (closed meshes share each vertex
+    // among about six triangles; clipping adds some back).
+    const double perTriangle = trianglesSeen_ ? double(verticesSeen_) / double(trianglesSeen_) : 1.0;
+    return uint64_t(double(triangles) * perTriangle) * kVertexBytes;
 }
 
 void StreamingBlocks::noteFailure(uint32_t block, const std::string& error) {

@@ -90,6 +90,9 @@ private:
     bool revive(uint32_t block, BlockParts part);
     void releaseUnused();
     std::vector<BlockRequest> withinBudget(std::vector<BlockRequest> missing) const;
+    /// Vertex-pool bytes a block's triangles take: exact once indexed, else estimated from the
+    /// vertices per triangle seen so far (the count is known only after merging).
+    uint64_t vertexBytes(uint32_t block) const;
     void noteFailure(uint32_t block, const std::string& error);
 
     const voxel::CvoxReader& reader_;
@@ -101,6 +104,8 @@ private:
     // This frame's acquisitions: block -> the parts used (kept resident; the rest are released).
     std::map<uint32_t, uint8_t> used_;
     std::vector<BlockRequest> lastRequests_;
+    std::map<uint32_t, uint32_t> vertexCounts_;  // blocks whose triangles were indexed: their vertices
+    uint64_t verticesSeen_ = 0, trianglesSeen_ = 0;
     StreamingFrameStats frame_, current_;
     uint64_t rootBytes_ = 0;
     std::unique_ptr<BlockLoader> loader_;  // last: its thread stops before the rest goes

@@ -46,7 +46,7 @@ std::filesystem::path writeTemp(const std::string& name, const std::string& byte
 
 raster::FramebufferDesc frameDesc() {
     raster::FramebufferDesc d;
-    d.widthPixels = kWidth, d.heightPixels = kHeight, d.samples = 4;
+    d.widthPixels = kWidth, d.heightPixels = kHeight, d.samples = 1;
     d.clearColor = glm::vec4(0.0f);
     return d;
 }

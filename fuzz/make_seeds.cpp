@@ -1,0 +1,112 @@
+// Writes the seed corpora of the fuzz targets (fuzz/corpus/TARGET/), made in code like the tests'
+// data: small valid files of every format, so the fuzzers start from inputs that reach deep.
+//
+//   make_seeds OUTPUT_DIR
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "lod/lod_pyramid.h"
+#include "voxel/cvox_file.h"
+#include "voxel/geometry_stream.h"
+#include "voxel/mesh_view.h"
+#include "voxel/octree_voxelizer.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace cuberille;
+
+void put(const fs::path& dir, const std::string& target, const std::string& name, const std::string& bytes) {
+    fs::create_directories(dir / target);
+    std::ofstream(dir / target / name, std::ios::binary) << bytes;
+}
+
+std::string u32(uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); }
+
+const char* kTetrahedronObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+std::string triangleGlb() {
+    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const std::string bin(reinterpret_cast<const char*>(p), sizeof p);
+    std::string json = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"children":[1]},{"mesh":0,"translation":[1,0,0]}],)"
+                       R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+                       R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
+                       R"("bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36}]})";
+    while (json.size() % 4) json += ' ';
+    return "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size() + 8 + bin.size())) + u32(uint32_t(json.size())) + "JSON" +
+           json + u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+}
+
+std::string binaryPly() {
+    std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
+    const float v[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    s.append(reinterpret_cast<const char*>(v), sizeof v);
+    const int32_t faces[2][3] = {{0, 2, 1}, {0, 1, 3}};
+    for (const auto& f : faces) {
+        s += char(3);
+        s.append(reinterpret_cast<const char*>(f), 12);
+    }
+    return s;
+}
+
+std::unique_ptr<voxel::MeshView> tetrahedron() {
+    return voxel::openMeshView(fs::temp_directory_path() / "cuberille-seed-tet.obj", nullptr);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 2) {
+        std::fprintf(stderr, "usage: make_seeds OUTPUT_DIR\n");
+        return 2;
+    }
+    const fs::path dir = argv[1];
+    put(dir, "fuzz_tri", "two.tri", "# two overlapping triangles\n0 0  10 0  0 10  1 0 0\n2 2  12 3  4 11  0 1 0\n");
+    put(dir, "fuzz_tri", "far.tri", "-1e6 -1e6  1e6 -1e6  0 1e6  1 1 1\n");
+    put(dir, "fuzz_ply", "ascii.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
+        "property list uchar int vertex_indices\nend_header\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n3 0 1 2\n");
+    put(dir, "fuzz_ply", "binary.ply", binaryPly());
+    put(dir, "fuzz_obj", "tet.obj", kTetrahedronObj);
+    put(dir, "fuzz_obj", "materials.obj",
+        "mtllib fuzz.mtl\nnewmtl red\nKd 1 0 0\nd 0.5\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+        "usemtl red\nf 1/1/1 2/2/1 3/3/1\ng other\no obj\nf -3 -2 -1\n");
+    put(dir, "fuzz_gltf", "two-nodes.glb", triangleGlb());
+    put(dir, "fuzz_camera_path", "keys.path", "# px py pz tx ty tz\n0 0 3 0 0 0\n1 1 2 0 0 0\n0 2 1 0 0.5 0\n");
+    // A 12^3 u8 sphere, after the 8-byte header the fuzz target reads: dims, type, iso.
+    {
+        std::string raw;
+        const uint16_t dims[3] = {12, 12, 12};
+        raw.append(reinterpret_cast<const char*>(dims), 6);
+        raw += char(0), raw += char(128 * 4 / 4);
+        for (int z = 0; z < 12; ++z)
+            for (int y = 0; y < 12; ++y)
+                for (int x = 0; x < 12; ++x)
+                    raw += char((x - 6) * (x - 6) + (y - 6) * (y - 6) + (z - 6) * (z - 6) < 20 ? 200 : 10);
+        put(dir, "fuzz_raw_volume", "sphere.raw", raw);
+    }
+    // .cgs and .cvox of the tetrahedron.
+    std::ofstream(fs::temp_directory_path() / "cuberille-seed-tet.obj") << kTetrahedronObj;
+    {
+        std::ostringstream out;
+        voxel::writeGeometryStream(*tetrahedron(), out);
+        put(dir, "fuzz_cgs", "tet.cgs", out.str());
+    }
+    {
+        voxel::VoxelizeOptions o;
+        o.resolution = 128;
+        voxel::VoxelModel m = voxel::voxelizeMesh(*tetrahedron(), o);
+        lod::buildLodPyramid(m, {});
+        std::ostringstream out;
+        voxel::writeCvox(m, out);
+        put(dir, "fuzz_cvox", "tet.cvox", out.str());
+    }
+    fs::remove(fs::temp_directory_path() / "cuberille-seed-tet.obj");
+    return 0;
+}
