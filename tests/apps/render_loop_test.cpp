@@ -24,8 +24,8 @@ uint64_t residentBytes() {
 TEST(RenderLoop, TenThousandRendersHoldFlatMemory) {
     apps::RenderOptions o;
     o.scene = "demo";
-    o.width = 48, o.height = 32, o.msaa = 4;
-    o.detail = 0.25f;
+    o.width = 24, o.height = 16, o.msaa = 4;
+    o.detail = 0.1f;
     // Warm up: allocator pools, thread pools and the first-use tables settle here.
     for (int i = 0; i < 500; ++i) apps::renderScene(o);
     const uint64_t before = residentBytes();
@@ -35,7 +35,7 @@ TEST(RenderLoop, TenThousandRendersHoldFlatMemory) {
         if (i % 1000 == 0) ASSERT_EQ(r.image.rgba, first.rgba) << "render " << i << " differs";
     }
     const uint64_t after = residentBytes();
-    // One leaked 48x32x4-sample frame per render would be tens of MiB by now.
+    // One leaked 24x16x4-sample frame per render would be over 50 MiB by now.
     EXPECT_LT(after, before + (4u << 20)) << "resident set grew from " << before << " to " << after << " bytes";
 }
 

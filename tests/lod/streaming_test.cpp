@@ -153,7 +153,7 @@ TEST(Streaming, SettledImageEqualsTheImageWithEverythingResident) {
     const auto path = writeTemp("settle.cvox", bytesOf(model));
     for (lod::Refinement refine : {lod::Refinement::Full, lod::Refinement::Partial}) {
         lod::StreamingOptions so;
-        so.uploadLimitBytes = 256 << 10;  // a few blocks a frame: loading spans many frames
+        so.uploadLimitBytes = 1 << 20;  // a few blocks a frame: loading spans many frames
         lod::VoxelRenderOptions ro;
         ro.refine = refine;
         Streamed s(path, so, ro);
