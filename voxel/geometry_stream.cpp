@@ -182,6 +182,11 @@ private:
             if (loc.rawBytes != rawPayloadBytes(info.vertexCount, info.triangleCount, loc.flags))
                 r.fail("raw bytes", "does not match the vertex and triangle counts (corrupt)");
             loc.payloadOffset = at + kChunkHeaderBytes;
+            // LZ4 expands a byte to at most 255 (a run of one value): a larger raw size is corrupt,
+            // and refusing it here keeps a forged header from asking for gigabytes.
+            if (uint64_t(loc.rawBytes) > uint64_t(loc.compressedBytes) * 255 + 64)
+                r.fail("raw bytes", "more than " + std::to_string(loc.compressedBytes) +
+                                        " LZ4-compressed bytes can hold (corrupt)");
             if (loc.compressedBytes > fileBytes_ - loc.payloadOffset)
                 r.fail("compressed bytes", "truncated: the chunk needs " + std::to_string(loc.compressedBytes) +
                                                " bytes, " + std::to_string(fileBytes_ - loc.payloadOffset) + " remain");
