@@ -285,8 +285,8 @@ private:
             for (int c = 0; c < 3; ++c)
                 normal[k][c] = v[k * n + on + c], color[k][c] = oc >= 0 ? v[k * n + oc + c] : s_.constantColor[c];
         for (int i = 0; i < q.count; ++i) {
-            const auto [w0, w1, w2] = weightsAt(t, q, i);
-            auto lerp = [&](const float(&x)[3][3], int c) { return w0 * x[0][c] + w1 * x[1][c] + w2 * x[2][c]; };
+            const Weights w = weightsAt(t, q, i);
+            auto lerp = [&](const float(&x)[3][3], int c) { return w.w0 * x[0][c] + w.w1 * x[1][c] + w.w2 * x[2][c]; };
             const float nx = lerp(normal, 0), ny = lerp(normal, 1), nz = lerp(normal, 2);
             const float len2 = nx * nx + ny * ny + nz * nz;
             const float nDotL = nx * l.x + ny * l.y + nz * l.z;

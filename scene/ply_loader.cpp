@@ -234,26 +234,27 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
         const int nx = findProperty(e, {"nx"}), ny = findProperty(e, {"ny"}), nz = findProperty(e, {"nz"});
         const int r = findProperty(e, {"red", "r"}), g = findProperty(e, {"green", "g"}), b = findProperty(e, {"blue", "b"});
         const int list = findProperty(e, {"vertex_indices", "vertex_index"});
+        const bool hasColors = isVertex && r >= 0 && g >= 0 && b >= 0;
         if (isVertex) {
             if (x < 0 || y < 0 || z < 0) fail(file, "element 'vertex'", "no x, y and z properties");
+            if (sawVertices) fail(file, "element 'vertex'", "a second vertex element");
             sawVertices = true;
             vertexCount = e.count;
             hasNormals = nx >= 0 && ny >= 0 && nz >= 0;
             mesh.positions.resize(e.count);
             if (hasNormals) mesh.normals.resize(e.count);
-            if (r >= 0 && g >= 0 && b >= 0) mesh.colors.resize(e.count);
+            if (hasColors) mesh.colors.resize(e.count);
         }
         if (isFace && list < 0) fail(file, "element 'face'", "no vertex_indices list");
         if (isFace && !sawVertices) fail(file, "element 'face'", "faces before vertices");
-        double values[64];
+        std::vector<double> values(e.properties.size());  // this instance's scalar properties
         std::vector<uint32_t> polygon;
         for (size_t i = 0; i < e.count; ++i) {
             const std::string where = e.name + " " + std::to_string(i);
             for (size_t p = 0; p < e.properties.size(); ++p) {
                 const Property& prop = e.properties[p];
                 if (!prop.isList) {
-                    const double v = reader.read(prop.type, where);
-                    if (p < 64) values[p] = v;
+                    values[p] = reader.read(prop.type, where);
                     continue;
                 }
                 const double countValue = reader.read(prop.countType, where);
@@ -280,7 +281,7 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
                 fail(file, where, "position is not finite");
             mesh.positions[i] = pos;
             if (hasNormals) mesh.normals[i] = glm::vec3(values[nx], values[ny], values[nz]);
-            if (!mesh.colors.empty()) {
+            if (hasColors) {
                 const float scale = e.properties[r].type == Type::UInt8 ? 1.0f / 255.0f : 1.0f;
                 mesh.colors[i] = glm::vec3(srgbToLinear(float(values[r]) * scale), srgbToLinear(float(values[g]) * scale),
                                            srgbToLinear(float(values[b]) * scale));

@@ -137,5 +137,21 @@ TEST(PlyLoader, CorruptCountsAndIndicesAreReportedBeforeUse) {
                  InputError);
 }
 
+TEST(PlyLoader, ASecondVertexElementIsRefused) {
+    // Found by fuzz_ply: a second vertex element without colours read the first one's colour
+    // property index.
+    const std::string twice = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                              "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+                              "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+                              "0 0 0 255 0 0\n1 1 1\n";
+    try {
+        parsePly(twice, "twice.ply");
+        ADD_FAILURE() << "accepted two vertex elements";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("twice.ply: element 'vertex': a second vertex element"), std::string::npos)
+            << e.what();
+    }
+}
+
 }  // namespace
 }  // namespace cuberille::scene
