@@ -5,7 +5,7 @@ PRESET ?= release
 BUILD_DIR := build/$(PRESET)
 JOBS ?= $(shell nproc)
 
-.PHONY: all setup configure build demo test bench golden fuzz format clean
+.PHONY: all setup configure build demo test bench golden sanitize asan tsan fuzz format clean
 
 all: build
 
@@ -33,6 +33,22 @@ bench: build
 golden: build
 	@CUBERILLE_UPDATE_GOLDEN=1 ctest --preset $(PRESET) -L golden
 
+# The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (`make asan`, in CI), and
+# the threaded and streaming tests under ThreadSanitizer (`make tsan`) (docs/robustness.md).
+# Only what the tests need is built.
+TSAN_TESTS := Determinism.*:*.SameVoxelsForAnyThreadCount:Simplify.SerialAndParallelGiveIdenticalPyramids:VoxelDeterminism.*:BlockLoader.*:BlockPool.*:Streaming.ResidentMemory*:Streaming.TheFirstImage*:Streaming.ACorruptBlock*
+sanitize: asan tsan
+
+asan: setup
+	@cmake --preset asan >/dev/null
+	@cmake --build --preset asan -j $(JOBS) --target cuberille cuberille_tests cuberille_golden_tests
+	@ctest --preset asan -j $(JOBS)
+
+tsan: setup
+	@cmake --preset tsan >/dev/null
+	@cmake --build --preset tsan -j $(JOBS) --target cuberille cuberille_tests
+	@build/tsan/tests/cuberille_tests --gtest_filter='$(TSAN_TESTS)' --gtest_brief=1
+
 # Fuzz every reader (fuzz/, docs/robustness.md): FUZZ_SECONDS each, corpora kept in build/fuzz/corpus.
 FUZZ_SECONDS ?= 60
 FUZZ_TARGETS := fuzz_tri fuzz_ply fuzz_obj fuzz_gltf fuzz_cgs fuzz_cvox fuzz_camera_path fuzz_raw_volume
@@ -43,7 +59,7 @@ fuzz: setup
 	@set -e; for t in $(FUZZ_TARGETS); do \
 	  mkdir -p build/fuzz/corpus/$$t; \
 	  echo "fuzz: $$t for $(FUZZ_SECONDS) s"; \
-	  build/fuzz/fuzz/$$t build/fuzz/corpus/$$t build/fuzz/seeds/$$t -max_total_time=$(FUZZ_SECONDS) \
+	  build/fuzz/fuzz/$$t build/fuzz/corpus/$$t build/fuzz/seeds/$$t -max_total_time=$(FUZZ_SECONDS) -seed=1 \
 	    -rss_limit_mb=4096 -timeout=20 -print_final_stats=1 -artifact_prefix=build/fuzz/$$t- 2>&1 | \
 	    grep -E "^(stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==|SUMMARY|ERROR|Done)" || true; \
 	  if ls build/fuzz/$$t-* >/dev/null 2>&1; then echo "fuzz: $$t found a crash: $$(ls build/fuzz/$$t-*)"; exit 1; fi; \
