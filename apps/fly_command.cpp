@@ -8,6 +8,7 @@
 #include "apps/atomic_file.h"
 #include "apps/frame_plot.h"
 #include "apps/image_io.h"
+#include "apps/render_command.h"
 #include "lod/camera_path.h"
 #include "raster/clock.h"
 #include "raster/parallel.h"
@@ -24,12 +25,7 @@ void validate(const FlyOptions& o) {
     using scene::InputError;
     if (!o.model.string().ends_with(".cvox")) throw InputError(o.model.string() + ": fly needs a voxel model (.cvox)");
     if (o.frames < 1 || o.frames > 1000000) throw InputError("--frames: must be 1 to 1000000");
-    if (o.width < 1 || o.height < 1 || o.width > raster::kMaxFramebufferPixels || o.height > raster::kMaxFramebufferPixels)
-        throw InputError("--width/--height: " + std::to_string(o.width) + "x" + std::to_string(o.height) +
-                         " is outside 1.." + std::to_string(raster::kMaxFramebufferPixels));
-    if (!raster::isSupportedSampleCount(o.msaa))
-        throw InputError("--msaa: " + std::to_string(o.msaa) + " is not 1, 2, 4, 8 or 16");
-    if (o.threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
+    validateFrameOptions(o.width, o.height, o.msaa, o.threads);
     if (o.saveEvery < 0) throw InputError("--save-every: must be 0 (the final image only) or more");
     if (o.saveEvery > 0 && o.outDir.empty()) throw InputError("--save-every: needs --out-dir");
     if (!(o.budgetMib >= 1.0 && o.budgetMib <= 1024.0 * 1024.0)) throw InputError("--budget-mib: must be 1 to 1048576");

@@ -23,14 +23,7 @@ namespace {
 
 void validate(const RenderOptions& o) {
     using scene::InputError;
-    if (o.width < 1 || o.height < 1 || o.width > raster::kMaxFramebufferPixels ||
-        o.height > raster::kMaxFramebufferPixels)
-        throw InputError("--width/--height: " + std::to_string(o.width) + "x" +
-                         std::to_string(o.height) + " is outside 1.." +
-                         std::to_string(raster::kMaxFramebufferPixels));
-    if (!raster::isSupportedSampleCount(o.msaa))
-        throw InputError("--msaa: " + std::to_string(o.msaa) + " is not 1, 2, 4, 8 or 16");
-    if (o.threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
+    validateFrameOptions(o.width, o.height, o.msaa, o.threads);
     if (!(o.detail > 0.0f && o.detail <= 16.0f)) throw InputError("--detail: must be in (0, 16]");
     if (!std::isfinite(o.timeSeconds)) throw InputError("--time: must be a finite number of seconds");
 }
@@ -78,6 +71,16 @@ const char* viewName(View v) {
 }
 
 }  // namespace
+
+void validateFrameOptions(int width, int height, int msaa, int threads) {
+    using scene::InputError;
+    if (width < 1 || height < 1 || width > raster::kMaxFramebufferPixels || height > raster::kMaxFramebufferPixels)
+        throw InputError("--width/--height: " + std::to_string(width) + "x" + std::to_string(height) +
+                         " is outside 1.." + std::to_string(raster::kMaxFramebufferPixels));
+    if (!raster::isSupportedSampleCount(msaa))
+        throw InputError("--msaa: " + std::to_string(msaa) + " is not 1, 2, 4, 8 or 16");
+    if (threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
+}
 
 View parseView(const std::string& name) {
     if (name == "color") return View::Color;

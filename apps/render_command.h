@@ -50,6 +50,9 @@ struct RenderResult {
 };
 
 View parseView(const std::string& name);  // throws scene::InputError
+/// The frame options every rendering command takes (--width, --height, --msaa, --threads);
+/// throws scene::InputError naming the option.
+void validateFrameOptions(int width, int height, int msaa, int threads);
 /// Loads the scene and renders it; throws scene::InputError for bad input.
 RenderResult renderScene(const RenderOptions& options);
 

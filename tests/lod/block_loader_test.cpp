@@ -12,29 +12,14 @@
 #include <gtest/gtest.h>
 
 #include "lod/block_loader.h"
-#include "lod/lod_pyramid.h"
-#include "tests/voxel/voxel_test_support.h"
+#include "tests/lod/lod_test_support.h"
 
 namespace cuberille {
 namespace {
 
-std::string pyramidBytes() {
-    std::mt19937 rng(8);
-    const auto tris = testing::icosphere(4, glm::dvec3(0.0), 2.0, testing::randomRotation(rng));
-    voxel::VoxelizeOptions o;
-    o.resolution = 512;
-    voxel::VoxelModel m = voxel::voxelizeMesh(*testing::viewOf(tris, 1000), o);
-    lod::buildLodPyramid(m, {});
-    std::ostringstream out;
-    voxel::writeCvox(m, out);
-    return out.str();
-}
+std::string pyramidBytes() { return testing::cvoxBytes(testing::spherePyramid(512, 8)); }
 
-std::filesystem::path writeTemp(const std::string& name, const std::string& bytes) {
-    const auto path = std::filesystem::path(::testing::TempDir()) / ("cuberille_" + std::to_string(::getpid()) + name);
-    std::ofstream(path, std::ios::binary) << bytes;
-    return path;
-}
+using testing::writeTemp;
 
 std::vector<lod::LoadedBlock> waitForAll(lod::BlockLoader& loader, size_t count) {
     std::vector<lod::LoadedBlock> all;

@@ -13,36 +13,17 @@
 
 #include "lod/camera_path.h"
 #include "lod/flight.h"
-#include "lod/lod_pyramid.h"
 #include "raster/resolve.h"
-#include "tests/voxel/voxel_test_support.h"
+#include "tests/lod/lod_test_support.h"
 
 namespace cuberille {
 namespace {
 
 constexpr int kWidth = 200, kHeight = 150;
 
-voxel::VoxelModel spherePyramid(uint32_t resolution) {
-    std::mt19937 rng(5);
-    const auto tris = testing::icosphere(4, glm::dvec3(0.0), 2.0, testing::randomRotation(rng));
-    voxel::VoxelizeOptions o;
-    o.resolution = resolution;
-    voxel::VoxelModel m = voxel::voxelizeMesh(*testing::viewOf(tris, 1000), o);
-    lod::buildLodPyramid(m, {});
-    return m;
-}
+voxel::VoxelModel spherePyramid(uint32_t resolution) { return testing::spherePyramid(resolution, 5); }
 
-std::string bytesOf(const voxel::VoxelModel& m) {
-    std::ostringstream out;
-    voxel::writeCvox(m, out);
-    return out.str();
-}
-
-std::filesystem::path writeTemp(const std::string& name, const std::string& bytes) {
-    const auto path = std::filesystem::path(::testing::TempDir()) / ("cuberille_" + std::to_string(::getpid()) + name);
-    std::ofstream(path, std::ios::binary) << bytes;
-    return path;
-}
+using testing::writeTemp;
 
 raster::FramebufferDesc frameDesc() {
     raster::FramebufferDesc d;
@@ -93,7 +74,7 @@ uint64_t voxelBytes(const voxel::VoxelModel& m) { return m.voxelCount() * 12; }
 
 TEST(Streaming, ResidentMemoryNeverExceedsTheBudget) {
     const voxel::VoxelModel model = spherePyramid(512);
-    const auto path = writeTemp("budget.cvox", bytesOf(model));
+    const auto path = writeTemp("budget.cvox", testing::cvoxBytes(model));
     lod::StreamingOptions so;
     so.budgetBytes = voxelBytes(model) / 4;  // an eighth of the voxels (half the budget is theirs)
     Streamed s(path, so);
@@ -123,7 +104,7 @@ TEST(Streaming, ResidentMemoryNeverExceedsTheBudget) {
 
 TEST(Streaming, DefragmentationKeepsEveryResidentBlockIntact) {
     const voxel::VoxelModel model = spherePyramid(512);
-    const auto path = writeTemp("defrag.cvox", bytesOf(model));
+    const auto path = writeTemp("defrag.cvox", testing::cvoxBytes(model));
     lod::StreamingOptions so;
     so.budgetBytes = voxelBytes(model) / 2;
     so.highWaterMark = 0.5;  // defragment early and often
@@ -150,7 +131,7 @@ TEST(Streaming, DefragmentationKeepsEveryResidentBlockIntact) {
 
 TEST(Streaming, SettledImageEqualsTheImageWithEverythingResident) {
     const voxel::VoxelModel model = spherePyramid(512);
-    const auto path = writeTemp("settle.cvox", bytesOf(model));
+    const auto path = writeTemp("settle.cvox", testing::cvoxBytes(model));
     for (lod::Refinement refine : {lod::Refinement::Full, lod::Refinement::Partial}) {
         lod::StreamingOptions so;
         so.uploadLimitBytes = 1 << 20;  // a few blocks a frame: loading spans many frames
@@ -173,7 +154,7 @@ TEST(Streaming, SettledImageEqualsTheImageWithEverythingResident) {
 
 TEST(Streaming, FullRefinementNeverShowsAHoleAndPartialDoesWhileLoading) {
     const voxel::VoxelModel model = spherePyramid(512);
-    const auto path = writeTemp("holes.cvox", bytesOf(model));
+    const auto path = writeTemp("holes.cvox", testing::cvoxBytes(model));
     for (lod::Refinement refine : {lod::Refinement::Full, lod::Refinement::Partial}) {
         lod::StreamingOptions so;
         so.uploadLimitBytes = 32 << 10;
@@ -206,7 +187,7 @@ TEST(Streaming, FullRefinementNeverShowsAHoleAndPartialDoesWhileLoading) {
 TEST(Streaming, TheFirstImageNeedsOnlyTheRootWhateverTheModelSize) {
     for (uint32_t resolution : {256u, 1024u}) {
         const voxel::VoxelModel model = spherePyramid(resolution);
-        const auto path = writeTemp("first.cvox", bytesOf(model));
+        const auto path = writeTemp("first.cvox", testing::cvoxBytes(model));
         Streamed s(path);
         const uint64_t root = s.reader.partBytes(0, voxel::CvoxReader::kAllParts);
         EXPECT_EQ(s.blocks.bytesReadFromDisk(), root) << resolution;
@@ -224,7 +205,7 @@ TEST(Streaming, TheFirstImageNeedsOnlyTheRootWhateverTheModelSize) {
 
 TEST(Streaming, ACorruptBlockIsReportedOnceAndItsParentShownThere) {
     const voxel::VoxelModel model = spherePyramid(512);
-    std::string bytes = bytesOf(model);
+    std::string bytes = testing::cvoxBytes(model);
     const auto goodPath = writeTemp("good.cvox", bytes);
     scene::Camera last;
     uint32_t victim = 0;
