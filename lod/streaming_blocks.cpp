@@ -60,6 +60,12 @@ StreamingBlocks::StreamingBlocks(const voxel::CvoxReader& reader, const Streamin
 
 StreamingBlocks::~StreamingBlocks() = default;
 
+uint64_t StreamingBlocks::defragmentations() const {
+    uint64_t n = 0;
+    for (const auto& p : pools_) n += p->stats().defragmentations;
+    return n;
+}
+
 uint64_t StreamingBlocks::capacityBytes() const {
     uint64_t total = 0;
     for (const auto& p : pools_) total += p->capacityBytes();
@@ -94,8 +100,7 @@ void StreamingBlocks::beginFrame() {
 bool StreamingBlocks::makeResident(const LoadedBlock& loaded) {
     const voxel::VoxelBlock& b = *loaded.data;
     const uint32_t id = loaded.block;
-    const uint64_t before = pools_[kVoxelPool]->stats().defragmentations + pools_[kVertexPool]->stats().defragmentations +
-                            pools_[kIndexPool]->stats().defragmentations;
+    const uint64_t before = defragmentations();
     bool ok = true;
     if ((loaded.parts & BlockParts::kVoxels) && !b.voxels.empty() && !pools_[kVoxelPool]->isResident(id)) {
         pools_[kVoxelPool]->discard(id);  // a stale copy on the free list
@@ -139,9 +144,7 @@ bool StreamingBlocks::makeResident(const LoadedBlock& loaded) {
             }
         }
     }
-    current_.defragmentations += pools_[kVoxelPool]->stats().defragmentations +
-                                 pools_[kVertexPool]->stats().defragmentations +
-                                 pools_[kIndexPool]->stats().defragmentations - before;
+    current_.defragmentations += defragmentations() - before;
     return ok;
 }
 

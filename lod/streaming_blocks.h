@@ -81,6 +81,8 @@ public:
     const StreamingFrameStats& frameStats() const { return frame_; }
     const BlockPool& pool(PoolKind kind) const { return *pools_[kind]; }
     uint64_t capacityBytes() const;
+    /// Defragmentations so far, all pools.
+    uint64_t defragmentations() const;
     uint64_t bytesReadFromDisk() const { return loader_->bytesRead() + rootBytes_; }
 
 private:
