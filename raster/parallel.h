@@ -11,6 +11,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_scan.h>
 #include <tbb/parallel_sort.h>
 
@@ -44,6 +45,19 @@ void parallelFor(size_t count, Body&& body) {
                       [&](const tbb::blocked_range<size_t>& r) {
                           for (size_t i = r.begin(); i != r.end(); ++i) body(i);
                       });
+#endif
+}
+
+/// Runs a() and b(), in parallel unless the thread limit is 1: the fork of a recursive
+/// divide-and-conquer (BVH build, refit) whose halves write disjoint data. In the std::thread
+/// mode (TSan) they run one after the other, for the reason parallelFor avoids TBB there.
+template <class A, class B>
+void parallelInvoke(A&& a, B&& b) {
+#if defined(CUBERILLE_PARALLEL_STD_THREADS)
+    a();
+    b();
+#else
+    tbb::parallel_invoke(a, b);
 #endif
 }
 

@@ -1,0 +1,94 @@
+#pragma once
+// Rays and the two tests every traversal is made of: ray against box (robust: conservative and
+// NaN-safe, after Ize, "Robust BVH Ray Traversal", 2013) and ray against triangle (watertight,
+// after Woop, Benthin and Wald, 2013). Both are exact about the cases that break naive code:
+// direction components of +0 or -0, origins on a box face, rays through triangle edges and
+// vertices.
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <glm/glm.hpp>
+
+namespace cuberille::rt {
+
+struct Ray {
+    glm::vec3 origin{0.0f};
+    glm::vec3 direction{0.0f, 0.0f, 1.0f};  // need not be normalised; t is in its units
+    float tMin = 0.0f;                      // the hit interval is [tMin, tMax]; tMin >= 0
+    float tMax = std::numeric_limits<float>::infinity();
+};
+
+struct RayHit {
+    static constexpr uint32_t kNone = ~0u;
+    float t = std::numeric_limits<float>::infinity();
+    uint32_t triangle = kNone;
+    float u = 0.0f, v = 0.0f;  // barycentric weights of the second and third vertex
+
+    bool hit() const { return triangle != kNone; }
+    /// The order that makes closest-hit deterministic: nearer first, then the lower triangle id,
+    /// so a ray through a shared edge reports the same triangle whatever the traversal order.
+    bool closerThan(float otherT, uint32_t otherTriangle) const {
+        return t < otherT || (t == otherT && triangle < otherTriangle);
+    }
+};
+
+/// gamma(n) of Higham (pbrt-v4's `gamma`): a bound on the relative error of n rounded float operations.
+constexpr float roundingGamma(int n) {
+    constexpr float eps = std::numeric_limits<float>::epsilon() * 0.5f;
+    return (float(n) * eps) / (1.0f - float(n) * eps);
+}
+
+/// A ray prepared for box tests: reciprocal direction (±inf for zero components) and the sign of
+/// each component, which picks the near and far slab without branching on values.
+struct RayBoxTest {
+    glm::vec3 origin;
+    glm::vec3 inverseDirection;
+    int farSide[3];  // 1 when the component is negative (signbit, so -0 counts as negative)
+
+    explicit RayBoxTest(const Ray& ray) : origin(ray.origin) {
+        for (int a = 0; a < 3; ++a) {
+            inverseDirection[a] = 1.0f / ray.direction[a];
+            farSide[a] = std::signbit(ray.direction[a]) ? 1 : 0;
+        }
+    }
+
+    /// Whether the ray meets box [lo, hi] within [tNear, tFar]; *entry gets where it enters.
+    ///
+    /// NaN arises as 0 x inf when the origin lies on a slab's plane and the direction is parallel
+    /// to it. The ordered comparisons below (`candidate > current ? candidate : current`) return
+    /// the current value when the candidate is NaN, so such a slab constrains nothing and the ray
+    /// lying in the box's face counts as inside: conservative. The far value grows by 2 gamma(3)
+    /// because each slab distance carries up to three roundings (Ize 2013).
+    bool hits(const glm::vec3& lo, const glm::vec3& hi, float tNear, float tFar, float* entry) const {
+        const glm::vec3* bounds[2] = {&lo, &hi};
+        for (int a = 0; a < 3; ++a) {
+            const float t0 = ((*bounds[farSide[a]])[a] - origin[a]) * inverseDirection[a];
+            const float t1 = ((*bounds[1 - farSide[a]])[a] - origin[a]) * inverseDirection[a];
+            tNear = t0 > tNear ? t0 : tNear;
+            tFar = t1 < tFar ? t1 : tFar;
+        }
+        *entry = tNear;
+        return tNear <= tFar * (1.0f + 2.0f * roundingGamma(3));
+    }
+};
+
+/// A ray prepared for watertight triangle tests (Woop et al. 2013, section 3): translate to the
+/// origin, permute so the largest direction component is z, shear so the ray is the +z axis.
+/// Every triangle edge is then a 2D cross product of two sheared vertices, computed the same way
+/// for both triangles that share it, so a ray through an edge or vertex cannot slip between them.
+struct WatertightRay {
+    glm::vec3 origin;
+    int kx, ky, kz;
+    float shearX, shearY, shearZ;
+
+    explicit WatertightRay(const Ray& ray);
+
+    /// Hit with t in [tMin, tMax]: writes t and barycentrics into *hit (not its triangle).
+    /// Both windings hit; degenerate triangles never do.
+    bool intersect(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, float tMin, float tMax,
+                   RayHit* hit) const;
+};
+
+}  // namespace cuberille::rt

@@ -1,0 +1,50 @@
+#include "rt/ray_query.h"
+
+namespace cuberille::rt {
+namespace {
+
+struct NodeBoxes {
+    const Bvh& bvh;
+    Aabb operator()(uint32_t node) const { return bvh.nodes[node].box(); }
+};
+
+}  // namespace
+
+RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray) {
+    return detail::traverse<false>(bvh, mesh, ray, NodeBoxes{bvh});
+}
+
+RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray, TraversalCounters& counters) {
+    return detail::traverse<false>(bvh, mesh, ray, NodeBoxes{bvh}, &counters);
+}
+
+bool anyHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray) {
+    return detail::traverse<true>(bvh, mesh, ray, NodeBoxes{bvh}).hit();
+}
+
+RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray) {
+    const WatertightRay test(ray);
+    RayHit best;
+    best.t = ray.tMax;
+    for (uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+        RayHit candidate;
+        if (!test.intersect(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), ray.tMin, best.t, &candidate))
+            continue;
+        candidate.triangle = t;
+        if (candidate.closerThan(best.t, best.triangle)) best = candidate;
+    }
+    if (!best.hit()) best.t = std::numeric_limits<float>::infinity();
+    return best;
+}
+
+bool anyHitBruteForce(const TriangleMeshView& mesh, const Ray& ray) {
+    const WatertightRay test(ray);
+    for (uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+        RayHit candidate;
+        if (test.intersect(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), ray.tMin, ray.tMax, &candidate))
+            return true;
+    }
+    return false;
+}
+
+}  // namespace cuberille::rt

@@ -1,0 +1,185 @@
+// Deforming meshes: refitted boxes are tight, Lauterbach's criterion stays quiet under rigid
+// motion and fires when a mesh explodes, and Larsson's lazy update answers every ray exactly as a
+// full refit does, on any number of threads.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstring>
+#include <random>
+
+#include "raster/parallel.h"
+#include "rt/bvh_build.h"
+#include "rt/bvh_refit.h"
+#include "rt/lazy_refit.h"
+#include "rt/ray_query.h"
+#include "tests/rt/rt_test_support.h"
+
+namespace cuberille::rt {
+namespace {
+
+using testing::expectWellFormed;
+using testing::OwnedMesh;
+
+/// A wave through the sphere: every vertex moves, neighbours together (coherent deformation).
+void wave(const OwnedMesh& rest, OwnedMesh& out, float time) {
+    out.indices = rest.indices;
+    out.positions.resize(rest.positions.size());
+    for (size_t i = 0; i < rest.positions.size(); ++i) {
+        const glm::vec3 p = rest.positions[i];
+        out.positions[i] = p * (1.0f + 0.25f * std::sin(4.0f * p.z + time));
+    }
+}
+
+std::vector<Ray> randomRays(int count, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.5f, 1.5f);
+    std::vector<Ray> rays;
+    for (int i = 0; i < count; ++i) rays.push_back(Ray{{unit(rng), unit(rng), unit(rng)}, {unit(rng), unit(rng), unit(rng)}});
+    return rays;
+}
+
+TEST(BvhRefit, BoxesAreTightAfterEveryRefit) {
+    const OwnedMesh rest = testing::uvSphere(32, 64);
+    OwnedMesh moved;
+    Bvh bvh = buildBvh(rest.view());
+    for (int frame = 1; frame <= 5; ++frame) {
+        wave(rest, moved, 0.7f * float(frame));
+        refitBvh(bvh, moved.view());
+        expectWellFormed(bvh, moved.view());
+        for (const Ray& ray : randomRays(200, uint32_t(frame))) {
+            EXPECT_EQ(closestHit(bvh, moved.view(), ray).triangle, closestHitBruteForce(moved.view(), ray).triangle);
+            EXPECT_EQ(anyHit(bvh, moved.view(), ray), anyHitBruteForce(moved.view(), ray));
+        }
+    }
+}
+
+TEST(BvhRefit, RigidMotionNeverTriggersARebuild) {
+    const OwnedMesh rest = testing::uvSphere(32, 64, glm::vec3(2.0f, 0.0f, 0.0f));
+    Bvh bvh = buildBvh(rest.view());
+    OwnedMesh moved = rest;
+    for (int frame = 1; frame <= 60; ++frame) {
+        // Translate, then turn about z: a rigid motion changes no triangle's neighbours.
+        const float angle = 0.1f * float(frame);
+        const glm::vec3 shift(0.5f * float(frame), -0.25f * float(frame), 1.0f);
+        for (size_t i = 0; i < rest.positions.size(); ++i) {
+            const glm::vec3 p = rest.positions[i];
+            moved.positions[i] = glm::vec3(p.x * std::cos(angle) - p.y * std::sin(angle), p.x * std::sin(angle) + p.y * std::cos(angle), p.z) + shift;
+        }
+        const double degradation = refitBvh(bvh, moved.view());
+        EXPECT_LT(degradation, 0.4) << "frame " << frame;
+        EXPECT_LT(std::abs(degradation), 0.1) << "frame " << frame;
+    }
+}
+
+TEST(BvhRefit, AnExplodingMeshTriggersARebuild) {
+    // Every triangle flies off in its own direction: neighbours part, parents balloon.
+    const OwnedMesh rest = testing::uvSphere(32, 64);
+    std::vector<glm::vec3> velocity;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    OwnedMesh soup;  // unshared vertices, so triangles can part
+    for (size_t t = 0; t < rest.indices.size() / 3; ++t) {
+        const glm::vec3 v(unit(rng), unit(rng), unit(rng));
+        for (int c = 0; c < 3; ++c) {
+            soup.positions.push_back(rest.positions[rest.indices[3 * t + c]]);
+            soup.indices.push_back(uint32_t(soup.positions.size() - 1));
+            velocity.push_back(v);
+        }
+    }
+    Bvh bvh = buildBvh(soup.view());
+    OwnedMesh moved = soup;
+    double degradation = 0.0;
+    int firstFrameOverThreshold = -1;
+    for (int frame = 1; frame <= 20 && firstFrameOverThreshold < 0; ++frame) {
+        for (size_t i = 0; i < soup.positions.size(); ++i) moved.positions[i] = soup.positions[i] + 0.1f * float(frame) * velocity[i];
+        degradation = refitBvh(bvh, moved.view());
+        if (degradation > 0.4) firstFrameOverThreshold = frame;
+    }
+    EXPECT_GT(firstFrameOverThreshold, 1) << "not at once: the first small steps are fine";
+    EXPECT_GT(degradation, 0.4);
+    // A rebuild restores the quality: a fresh tree measures 0 against its own build ratios.
+    const Bvh rebuilt = buildBvh(moved.view());
+    EXPECT_EQ(bvhDegradation(rebuilt), 0.0);
+}
+
+TEST(BvhRefit, SameBoxesAndDegradationForAnyThreadCount) {
+    const OwnedMesh rest = testing::randomSoup(100000, 21, 0.02f);
+    OwnedMesh moved = rest;
+    for (size_t i = 0; i < moved.positions.size(); ++i) moved.positions[i] += 0.1f * glm::sin(7.0f * glm::vec3(rest.positions[i].y, rest.positions[i].z, rest.positions[i].x));
+    Bvh reference;
+    double referenceDegradation = 0.0;
+    for (const int threads : {1, 2, 7}) {
+        raster::ThreadLimit limit(threads);
+        Bvh bvh = buildBvh(rest.view());
+        const double degradation = refitBvh(bvh, moved.view());
+        if (threads == 1) {
+            reference = bvh;
+            referenceDegradation = degradation;
+            continue;
+        }
+        EXPECT_EQ(degradation, referenceDegradation);
+        EXPECT_EQ(0, std::memcmp(bvh.nodes.data(), reference.nodes.data(), bvh.nodes.size() * sizeof(BvhNode)));
+    }
+}
+
+TEST(LazyRefit, GivesTheSameHitsAsAFullRefitEveryFrame) {
+    const OwnedMesh rest = testing::uvSphere(40, 80);
+    OwnedMesh moved;
+    Bvh full = buildBvh(rest.view());
+    Bvh lazyTree = full;
+    LazyRefit lazy(lazyTree);
+    EXPECT_GT(lazy.middleDepth(), 2);
+    for (int frame = 1; frame <= 6; ++frame) {
+        wave(rest, moved, 0.9f * float(frame));
+        refitBvh(full, moved.view());
+        lazy.update(moved.view());
+        for (const Ray& ray : randomRays(500, uint32_t(frame))) {
+            const RayHit a = closestHit(full, moved.view(), ray), b = lazy.closestHit(ray);
+            ASSERT_EQ(a.triangle, b.triangle);
+            if (a.hit()) { ASSERT_EQ(a.t, b.t); }
+            ASSERT_EQ(anyHit(full, moved.view(), ray), lazy.anyHit(ray));
+        }
+        // Every box a query refreshed is the full refit's; refreshing the rest gives the full tree.
+        lazy.refreshAll();
+        ASSERT_EQ(0, std::memcmp(full.nodes.data(), lazyTree.nodes.data(), full.nodes.size() * sizeof(BvhNode)));
+    }
+}
+
+TEST(LazyRefit, RaysThatMissRefreshNothingBelowTheMiddle) {
+    const OwnedMesh rest = testing::uvSphere(40, 80);
+    OwnedMesh moved;
+    Bvh bvh = buildBvh(rest.view());
+    LazyRefit lazy(bvh);
+    wave(rest, moved, 1.0f);
+    lazy.update(moved.view());
+    for (int i = 0; i < 100; ++i) EXPECT_FALSE(lazy.closestHit(Ray{{5.0f, float(i) * 0.01f, 0.0f}, {0, 1, 0}}).hit());
+    EXPECT_EQ(lazy.refreshedThisFrame(), 0u);
+    // One ray into the mesh refreshes one path's worth of boxes and their siblings, not the tree.
+    EXPECT_TRUE(lazy.closestHit(Ray{{0.0f, 0.0f, -5.0f}, {0, 0, 1}}).hit());
+    EXPECT_GT(lazy.refreshedThisFrame(), 0u);
+    EXPECT_LT(lazy.refreshedThisFrame(), bvh.nodes.size() / 10);
+}
+
+TEST(LazyRefit, ConcurrentQueriesGiveTheSameHitsAsSerialOnes) {
+    const OwnedMesh rest = testing::uvSphere(64, 128);
+    OwnedMesh moved;
+    wave(rest, moved, 2.0f);
+    const std::vector<Ray> rays = randomRays(20000, 77);
+    std::vector<uint32_t> serial(rays.size()), parallel(rays.size());
+    {
+        Bvh bvh = buildBvh(rest.view());
+        LazyRefit lazy(bvh);
+        lazy.update(moved.view());
+        for (size_t i = 0; i < rays.size(); ++i) serial[i] = lazy.closestHit(rays[i]).triangle;
+    }
+    Bvh bvh = buildBvh(rest.view());
+    LazyRefit lazy(bvh);
+    lazy.update(moved.view());
+    raster::ThreadLimit limit(4);
+    raster::parallelFor(rays.size(), [&](size_t i) { parallel[i] = lazy.closestHit(rays[i]).triangle; });
+    EXPECT_EQ(serial, parallel);
+}
+
+}  // namespace
+}  // namespace cuberille::rt

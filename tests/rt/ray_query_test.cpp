@@ -1,0 +1,132 @@
+// Ray queries through the BVH give exactly the brute-force answer (same triangle, same t bits),
+// on random scenes and on the cases that break naive traversal: rays lying in box faces, through
+// shared edges and vertices, with +0 and -0 direction components, starting on surfaces.
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "rt/bvh_build.h"
+#include "rt/ray_query.h"
+#include "tests/rt/rt_test_support.h"
+
+namespace cuberille::rt {
+namespace {
+
+using testing::OwnedMesh;
+
+const BvhBuildMethod kMethods[] = {BvhBuildMethod::BinnedSah, BvhBuildMethod::SpatialMedian};
+
+void expectSameAsBruteForce(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray) {
+    const RayHit expected = closestHitBruteForce(mesh, ray);
+    const RayHit got = closestHit(bvh, mesh, ray);
+    ASSERT_EQ(got.triangle, expected.triangle)
+        << "origin " << ray.origin.x << " " << ray.origin.y << " " << ray.origin.z << " direction " << ray.direction.x
+        << " " << ray.direction.y << " " << ray.direction.z;
+    if (expected.hit()) {
+        EXPECT_EQ(got.t, expected.t);
+        EXPECT_EQ(got.u, expected.u);
+        EXPECT_EQ(got.v, expected.v);
+    }
+    ASSERT_EQ(anyHit(bvh, mesh, ray), anyHitBruteForce(mesh, ray));
+}
+
+TEST(RayQuery, ClosestAndAnyHitEqualBruteForceOnRandomScenes) {
+    for (const uint32_t seed : {1u, 2u, 3u}) {
+        const OwnedMesh soup = testing::randomSoup(3000, seed, 0.3f);
+        std::mt19937 rng(seed + 100);
+        std::uniform_real_distribution<float> unit(-1.5f, 1.5f), range(0.0f, 3.0f);
+        for (const BvhBuildMethod method : kMethods) {
+            const Bvh bvh = buildBvh(soup.view(), {.method = method});
+            for (int i = 0; i < 2000; ++i) {
+                Ray ray{{unit(rng), unit(rng), unit(rng)}, {unit(rng), unit(rng), unit(rng)}};
+                if (i % 3 == 0) ray.tMax = range(rng);  // shadow-ray style: a finite segment
+                if (i % 5 == 0) ray.tMin = range(rng) * 0.1f;
+                expectSameAsBruteForce(bvh, soup.view(), ray);
+            }
+        }
+    }
+}
+
+TEST(RayQuery, RaysInBoxFacesThroughEdgesAndVerticesEqualBruteForce) {
+    // Every lattice coordinate is an integer, so boxes, faces, edges and vertices all lie on the
+    // planes these rays start in, run along or pass through.
+    const OwnedMesh lattice = testing::cubeLattice(4);
+    const float nz = -0.0f;
+    const glm::vec3 directions[] = {{0, 0, 1},  {0, 0, -1}, {1, 0, 0},   {0, nz, 1},  {nz, 0, -1}, {nz, nz, 1},
+                                    {1, 1, 0},  {1, 1, 1},  {-1, -1, 1}, {1, 2, 0},   {0, 1, nz},  {0.5f, 0, 1}};
+    for (const BvhBuildMethod method : kMethods) {
+        const Bvh bvh = buildBvh(lattice.view(), {.method = method});
+        for (int x = -1; x <= 5; ++x)
+            for (int y = -1; y <= 5; ++y)
+                for (const float fx : {0.0f, 0.5f})
+                    for (const float fy : {0.0f, 0.5f})
+                        for (const float z : {-1.0f, 0.0f, 2.0f, 2.5f})
+                            for (const glm::vec3& d : directions) {
+                                const glm::vec3 o(float(x) + fx, float(y) + fy, z);
+                                expectSameAsBruteForce(bvh, lattice.view(), Ray{o, d});
+                                expectSameAsBruteForce(bvh, lattice.view(), Ray{{o.z, o.x, o.y}, {d.z, d.x, d.y}});
+                            }
+    }
+}
+
+TEST(RayQuery, OriginsOnSurfacesEqualBruteForce) {
+    // Shadow rays start on the surface they leave: at t = 0 they may hit it, and both must agree.
+    const OwnedMesh sphere = testing::uvSphere(16, 32);
+    const Bvh bvh = buildBvh(sphere.view());
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), weight(0.0f, 1.0f);
+    for (int i = 0; i < 3000; ++i) {
+        const uint32_t t = uint32_t(rng() % sphere.view().triangleCount());
+        float a = weight(rng), b = weight(rng);
+        if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
+        const TriangleMeshView m = sphere.view();
+        const glm::vec3 p = m.vertex(t, 0) + a * (m.vertex(t, 1) - m.vertex(t, 0)) + b * (m.vertex(t, 2) - m.vertex(t, 0));
+        for (const float tMin : {0.0f, 1e-4f})
+            expectSameAsBruteForce(bvh, m, Ray{p, {unit(rng), unit(rng), unit(rng)}, tMin});
+    }
+}
+
+TEST(RayQuery, NoRayEscapesAClosedMeshThroughAnEdgeOrVertex) {
+    // From points inside a closed sphere, rays aimed exactly at vertices and edge midpoints must
+    // hit: a non-watertight test lets some through the cracks between neighbouring triangles.
+    const OwnedMesh sphere = testing::uvSphere(20, 40);
+    const TriangleMeshView m = sphere.view();
+    const Bvh bvh = buildBvh(m);
+    int escaped = 0;
+    for (const glm::vec3 origin : {glm::vec3(0.0f), glm::vec3(0.3f, -0.2f, 0.1f), glm::vec3(-0.5f, 0.25f, 0.6f)}) {
+        for (const glm::vec3& v : sphere.positions) escaped += !closestHit(bvh, m, Ray{origin, v - origin}).hit();
+        for (size_t t = 0; t < m.triangleCount(); ++t)
+            for (int e = 0; e < 3; ++e) {
+                const glm::vec3 mid = 0.5f * (m.vertex(t, e) + m.vertex(t, (e + 1) % 3));
+                escaped += !closestHit(bvh, m, Ray{origin, mid - origin}).hit();
+            }
+    }
+    EXPECT_EQ(escaped, 0);
+}
+
+TEST(RayQuery, EqualTsGoToTheLowerTriangleId) {
+    // Two copies of one triangle: every hit is a tie, and the lower id must win in any tree.
+    OwnedMesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    for (int i = 0; i < 50; ++i) m.indices.insert(m.indices.end(), {0u, 1u, 2u});
+    const Bvh bvh = buildBvh(m.view(), {.maxLeafPrimitives = 1});
+    const RayHit hit = closestHit(bvh, m.view(), Ray{{0.2f, 0.2f, -1.0f}, {0, 0, 1}});
+    ASSERT_TRUE(hit.hit());
+    EXPECT_EQ(hit.triangle, 0u);
+    EXPECT_EQ(hit.t, 1.0f);
+}
+
+TEST(RayQuery, TraversalTestsFewTriangles) {
+    const OwnedMesh soup = testing::randomSoup(20000, 4, 0.05f);
+    const Bvh bvh = buildBvh(soup.view());
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    TraversalCounters counters;
+    const int rays = 1000;
+    for (int i = 0; i < rays; ++i) closestHit(bvh, soup.view(), Ray{{unit(rng), unit(rng), -3.0f}, {0.1f * unit(rng), 0.1f * unit(rng), 1.0f}}, counters);
+    EXPECT_LT(counters.trianglesTested / rays, 200u) << "a BVH should test a small fraction of 20000 triangles";
+}
+
+}  // namespace
+}  // namespace cuberille::rt

@@ -1,0 +1,125 @@
+#pragma once
+// Meshes made in code for the rt/ tests: random triangle soups, an axis-aligned lattice (whose
+// faces, edges and vertices lie exactly on box planes: the hard cases for traversal) and a
+// closed sphere (where a watertight test must never let a ray through); and the structural
+// check every built or refitted tree must pass.
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <gtest/gtest.h>
+
+#include "rt/bvh.h"
+#include "rt/bvh_build.h"
+#include "rt/triangle_mesh.h"
+
+namespace cuberille::rt::testing {
+
+struct OwnedMesh {
+    std::vector<glm::vec3> positions;
+    std::vector<uint32_t> indices;
+    TriangleMeshView view() const { return {positions, indices}; }
+};
+
+/// n independent triangles, centres uniform in [-1, 1]^3, edges up to `size` long.
+inline OwnedMesh randomSoup(uint32_t n, uint32_t seed, float size = 0.2f) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    OwnedMesh m;
+    for (uint32_t i = 0; i < n; ++i) {
+        const glm::vec3 c(unit(rng), unit(rng), unit(rng));
+        for (int k = 0; k < 3; ++k) {
+            m.positions.push_back(c + size * glm::vec3(unit(rng), unit(rng), unit(rng)));
+            m.indices.push_back(uint32_t(m.positions.size() - 1));
+        }
+    }
+    return m;
+}
+
+/// The faces of an n x n x n lattice of unit cubes with integer corners in [0, n]: every face
+/// two triangles, shared vertices, every coordinate an integer.
+inline OwnedMesh cubeLattice(int n) {
+    OwnedMesh m;
+    auto vertex = [&](int x, int y, int z) { return uint32_t((z * (n + 1) + y) * (n + 1) + x); };
+    for (int z = 0; z <= n; ++z)
+        for (int y = 0; y <= n; ++y)
+            for (int x = 0; x <= n; ++x) m.positions.push_back(glm::vec3(float(x), float(y), float(z)));
+    auto quad = [&](uint32_t a, uint32_t b, uint32_t c, uint32_t d) {
+        m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
+    };
+    for (int z = 0; z <= n; ++z)
+        for (int y = 0; y <= n; ++y)
+            for (int x = 0; x <= n; ++x) {
+                if (x < n && y < n) quad(vertex(x, y, z), vertex(x + 1, y, z), vertex(x + 1, y + 1, z), vertex(x, y + 1, z));
+                if (y < n && z < n) quad(vertex(x, y, z), vertex(x, y + 1, z), vertex(x, y + 1, z + 1), vertex(x, y, z + 1));
+                if (x < n && z < n) quad(vertex(x, y, z), vertex(x, y, z + 1), vertex(x + 1, y, z + 1), vertex(x + 1, y, z));
+            }
+    return m;
+}
+
+/// A closed UV sphere of radius r around c.
+inline OwnedMesh uvSphere(int rings, int segments, glm::vec3 c = glm::vec3(0.0f), float r = 1.0f) {
+    OwnedMesh m;
+    m.positions.push_back(c + glm::vec3(0, 0, r));
+    for (int i = 1; i < rings; ++i) {
+        const float theta = 3.14159265f * float(i) / float(rings);
+        for (int j = 0; j < segments; ++j) {
+            const float phi = 2.0f * 3.14159265f * float(j) / float(segments);
+            m.positions.push_back(c + r * glm::vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)));
+        }
+    }
+    m.positions.push_back(c + glm::vec3(0, 0, -r));
+    const uint32_t south = uint32_t(m.positions.size() - 1);
+    auto ring = [&](int i, int j) { return uint32_t(1 + (i - 1) * segments + (j % segments)); };
+    for (int j = 0; j < segments; ++j) m.indices.insert(m.indices.end(), {0u, ring(1, j), ring(1, j + 1)});
+    for (int i = 1; i < rings - 1; ++i)
+        for (int j = 0; j < segments; ++j)
+            m.indices.insert(m.indices.end(), {ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+    for (int j = 0; j < segments; ++j) m.indices.insert(m.indices.end(), {south, ring(rings - 1, j + 1), ring(rings - 1, j)});
+    return m;
+}
+
+/// Checks every structural invariant of `bvh` over `mesh`.
+inline void expectWellFormed(const Bvh& bvh, const TriangleMeshView& mesh) {
+    const size_t n = mesh.triangleCount();
+    ASSERT_EQ(bvh.primitiveIndices.size(), n);
+    if (n == 0) return;
+    EXPECT_EQ(bvh.nodes[0].box(), meshBounds(mesh)) << "the root box is the mesh's";
+    std::vector<int> seen(n, 0);
+    size_t leaves = 0;
+    for (uint32_t i = 0; i < bvh.nodes.size(); ++i) {
+        const BvhNode& node = bvh.nodes[i];
+        EXPECT_LE(bvh.depth[i], kMaxBvhDepth);
+        if (node.isLeaf()) {
+            ++leaves;
+            EXPECT_EQ(node.first, bvh.subtreeFirst[i]);
+            EXPECT_EQ(node.primitiveCount, bvh.subtreeCount[i]);
+            Aabb tight;
+            for (uint32_t k = node.first; k < node.first + node.primitiveCount; ++k) {
+                const uint32_t triangle = bvh.primitiveIndices[k];
+                ++seen[triangle];
+                EXPECT_TRUE(node.box().contains(mesh.triangleBounds(triangle))) << "triangle " << triangle << " leaf " << i;
+                tight.grow(mesh.triangleBounds(triangle));
+            }
+            EXPECT_EQ(node.box(), tight) << "leaf " << i << " is not tight";
+            continue;
+        }
+        ASSERT_LT(node.first + 1, bvh.nodes.size());
+        const BvhNode &left = bvh.nodes[node.first], &right = bvh.nodes[node.first + 1];
+        EXPECT_TRUE(node.box().contains(left.box())) << "node " << i;
+        EXPECT_TRUE(node.box().contains(right.box())) << "node " << i;
+        EXPECT_EQ(node.box(), merged(left.box(), right.box())) << "node " << i << " is not tight";
+        EXPECT_EQ(bvh.depth[node.first], bvh.depth[i] + 1);
+        EXPECT_EQ(bvh.subtreeFirst[node.first], bvh.subtreeFirst[i]);
+        EXPECT_EQ(bvh.subtreeFirst[node.first + 1], bvh.subtreeFirst[i] + bvh.subtreeCount[node.first]);
+        EXPECT_EQ(bvh.subtreeCount[node.first] + bvh.subtreeCount[node.first + 1], bvh.subtreeCount[i]);
+        EXPECT_GE(bvh.buildAreaRatio[i], 0.0f);
+    }
+    EXPECT_EQ(bvh.nodes.size(), 2 * leaves - 1) << "a full binary tree";
+    for (size_t t = 0; t < n; ++t) EXPECT_EQ(seen[t], 1) << "triangle " << t << " in " << seen[t] << " leaves";
+}
+
+}  // namespace cuberille::rt::testing
