@@ -25,7 +25,7 @@ void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int&
     command->add_option("--threads", threads, "Worker threads (0 = all cores)")->capture_default_str();
 }
 
-void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::string& view) {
+void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::string& view, std::string& shadows) {
     CLI::App* render = app.add_subcommand(
         "render", "Render one frame of a scene to an image (PNG: sRGB 8-bit; EXR: linear float)");
     std::string scenes;
@@ -39,7 +39,8 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_option("--view", view, "What to show: color, depth, tiles (coarse block "
                                        "classes), overdraw (depth-passing samples), lod (voxel models: "
                                        "blocks coloured by level) or visibility (voxel models: drawn green, "
-                                       "source triangles yellow, occlusion-culled red)")
+                                       "source triangles yellow, occlusion-culled red) or shadow-pixels "
+                                       "(the pixels the shadow stage traced rays for, red)")
         ->capture_default_str();
     render->add_option("--detail", o.detail, "Tessellation scale of built-in scenes")
         ->capture_default_str();
@@ -65,6 +66,19 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
                      "Voxel models: draw what the camera's frame selected as seen from its side, farther and above");
     render->add_option("--warmup", o.warmup,
                        "Voxel models: frames rendered first so occlusion culling has the frame before to learn from")
+        ->capture_default_str();
+    render->add_option("--shadows", shadows,
+                       "Shadows from the scene's lights: none, map (shadow maps), hybrid (maps, with shadow rays "
+                       "for the pixels a map may get wrong) or raytraced (a shadow ray per pixel, the reference)")
+        ->capture_default_str();
+    render->add_flag("--soft", o.shadows.soft, "Area lights: soft shadows (N x N rays where rays are traced)");
+    render->add_option("--light-radius", o.shadows.lightRadius,
+                       "With --soft: light radius in world units (point, spot); tangent of the angular radius "
+                       "(directional)")
+        ->capture_default_str();
+    render->add_option("--shadow-map-size", o.shadows.mapSizeTexels, "Shadow map side in texels (per cube face)")
+        ->capture_default_str();
+    render->add_option("--soft-samples", o.shadows.softSamplesPerSide, "With --soft: N, for N x N rays per pixel")
         ->capture_default_str();
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
@@ -168,8 +182,8 @@ int main(int argc, char** argv) {
     CLI::App app{"cuberille: a CPU renderer modelled on the GPU rasterization pipeline"};
     app.require_subcommand(1);
     cuberille::apps::RenderOptions renderOptions;
-    std::string view = "color";
-    addRenderCommand(app, renderOptions, view);
+    std::string view = "color", shadows = "none";
+    addRenderCommand(app, renderOptions, view, shadows);
     cuberille::apps::PackOptions packOptions;
     addPackCommand(app, packOptions);
     cuberille::apps::VoxelizeCommandOptions voxelizeOptions;
@@ -195,6 +209,7 @@ int main(int argc, char** argv) {
     try {
         if (app.got_subcommand("render")) {
             renderOptions.view = cuberille::apps::parseView(view);
+            renderOptions.shadows.mode = cuberille::apps::parseShadowMode(shadows);
             return cuberille::apps::runRenderCommand(renderOptions);
         }
         if (app.got_subcommand("pack")) return cuberille::apps::runPackCommand(packOptions);

@@ -26,6 +26,18 @@ void validate(const RenderOptions& o) {
     validateFrameOptions(o.width, o.height, o.msaa, o.threads);
     if (!(o.detail > 0.0f && o.detail <= 16.0f)) throw InputError("--detail: must be in (0, 16]");
     if (!std::isfinite(o.timeSeconds)) throw InputError("--time: must be a finite number of seconds");
+    const rt::ShadowOptions& sh = o.shadows;
+    if (sh.mapSizeTexels < 16 || sh.mapSizeTexels > 16384)
+        throw InputError("--shadow-map-size: " + std::to_string(sh.mapSizeTexels) + " is outside 16..16384");
+    if (sh.softSamplesPerSide < 1 || sh.softSamplesPerSide > 16)
+        throw InputError("--soft-samples: " + std::to_string(sh.softSamplesPerSide) + " is outside 1..16 (rays per side)");
+    if (!(sh.lightRadius >= 0.0f) || !std::isfinite(sh.lightRadius))
+        throw InputError("--light-radius: must be a finite number, 0 or more");
+    const bool threeD = !o.scene.ends_with(".tri") && !o.scene.ends_with(".cvox");
+    if ((sh.mode != rt::ShadowMode::None || o.view == View::ShadowPixels) && !threeD)
+        throw InputError("--shadows and --view shadow-pixels: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + o.scene);
+    if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
+        throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
 }
 
 raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) {
@@ -45,7 +57,8 @@ void finishView(const raster::Pipeline& p, View view, raster::Image& image, doub
     switch (view) {
         case View::Color:
         case View::Lod:
-        case View::Visibility: raster::resolveColor(p.framebuffer(), image); break;
+        case View::Visibility:
+        case View::ShadowPixels: raster::resolveColor(p.framebuffer(), image); break;
         case View::Depth: raster::resolveDepth(p.framebuffer(), image); break;
         case View::Overdraw: raster::visualizeOverdraw(p.framebuffer(), image); break;
         case View::Tiles: {
@@ -66,6 +79,7 @@ const char* viewName(View v) {
         case View::Overdraw: return "overdraw";
         case View::Lod: return "lod";
         case View::Visibility: return "visibility";
+        case View::ShadowPixels: return "shadow-pixels";
     }
     return "?";
 }
@@ -89,7 +103,8 @@ View parseView(const std::string& name) {
     if (name == "overdraw") return View::Overdraw;
     if (name == "lod") return View::Lod;
     if (name == "visibility") return View::Visibility;
-    throw scene::InputError("--view: '" + name + "' is not color, depth, tiles, overdraw, lod or visibility");
+    if (name == "shadow-pixels") return View::ShadowPixels;
+    throw scene::InputError("--view: '" + name + "' is not color, depth, tiles, overdraw, lod, visibility or shadow-pixels");
 }
 
 namespace {
@@ -122,9 +137,31 @@ void renderFrame(const RenderOptions& o, glm::vec4 background, Submit&& submit, 
     finishView(pipeline, o.view, result.image, result.stats.times.resolveMs);
 }
 
-void renderFrame(const scene::Scene& s, const RenderOptions& o, RenderResult& result) {
+// --view shadow-pixels: the frame dimmed, and the pixels the shadow stage traced rays for in red.
+void showShadowPixels(const std::vector<uint8_t>& marked, raster::Image& image) {
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) {
+            float* p = image.pixel(x, y);
+            const bool traced = !marked.empty() && marked[size_t(y) * image.width + x];
+            for (int k = 0; k < 3; ++k) p[k] = traced ? (k == 0 ? 1.0f : 0.1f) : 0.3f * p[k];
+        }
+}
+
+// A 3D scene's frame: the shadow stage first when asked for (its masks go to the shade stage
+// with the lights), then the draws.
+void renderFrame(const scene::Scene& s, const RenderOptions& o, SceneShadows* shadows, RenderResult& result) {
     result.sceneTriangles = s.triangleCount();
-    renderFrame(o, s.background, [&](raster::Pipeline& p) { s.draw(p, float(o.width) / float(o.height)); }, result);
+    std::optional<raster::Lighting> shadowed;
+    if (shadows) {
+        result.shadows.emplace();
+        const double t0 = raster::nowMs();
+        if (shadows->active()) shadowed = shadows->run(s, o.width, o.height, *result.shadows);
+        result.shadows->totalMs = raster::nowMs() - t0;
+    }
+    renderFrame(o, s.background, [&](raster::Pipeline& p) {
+        s.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
+    }, result);
+    if (o.view == View::ShadowPixels) showShadowPixels(shadows->markedPixels(), result.image);
 }
 
 // The camera turned about the world's up axis through its target.
@@ -190,7 +227,9 @@ RenderResult renderScene(const RenderOptions& o) {
         const scene::Scene s = load3dScene(o);
         result.loadMs = raster::nowMs() - t0;
         result.load = s.loadStats;
-        renderFrame(s, o, result);
+        std::optional<SceneShadows> shadows;
+        if (o.shadows.mode != rt::ShadowMode::None) shadows.emplace(s, o.shadows);
+        renderFrame(s, o, shadows ? &*shadows : nullptr, result);
         return result;
     }
     const scene::TriScene s = scene::loadTriScene(o.scene);
@@ -225,6 +264,23 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
                       {"facesEmitted", v.facesEmitted},
                       {"selectMs", v.selectMs},
                       {"expandMs", v.expandMs}};
+    }
+    if (r.shadows) {
+        const ShadowFrameStats& sh = *r.shadows;
+        const rt::ShadowStats& st = sh.shadows;
+        j["shadows"] = {{"mode", shadowModeName(sh.mode)},
+                        {"soft", sh.soft},
+                        {"lightsShadowed", st.lightsShadowed},
+                        {"casterTriangles", sh.casterTriangles},
+                        {"receiverPixels", st.receiverPixels},
+                        {"markedPixels", st.markedPixels},
+                        {"markedShare", st.receiverPixels ? double(st.markedPixels) / double(st.receiverPixels) : 0.0},
+                        {"raysTraced", st.raysTraced},
+                        {"bvhBuildMs", sh.bvhBuildMs},
+                        {"surfacesMs", sh.surfacesMs},
+                        {"mapMs", st.mapMs},
+                        {"maskMs", st.maskMs},
+                        {"totalMs", sh.totalMs}};
     }
     j["stages"] = {
         {"vertex", {{"verticesShaded", c.verticesShaded}, {"ms", t.vertexMs}}},
@@ -282,6 +338,17 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
     std::printf("  effects: %llu texture samples, %llu light evaluations, %llu pixels alpha-tested, %llu blended\n",
                 (unsigned long long)c.textureSamples, (unsigned long long)c.lightEvaluations,
                 (unsigned long long)c.pixelsAlphaTested, (unsigned long long)c.pixelsBlended);
+    if (r.shadows) {
+        const rt::ShadowStats& st = r.shadows->shadows;
+        std::printf("  shadows (%s%s): %d light%s, %llu receiver pixels, %llu marked (%.2f%%), %llu rays; %.1f ms "
+                    "(bvh %.1f, surfaces %.1f, maps %.1f, masks %.1f)\n",
+                    shadowModeName(r.shadows->mode), r.shadows->soft ? ", soft" : "", st.lightsShadowed,
+                    st.lightsShadowed == 1 ? "" : "s", (unsigned long long)st.receiverPixels,
+                    (unsigned long long)st.markedPixels,
+                    st.receiverPixels ? 100.0 * double(st.markedPixels) / double(st.receiverPixels) : 0.0,
+                    (unsigned long long)st.raysTraced, r.shadows->totalMs, r.shadows->bvhBuildMs, r.shadows->surfacesMs,
+                    st.mapMs, st.maskMs);
+    }
 }
 
 int runTurntable(const RenderOptions& o);
@@ -309,13 +376,15 @@ int runTurntable(const RenderOptions& o) {
     scene::Scene s = load3dScene(o);
     const double loadMs = raster::nowMs() - t0;
     const scene::Camera start = s.camera;
+    std::optional<SceneShadows> shadows;
+    if (o.shadows.mode != rt::ShadowMode::None) shadows.emplace(s, o.shadows);
     nlohmann::json frames = nlohmann::json::array();
     for (int i = 0; i < o.turntable; ++i) {
         s.camera = orbit(start, 360.0f * float(i) / float(o.turntable));
         RenderResult r;
         r.loadMs = i == 0 ? loadMs : 0.0;
         r.load = s.loadStats;
-        renderFrame(s, o, r);
+        renderFrame(s, o, shadows ? &*shadows : nullptr, r);
         const std::filesystem::path file = frameFileName(o.out, i);
         writeImageAtomically(file, r.image);
         if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));

@@ -10,12 +10,14 @@
 
 #include "raster/resolve.h"
 #include "raster/stats.h"
+#include "apps/scene_shadows.h"
 #include "lod/voxel_scene.h"
+#include "rt/shadows.h"
 #include "scene/load_stats.h"
 
 namespace cuberille::apps {
 
-enum class View { Color, Depth, Tiles, Overdraw, Lod, Visibility };
+enum class View { Color, Depth, Tiles, Overdraw, Lod, Visibility, ShadowPixels };
 
 struct RenderOptions {
     std::string scene;  // a .tri, .ply, .ply.gz or .obj path, or a built-in scene name
@@ -35,6 +37,7 @@ struct RenderOptions {
     bool noOcclusion = false; // voxel models: no occlusion culling
     int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
     bool debugCamera = false; // voxel models: show the frame's selection from behind and above
+    rt::ShadowOptions shadows; // --shadows, --soft, --light-radius, --shadow-map-size, --soft-samples
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;
@@ -47,6 +50,7 @@ struct RenderResult {
     double loadMs = 0;
     scene::LoadStats load;
     std::optional<lod::VoxelFrameStats> voxel;  // voxel models only
+    std::optional<ShadowFrameStats> shadows;    // when a shadow mode was asked for
 };
 
 View parseView(const std::string& name);  // throws scene::InputError

@@ -47,6 +47,11 @@ struct Light {
     glm::vec3 intensity{1.0f};                // linear RGB
     float range = 0.0f;                       // Point and Spot; 0: unlimited
     float cosInnerCone = 1.0f, cosOuterCone = 0.70710678f;  // Spot
+    /// A screen-space shadow mask, like the one a deferred GPU renderer reads: the fraction of
+    /// the light reaching the surface seen at each pixel of the target (row-major, the target's
+    /// width; 1 = lit). Null: unshadowed. Computed before the frame by rt/shadows.h; the shade
+    /// stage only multiplies it in, so raster/ knows nothing of how shadows are found.
+    const float* visibility = nullptr;
 };
 
 inline constexpr int kMaxLights = 8;

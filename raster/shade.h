@@ -35,6 +35,7 @@ struct ShadeQueue {
     int64_t edge0[kCapacity], edge1[kCapacity], edge2[kCapacity];
     uint32_t firstSample[kCapacity];  // index of the pixel's first sample in the tile
     uint32_t passMask[kCapacity];     // samples that passed the depth test
+    uint32_t pixelIndex[kCapacity];   // y x image width + x: where screen-space inputs are read
     float red[kCapacity], green[kCapacity], blue[kCapacity], alpha[kCapacity];
 };
 
@@ -70,7 +71,8 @@ public:
     SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 &&
-                        state.lighting.lights[0].type == LightType::Directional && layout.texCoord < 0 &&
+                        state.lighting.lights[0].type == LightType::Directional &&
+                        state.lighting.lights[0].visibility == nullptr && layout.texCoord < 0 &&
                         layout.alpha < 0 && !hasEmissive_;
     }
 
@@ -103,9 +105,9 @@ public:
             std::fill_n(occlusion, q.count, 1.0f);
             if (textured && s_.textures.occlusion) occlusionFromTexture(q.count, a, occlusion, counters);
             if constexpr (kModel == ShadingModel::Lambert)
-                lambert(q.count, a, occlusion, counters);
+                lambert(q, a, occlusion, counters);
             else
-                metallicRoughness(q.count, a, occlusion, counters);
+                metallicRoughness(q, a, occlusion, counters);
             if (hasEmissive_) addEmissive(q.count, a, counters);
             writeOut(q, a.radiance, a.alpha);
         }
@@ -300,7 +302,8 @@ private:
         counters.lightEvaluations += uint64_t(q.count);
     }
 
-    void lambert(int count, PixelAttributes& a, const float* occlusion, StageCounters& counters) const {
+    void lambert(const ShadeQueue& q, PixelAttributes& a, const float* occlusion, StageCounters& counters) const {
+        const int count = q.count;
         const Lighting& lighting = s_.lighting;
         float irradiance[3][N];
         for (int k = 0; k < 3; ++k)
@@ -311,12 +314,14 @@ private:
                 const glm::vec3 d = -light.direction, e = light.intensity;
                 for (int i = 0; i < count; ++i) {
                     const float c = std::max(0.0f, a.normal[0][i] * d.x + a.normal[1][i] * d.y + a.normal[2][i] * d.z);
-                    irradiance[0][i] += e.x * c, irradiance[1][i] += e.y * c, irradiance[2][i] += e.z * c;
+                    const float v = light.visibility ? light.visibility[q.pixelIndex[i]] : 1.0f;
+                    irradiance[0][i] += e.x * c * v, irradiance[1][i] += e.y * c * v, irradiance[2][i] += e.z * c * v;
                 }
             } else {
                 for (int i = 0; i < count; ++i) {
                     const Incident in = incident(light, a, i);
-                    const float c = std::max(0.0f, glm::dot(glm::vec3(a.normal[0][i], a.normal[1][i], a.normal[2][i]), in.toLight));
+                    float c = std::max(0.0f, glm::dot(glm::vec3(a.normal[0][i], a.normal[1][i], a.normal[2][i]), in.toLight));
+                    if (light.visibility) c *= light.visibility[q.pixelIndex[i]];
                     for (int k = 0; k < 3; ++k) irradiance[k][i] += in.intensity[k] * c;
                 }
             }
@@ -326,8 +331,9 @@ private:
             for (int i = 0; i < count; ++i) a.radiance[k][i] = a.albedo[k][i] * irradiance[k][i];
     }
 
-    void metallicRoughness(int count, PixelAttributes& a, const float* occlusion,
+    void metallicRoughness(const ShadeQueue& q, PixelAttributes& a, const float* occlusion,
                            StageCounters& counters) const {
+        const int count = q.count;
         const Lighting& lighting = s_.lighting;
         const bool textured = layout_.texCoord >= 0 && s_.textures.metallicRoughness;
         for (int i = 0; i < count; ++i) {
@@ -349,7 +355,8 @@ private:
             const float nDotV = std::max(glm::dot(n, view), 1e-4f);
             glm::vec3 color = lighting.ambient * occlusion[i] * (diffuse + f0);
             for (int l = 0; l < lighting.lightCount; ++l) {
-                const Incident in = incident(lighting.lights[l], a, i);
+                Incident in = incident(lighting.lights[l], a, i);
+                if (lighting.lights[l].visibility) in.intensity *= lighting.lights[l].visibility[q.pixelIndex[i]];
                 const float nDotL = glm::dot(n, in.toLight);
                 if (!(nDotL > 0.0f)) continue;
                 const glm::vec3 h = safeNormalize(in.toLight + view);

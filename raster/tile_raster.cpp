@@ -168,16 +168,17 @@ private:
             // Alpha test: whether the pixel exists is known only after shading, so its samples
             // are counted and its depths written then (late depth write, shadeAndMerge). It
             // reports no pass, so hierarchical Z is not tightened on its account.
-            queuePixel(first, pass, centreEdges);
+            queuePixel(x, y, first, pass, centreEdges);
             return 0;
         }
-        if (state.colorWriteMask) queuePixel(first, pass, centreEdges);
+        if (state.colorWriteMask) queuePixel(x, y, first, pass, centreEdges);
         writeDepthAndCount(x, y, first, pass, depth, maxDepthPassed);
         return pass;
     }
 
-    void queuePixel(size_t first, uint32_t pass, const int64_t centreEdges[3]) {
+    void queuePixel(int32_t x, int32_t y, size_t first, uint32_t pass, const int64_t centreEdges[3]) {
         const int i = queue_.count++;
+        queue_.pixelIndex[i] = uint32_t(y) * uint32_t(target_.imageWidth) + uint32_t(x);
         queue_.edge0[i] = centreEdges[0];
         queue_.edge1[i] = centreEdges[1];
         queue_.edge2[i] = centreEdges[2];

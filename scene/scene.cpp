@@ -10,7 +10,7 @@ size_t Scene::triangleCount() const {
     return n;
 }
 
-void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
+void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lighting* shadowedLighting) const {
     const glm::mat4 clipFromWorld = camera.clipFromWorld(aspect);
     std::vector<size_t> order, blended;
     for (size_t i = 0; i < meshes.size(); ++i)
@@ -50,7 +50,7 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect) const {
         d.state.alphaMode = m.alphaMode;
         d.state.alphaCutoff = m.alphaCutoff;
         d.state.depthWrite = m.alphaMode != raster::AlphaMode::Blend;
-        d.state.lighting = lighting;
+        d.state.lighting = shadowedLighting && m.alphaMode != raster::AlphaMode::Blend ? *shadowedLighting : lighting;
         d.state.metallic = m.metallic;
         d.state.roughness = m.roughness;
         d.state.emissive = m.emissive;

@@ -1,0 +1,69 @@
+#include "apps/scene_shadows.h"
+
+#include "raster/clock.h"
+#include "rt/bvh_build.h"
+#include "scene/input_error.h"
+
+namespace cuberille::apps {
+
+SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& options) : options_(options) {
+    if (options.mode == rt::ShadowMode::None) return;
+    bool anyLight = false;
+    for (int l = 0; l < s.lighting.lightCount; ++l) anyLight = anyLight || rt::castsShadows(s.lighting.lights[l]);
+    if (!anyLight) return;
+    for (const scene::Mesh& m : s.meshes) {
+        if (m.alphaMode == raster::AlphaMode::Blend) continue;
+        const uint32_t base = uint32_t(positions_.size());
+        positions_.insert(positions_.end(), m.positions.begin(), m.positions.end());
+        ranges_.push_back({uint32_t(indices_.size() / 3), uint32_t(m.triangleCount()), base,
+                           uint32_t(m.positions.size()), m.doubleSided ? raster::CullMode::None : s.cull});
+        for (const uint32_t i : m.indices) indices_.push_back(base + i);
+    }
+    if (indices_.empty()) return;
+    for (const glm::vec3& p : positions_) bounds_.grow(p);
+    active_ = true;
+    if (options.mode == rt::ShadowMode::Hybrid || options.mode == rt::ShadowMode::RayTraced) {
+        const double t0 = raster::nowMs();
+        bvh_ = rt::buildBvh({positions_, indices_});
+        bvhBuildMs_ = raster::nowMs() - t0;
+    }
+}
+
+raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height, ShadowFrameStats& stats) {
+    stats.mode = options_.mode;
+    stats.soft = options_.soft;
+    stats.casterTriangles = indices_.size() / 3;
+    if (!bvhReported_) stats.bvhBuildMs = bvhBuildMs_, bvhReported_ = true;
+    raster::Lighting lighting = s.lighting;
+    if (!active_) return lighting;
+    const rt::TriangleMeshView casters{positions_, indices_};
+    double t0 = raster::nowMs();
+    const rt::ScreenSurfaces surfaces =
+        rt::findScreenSurfaces(casters, ranges_, s.camera.clipFromWorld(float(width) / float(height)), width, height);
+    stats.surfacesMs = raster::nowMs() - t0;
+    masks_ = rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &*bvh_ : nullptr, bounds_}, options_);
+    stats.shadows = masks_.stats;
+    for (int l = 0; l < lighting.lightCount; ++l)
+        if (!masks_.visibility[size_t(l)].empty()) lighting.lights[l].visibility = masks_.visibility[size_t(l)].data();
+    return lighting;
+}
+
+rt::ShadowMode parseShadowMode(const std::string& name) {
+    if (name == "none") return rt::ShadowMode::None;
+    if (name == "map") return rt::ShadowMode::Map;
+    if (name == "hybrid") return rt::ShadowMode::Hybrid;
+    if (name == "raytraced") return rt::ShadowMode::RayTraced;
+    throw scene::InputError("--shadows: '" + name + "' is not none, map, hybrid or raytraced");
+}
+
+const char* shadowModeName(rt::ShadowMode mode) {
+    switch (mode) {
+        case rt::ShadowMode::None: return "none";
+        case rt::ShadowMode::Map: return "map";
+        case rt::ShadowMode::Hybrid: return "hybrid";
+        case rt::ShadowMode::RayTraced: return "raytraced";
+    }
+    return "?";
+}
+
+}  // namespace cuberille::apps

@@ -1,0 +1,61 @@
+#pragma once
+// The shadow stage for a 3D scene (rt/shadows.h) wired to the scene: which meshes cast and
+// receive, the BVH over them, and the per-frame screen-space masks handed to the shade stage.
+//
+// Casters are the opaque and alpha-tested meshes (alpha-tested ones as if opaque), concatenated
+// in world space in draw order, each keeping its culling so the visibility buffer sees what the
+// frame shades. Blended meshes neither cast nor take masks (scene::Scene::draw). Nothing here
+// runs unless a mode is asked for and a light casts shadows: the promise that a stage a scene
+// does not need costs nothing.
+
+#include <optional>
+#include <vector>
+
+#include "rt/bvh.h"
+#include "rt/screen_surfaces.h"
+#include "rt/shadows.h"
+#include "scene/scene.h"
+
+namespace cuberille::apps {
+
+struct ShadowFrameStats {
+    rt::ShadowMode mode = rt::ShadowMode::None;
+    bool soft = false;
+    rt::ShadowStats shadows;
+    size_t casterTriangles = 0;
+    double bvhBuildMs = 0.0;  // once per scene, reported with the first frame
+    double surfacesMs = 0.0;  // the visibility buffer and surface reconstruction
+    double totalMs = 0.0;     // the whole stage this frame, BVH build included on the first
+};
+
+class SceneShadows {
+public:
+    SceneShadows(const scene::Scene& scene, const rt::ShadowOptions& options);
+
+    /// Whether the stage runs at all: a mode other than none, casters and a shadow-casting light.
+    bool active() const { return active_; }
+
+    /// One frame's masks for the scene's current camera; returns the lighting to shade with
+    /// (the scene's lights, each pointing at its mask). Valid until the next call.
+    raster::Lighting run(const scene::Scene& scene, int width, int height, ShadowFrameStats& stats);
+
+    /// Per pixel of the last frame: rays were traced there for some light.
+    const std::vector<uint8_t>& markedPixels() const { return masks_.marked; }
+
+private:
+    rt::ShadowOptions options_;
+    bool active_ = false;
+    std::vector<glm::vec3> positions_;
+    std::vector<uint32_t> indices_;
+    std::vector<rt::CasterRange> ranges_;
+    rt::Aabb bounds_;
+    std::optional<rt::Bvh> bvh_;
+    double bvhBuildMs_ = 0.0;
+    bool bvhReported_ = false;
+    rt::ShadowMasks masks_;
+};
+
+rt::ShadowMode parseShadowMode(const std::string& name);  // throws scene::InputError
+const char* shadowModeName(rt::ShadowMode mode);
+
+}  // namespace cuberille::apps

@@ -1,0 +1,131 @@
+#include "rt/shadow_map.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "raster/pipeline.h"
+#include "raster/resolve.h"
+
+namespace cuberille::rt {
+namespace {
+
+// An up vector not parallel to the view direction.
+glm::vec3 upFor(const glm::vec3& forward) {
+    return std::abs(forward.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
+}
+
+ShadowMapFace orthographicFace(const glm::vec3& direction, const Aabb& bounds) {
+    const glm::vec3 centre = bounds.centre();
+    const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
+    ShadowMapFace f;
+    const glm::vec3 eye = centre - direction * (2.0f * radius);
+    f.viewFromWorld = glm::lookAtRH(eye, centre, upFor(direction));
+    f.nearPlane = 0.5f * radius;
+    f.farPlane = 3.5f * radius;
+    f.halfExtent = radius;
+    f.clipFromWorld = glm::orthoRH_ZO(-radius, radius, -radius, radius, f.nearPlane, f.farPlane) * f.viewFromWorld;
+    return f;
+}
+
+ShadowMapFace perspectiveFace(const glm::vec3& position, const glm::vec3& forward, float halfAngle, const Aabb& bounds) {
+    ShadowMapFace f;
+    f.perspective = true;
+    f.viewFromWorld = glm::lookAtRH(position, position + forward, upFor(forward));
+    float farthest = 0.0f;
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec3 corner((c & 1) ? bounds.hi.x : bounds.lo.x, (c & 2) ? bounds.hi.y : bounds.lo.y,
+                               (c & 4) ? bounds.hi.z : bounds.lo.z);
+        farthest = std::max(farthest, glm::distance(position, corner));
+    }
+    f.farPlane = std::max(farthest * 1.01f, 1e-3f);
+    f.nearPlane = f.farPlane * 1e-4f;
+    f.halfExtent = std::tan(halfAngle);
+    f.clipFromWorld = glm::perspectiveRH_ZO(2.0f * halfAngle, 1.0f, f.nearPlane, f.farPlane) * f.viewFromWorld;
+    return f;
+}
+
+/// Linear depth from the rasterizer's [0, 1] depth (Direct3D convention: z_ndc = depth).
+float linearDepth(const ShadowMapFace& f, float d) {
+    if (d >= 1.0f) return ShadowMap::kEmpty;
+    if (!f.perspective) return f.nearPlane + d * (f.farPlane - f.nearPlane);
+    return f.nearPlane * f.farPlane / (f.farPlane - d * (f.farPlane - f.nearPlane));
+}
+
+void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size) {
+    raster::Pipeline pipeline;
+    raster::FramebufferDesc desc;
+    desc.widthPixels = desc.heightPixels = size;
+    desc.samples = 1;
+    pipeline.beginFrame(desc);
+    raster::DrawCall d;
+    d.space = raster::PositionSpace::Clip;
+    d.clipFromObject = f.clipFromWorld;
+    d.positions = casters.positions;
+    d.indices = casters.indices;
+    d.state.shading = raster::ShadingModel::ConstantColor;
+    d.state.cull = raster::CullMode::None;  // both faces cast
+    d.state.colorWriteMask = 0;             // depth only
+    pipeline.draw(d);
+    pipeline.endFrame();
+    raster::Image depth;
+    raster::resolveDepth(pipeline.framebuffer(), depth);
+    f.depth.resize(size_t(size) * size);
+    for (size_t i = 0; i < f.depth.size(); ++i) f.depth[i] = linearDepth(f, depth.rgba[i * 4]);
+}
+
+}  // namespace
+
+ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size) {
+    ShadowMap map;
+    map.size_ = size;
+    map.lightPosition_ = light.position;
+    switch (light.type) {
+        case raster::LightType::Directional:
+            map.faces_.push_back(orthographicFace(glm::normalize(light.direction), bounds));
+            break;
+        case raster::LightType::Spot: {
+            const float halfAngle = std::min(std::acos(std::clamp(light.cosOuterCone, -1.0f, 1.0f)), glm::radians(85.0f));
+            map.faces_.push_back(perspectiveFace(light.position, glm::normalize(light.direction), halfAngle, bounds));
+            break;
+        }
+        case raster::LightType::Point:
+            for (const glm::vec3 axis : {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, -1, 0),
+                                         glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)})
+                map.faces_.push_back(perspectiveFace(light.position, axis, glm::radians(45.0f), bounds));
+            break;
+    }
+    for (ShadowMapFace& f : map.faces_) drawDepth(f, casters, size);
+    return map;
+}
+
+glm::vec3 ShadowMap::project(int face, const glm::vec3& p) const {
+    const ShadowMapFace& f = faces_[size_t(face)];
+    const glm::vec4 clip = f.clipFromWorld * glm::vec4(p, 1.0f);
+    const glm::vec3 view = glm::vec3(f.viewFromWorld * glm::vec4(p, 1.0f));
+    const float w = f.perspective ? clip.w : 1.0f;
+    // The rasterizer's viewport: x right, y down (DESIGN.md).
+    return {(clip.x / w * 0.5f + 0.5f) * float(size_), (0.5f - clip.y / w * 0.5f) * float(size_), -view.z};
+}
+
+ShadowMapTexel ShadowMap::locate(const glm::vec3& p) const {
+    ShadowMapTexel t;
+    int face = 0;
+    if (faces_.size() == 6) {  // cube map: the face of the dominant axis from the light
+        const glm::vec3 v = p - lightPosition_, a = glm::abs(v);
+        const int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+        face = 2 * axis + (v[axis] < 0.0f ? 1 : 0);
+    }
+    const glm::vec3 q = project(face, p);
+    if (!(q.z > 0.0f) || !(q.x >= 0.0f && q.y >= 0.0f && q.x < float(size_) && q.y < float(size_))) return t;
+    const ShadowMapFace& f = faces_[size_t(face)];
+    t.face = face;
+    t.x = int(q.x);
+    t.y = int(q.y);
+    t.receiverDepth = q.z;
+    t.texelWorld = 2.0f * f.halfExtent * (f.perspective ? q.z : 1.0f) / float(size_);
+    return t;
+}
+
+}  // namespace cuberille::rt

@@ -1,0 +1,65 @@
+#pragma once
+// Shadow maps drawn by the software GPU itself: the casters rendered from the light with depth
+// only (colour writes off, both faces, one sample at each texel centre), a pass raster/ needs
+// no change for. Depths are kept as linear distances along the light's view axis, so bias and
+// the hybrid method's tests work in world units for every light type.
+//
+// Directional lights get one orthographic view fitted to the casters' bounds; spot lights one
+// perspective view spanning the outer cone; point lights six 90-degree views (a cube map).
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "raster/draw.h"
+#include "rt/aabb.h"
+#include "rt/triangle_mesh.h"
+
+namespace cuberille::rt {
+
+struct ShadowMapFace {
+    glm::mat4 viewFromWorld{1.0f};
+    glm::mat4 clipFromWorld{1.0f};
+    bool perspective = false;
+    float nearPlane = 0.0f, farPlane = 1.0f;
+    float halfExtent = 1.0f;  // orthographic: half the side in world units; perspective: tan(half fov)
+    std::vector<float> depth;  // size x size, row-major from the top; linear, +inf where empty
+};
+
+/// Where a world-space point falls in a shadow map.
+struct ShadowMapTexel {
+    int face = -1;  // -1: outside every face
+    int x = 0, y = 0;
+    float receiverDepth = 0.0f;  // the point's linear depth in that face
+    float texelWorld = 0.0f;     // a texel's side in world units at the point's depth
+};
+
+class ShadowMap {
+public:
+    /// Renders the casters' depth from the light. `sizeTexels` per side (per face for cube maps).
+    static ShadowMap render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& casterBounds,
+                            int sizeTexels);
+
+    ShadowMapTexel locate(const glm::vec3& p) const;
+    /// Linear depth at a texel; +inf outside the face or where no caster was drawn.
+    float depthAt(int face, int x, int y) const {
+        if (x < 0 || y < 0 || x >= size_ || y >= size_) return kEmpty;
+        return faces_[size_t(face)].depth[size_t(y) * size_ + x];
+    }
+    int size() const { return size_; }
+    int faceCount() const { return int(faces_.size()); }
+    const ShadowMapFace& face(int i) const { return faces_[size_t(i)]; }
+    /// Texel position (continuous, in texels) of a point in a face, and its linear depth.
+    glm::vec3 project(int face, const glm::vec3& p) const;
+
+    static constexpr float kEmpty = std::numeric_limits<float>::infinity();
+
+private:
+    int size_ = 0;
+    glm::vec3 lightPosition_{0.0f};  // point lights: the cube's centre
+    std::vector<ShadowMapFace> faces_;
+};
+
+}  // namespace cuberille::rt

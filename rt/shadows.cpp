@@ -1,0 +1,422 @@
+#include "rt/shadows.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+
+#include "raster/clock.h"
+#include "raster/parallel.h"
+#include "rt/ray_query.h"
+#include "rt/shadow_map.h"
+
+namespace cuberille::rt {
+namespace {
+
+// ---- the light as seen from a surface point ------------------------------------------------
+
+struct Incidence {
+    glm::vec3 toLight{0.0f};  // unit
+    float distance = 0.0f;    // +inf for directional lights
+    bool reaches = false;     // the light can contribute here at all (facing, in cone, in range)
+};
+
+Incidence incidence(const raster::Light& light, const glm::vec3& p, const glm::vec3& n) {
+    Incidence in;
+    if (light.type == raster::LightType::Directional) {
+        in.toLight = -glm::normalize(light.direction);
+        in.distance = std::numeric_limits<float>::infinity();
+    } else {
+        const glm::vec3 d = light.position - p;
+        in.distance = glm::length(d);
+        if (!(in.distance > 0.0f)) return in;
+        in.toLight = d / in.distance;
+        if (light.range > 0.0f && in.distance >= light.range) return in;
+        if (light.type == raster::LightType::Spot && glm::dot(light.direction, -in.toLight) <= light.cosOuterCone) return in;
+    }
+    in.reaches = glm::dot(n, in.toLight) > 0.0f;
+    return in;
+}
+
+float distanceToSegment(const glm::vec2& p, const glm::vec2& a, const glm::vec2& b) {
+    const glm::vec2 ab = b - a;
+    const float length2 = glm::dot(ab, ab);
+    const float t = length2 > 0.0f ? std::clamp(glm::dot(p - a, ab) / length2, 0.0f, 1.0f) : 0.0f;
+    return glm::length(p - (a + t * ab));
+}
+
+/// Distance from p to a 2D triangle (0 inside), either winding.
+float distanceToTriangle(const glm::vec2& p, const glm::vec2& a, const glm::vec2& b, const glm::vec2& c) {
+    auto side = [](const glm::vec2& u, const glm::vec2& v, const glm::vec2& w) {
+        return (v.x - u.x) * (w.y - u.y) - (v.y - u.y) * (w.x - u.x);
+    };
+    const float d0 = side(a, b, p), d1 = side(b, c, p), d2 = side(c, a, p);
+    if ((d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0)) return 0.0f;
+    return std::min({distanceToSegment(p, a, b), distanceToSegment(p, b, c), distanceToSegment(p, c, a)});
+}
+
+/// Stratified points on the unit disk (Shirley and Chiu's concentric map of an N x N grid of
+/// cell centres): fixed, so soft shadows are deterministic.
+std::vector<glm::vec2> diskSamples(int n) {
+    std::vector<glm::vec2> samples;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const float a = 2.0f * (float(i) + 0.5f) / float(n) - 1.0f, b = 2.0f * (float(j) + 0.5f) / float(n) - 1.0f;
+            float r, phi;
+            if (std::abs(a) > std::abs(b)) {
+                r = a;
+                phi = 0.78539816f * (b / a);
+            } else {
+                r = b;
+                phi = 1.57079633f - 0.78539816f * (a / b);
+            }
+            samples.push_back({r * std::cos(phi), r * std::sin(phi)});
+        }
+    return samples;
+}
+
+void perpendicularBasis(const glm::vec3& w, glm::vec3& u, glm::vec3& v) {
+    u = glm::normalize(glm::cross(std::abs(w.x) > 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0), w));
+    v = glm::cross(w, u);
+}
+
+// ---- one light's shadow stage ------------------------------------------------------------
+
+class LightShadows {
+public:
+    LightShadows(const raster::Light& light, const ShadowCasters& casters, const ShadowOptions& options)
+        : light_(light), casters_(casters), options_(options) {
+        const float radius = 0.5f * glm::length(casters.bounds.extent());
+        rayOffset_ = 1e-4f * std::max(radius, 1e-3f);
+        if (options.soft) disk_ = diskSamples(std::max(1, options.softSamplesPerSide));
+    }
+
+    void prepareMap() {
+        map_ = std::make_unique<ShadowMap>(ShadowMap::render(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels));
+        if (options_.mode != ShadowMode::Hybrid && !options_.soft) return;
+        faces_.resize(size_t(map_->faceCount()));
+        for (int f = 0; f < map_->faceCount(); ++f) prepareFace(f);
+    }
+
+    /// The light's visibility at one receiver; sets *marked when rays decided it, adds rays.
+    float visibility(const glm::vec3& p, const glm::vec3& n, const Incidence& in, bool* marked, uint64_t* rays) const {
+        *marked = false;
+        if (options_.mode == ShadowMode::RayTraced) {
+            *marked = true;
+            return trace(p, n, in, rays);
+        }
+        const ShadowMapTexel t = map_->locate(p);
+        if (t.face < 0) {  // outside the map: only rays can tell
+            if (options_.mode == ShadowMode::Map) return 1.0f;
+            *marked = true;
+            return trace(p, n, in, rays);
+        }
+        const Receiver r = receiver(p, n, t);
+        if (options_.mode == ShadowMode::Map) return options_.soft ? percentageCloser(r, t) : (litAt(r, t, 0, 0) ? 1.0f : 0.0f);
+        int decision = 0;  // hybrid: what the 3x3 texels agree on, or -1
+        if (potentiallyIncorrect(r, t, &decision)) {
+            *marked = true;
+            return trace(p, n, in, rays);
+        }
+        return float(decision);
+    }
+
+private:
+    /// A receiver in map space: its continuous texel position and the plane through it, as depth
+    /// change per texel step along x and y.
+    struct Receiver {
+        float qx, qy, depth;
+        float slopeX, slopeY;
+        float texelWorld;
+        float bias;
+    };
+
+    Receiver receiver(const glm::vec3& p, const glm::vec3& n, const ShadowMapTexel& t) const {
+        const ShadowMapFace& face = map_->face(t.face);
+        const glm::vec3 q = map_->project(t.face, p);
+        const glm::vec3 nv = glm::mat3(face.viewFromWorld) * n;
+        // The receiver's plane, carried one texel over: view x is texel x, view y is texel -y.
+        const float nz = std::max(nv.z, 0.05f);  // steeper than 20 texels of depth per texel: clamp
+        Receiver r;
+        r.qx = q.x;
+        r.qy = q.y;
+        r.depth = q.z;
+        r.texelWorld = t.texelWorld;
+        r.slopeX = nv.x / nz * t.texelWorld;
+        r.slopeY = -nv.y / nz * t.texelWorld;
+        r.bias = 0.5f * t.texelWorld + rayOffset_;  // rounding of the map and of curved receivers
+        return r;
+    }
+
+    /// Lit by the map at texel (x + dx, y + dy): its stored depth against the receiver's plane at
+    /// that texel's centre (a receiver-plane depth bias, so sloped receivers do not shadow themselves).
+    bool litAt(const Receiver& r, const ShadowMapTexel& t, int dx, int dy) const {
+        const float cx = float(t.x + dx) + 0.5f - r.qx, cy = float(t.y + dy) + 0.5f - r.qy;
+        const float planeDepth = r.depth + r.slopeX * cx + r.slopeY * cy;
+        return planeDepth - r.bias <= map_->depthAt(t.face, t.x + dx, t.y + dy);
+    }
+
+    bool potentiallyIncorrect(const Receiver& r, const ShadowMapTexel& t, int* decision) const {
+        const int size = map_->size();
+        if (t.x < 1 || t.y < 1 || t.x >= size - 1 || t.y >= size - 1) return true;  // a neighbour is off the face
+        const bool centre = litAt(r, t, 0, 0);
+        const FaceMarks& marks = faces_[size_t(t.face)];
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                if (litAt(r, t, dx, dy) != centre) return true;  // a shadow edge passes near
+                // A thin caster the map may have missed, nearer the light than the receiver.
+                if (marks.thinDepth[size_t(t.y + dy) * size + t.x + dx] < r.depth + r.bias) return true;
+            }
+        if (options_.soft && nearDiscontinuity(r, t)) return true;
+        *decision = centre ? 1 : 0;
+        return false;
+    }
+
+    // ---- soft shadows: where the penumbra can be -----------------------------------------------
+
+    /// The widest penumbra a receiver at this depth can see, in texels: a blocker as near the
+    /// light as the nearest caster in the map, and the light's full radius.
+    int penumbraTexels(const Receiver& r, const ShadowMapTexel& t) const {
+        const ShadowMapFace& face = map_->face(t.face);
+        const float nearest = faces_[size_t(t.face)].nearestDepth;
+        const float gap = std::max(0.0f, r.depth - nearest);
+        float world;  // lateral reach of the penumbra at the blocker's depth, in texels there
+        if (face.perspective) {
+            const float texelAtBlocker = 2.0f * face.halfExtent * std::max(nearest, face.nearPlane) / float(map_->size());
+            world = options_.lightRadius * gap / std::max(r.depth, 1e-6f) / texelAtBlocker;
+        } else {
+            world = options_.lightRadius * gap / r.texelWorld;
+        }
+        return int(std::min(std::ceil(world) + 1.0f, 1e6f));
+    }
+
+    bool nearDiscontinuity(const Receiver& r, const ShadowMapTexel& t) const {
+        const int reach = penumbraTexels(r, t);
+        const FaceMarks& marks = faces_[size_t(t.face)];
+        const int size = map_->size();
+        const int x0 = std::max(0, t.x - reach), y0 = std::max(0, t.y - reach);
+        const int x1 = std::min(size - 1, t.x + reach), y1 = std::min(size - 1, t.y + reach);
+        return marks.discontinuitiesIn(x0, y0, x1, y1, size) > 0;
+    }
+
+    /// Map mode, soft: the fraction of lit texels over the penumbra's width (PCF).
+    float percentageCloser(const Receiver& r, const ShadowMapTexel& t) const {
+        const int reach = std::min(penumbraTexels(r, t), 8);
+        int lit = 0, total = 0;
+        for (int dy = -reach; dy <= reach; ++dy)
+            for (int dx = -reach; dx <= reach; ++dx) {
+                lit += litAt(r, t, dx, dy);
+                ++total;
+            }
+        return float(lit) / float(total);
+    }
+
+    // ---- rays ------------------------------------------------------------------------------
+
+    float trace(const glm::vec3& p, const glm::vec3& n, const Incidence& in, uint64_t* rays) const {
+        const glm::vec3 origin = p + n * rayOffset_;
+        if (!options_.soft) {
+            ++*rays;
+            return occluded(origin, in.toLight, in.distance) ? 0.0f : 1.0f;
+        }
+        glm::vec3 u, v;
+        perpendicularBasis(in.toLight, u, v);
+        int lit = 0;
+        for (const glm::vec2& s : disk_) {
+            glm::vec3 direction;
+            float distance;
+            if (light_.type == raster::LightType::Directional) {
+                direction = glm::normalize(in.toLight + options_.lightRadius * (s.x * u + s.y * v));
+                distance = std::numeric_limits<float>::infinity();
+            } else {
+                const glm::vec3 target = light_.position + options_.lightRadius * (s.x * u + s.y * v) - origin;
+                distance = glm::length(target);
+                direction = target / distance;
+            }
+            lit += !occluded(origin, direction, distance);
+        }
+        *rays += disk_.size();
+        return float(lit) / float(disk_.size());
+    }
+
+    bool occluded(const glm::vec3& origin, const glm::vec3& direction, float distance) const {
+        Ray ray{origin, direction, 0.0f, std::isinf(distance) ? distance : distance * (1.0f - 1e-4f)};
+        return anyHit(*casters_.bvh, casters_.mesh, ray);
+    }
+
+    // ---- per-face marks for the hybrid method -------------------------------------------------
+
+    struct FaceMarks {
+        std::vector<float> thinDepth;              // nearest thin caster over each texel; +inf: none
+        std::vector<uint32_t> discontinuitySums;   // summed-area table of discontinuity texels
+        float nearestDepth = 0.0f;                 // the nearest caster depth in the face
+
+        uint32_t discontinuitiesIn(int x0, int y0, int x1, int y1, int size) const {
+            const size_t w = size_t(size) + 1;
+            auto at = [&](int x, int y) { return discontinuitySums[size_t(y) * w + size_t(x)]; };
+            return at(x1 + 1, y1 + 1) - at(x0, y1 + 1) - at(x1 + 1, y0) + at(x0, y0);
+        }
+    };
+
+    void prepareFace(int f) {
+        const int size = map_->size();
+        FaceMarks& marks = faces_[size_t(f)];
+        marks.thinDepth.assign(size_t(size) * size, ShadowMap::kEmpty);
+        markThinTriangles(f, marks);
+        marks.nearestDepth = ShadowMap::kEmpty;
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x) marks.nearestDepth = std::min(marks.nearestDepth, map_->depthAt(f, x, y));
+        if (!options_.soft) return;
+        // A discontinuity: a texel whose 3x3 neighbourhood spans more depth than a surface four
+        // texels steep would (or meets an empty texel: a silhouette against nothing). A thin
+        // caster counts as one: its penumbra is as wide as any other's.
+        const ShadowMapFace& face = map_->face(f);
+        const size_t w = size_t(size) + 1;
+        marks.discontinuitySums.assign(w * (size_t(size) + 1), 0);
+        for (int y = 0; y < size; ++y) {
+            uint32_t row = 0;
+            for (int x = 0; x < size; ++x) {
+                const float s = map_->depthAt(f, x, y);
+                float lo = s, hi = s;
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        if (x + dx < 0 || y + dy < 0 || x + dx >= size || y + dy >= size) continue;
+                        const float d = map_->depthAt(f, x + dx, y + dy);
+                        lo = std::min(lo, d), hi = std::max(hi, d);
+                    }
+                const float texel = 2.0f * face.halfExtent * (face.perspective ? std::min(lo, face.farPlane) : 1.0f) / float(size);
+                const bool edge = (hi - lo > 4.0f * texel) || std::isinf(hi) != std::isinf(lo) ||
+                                  marks.thinDepth[size_t(y) * size + x] < ShadowMap::kEmpty;
+                row += edge;
+                marks.discontinuitySums[size_t(y + 1) * w + size_t(x + 1)] = marks.discontinuitySums[size_t(y) * w + size_t(x + 1)] + row;
+            }
+        }
+    }
+
+    /// Triangles thin in light space (an altitude under one texel while longer than one) and in the
+    /// world (slivers, wires, poles narrower than a texel) can fall between texel centres and
+    /// vanish from the map. Each marks every texel
+    /// it touches (conservative rasterization: the texel's centre within half a diagonal of the
+    /// triangle), with its nearest depth.
+    void markThinTriangles(int f, FaceMarks& marks) const {
+        // Finding the thin triangles is a pass over every caster, in parallel over fixed chunks;
+        // marking them (few, and writing shared texels) runs after, in triangle order.
+        const size_t count = casters_.mesh.triangleCount();
+        constexpr size_t kChunk = 16384;
+        std::vector<std::vector<uint32_t>> thin((count + kChunk - 1) / kChunk);
+        raster::parallelFor(thin.size(), [&](size_t chunk) {
+            for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t)
+                if (isThin(f, t)) thin[chunk].push_back(uint32_t(t));
+        });
+        for (const auto& chunk : thin)
+            for (const uint32_t t : chunk) markTexelsOf(f, t, marks);
+    }
+
+    bool isThin(int f, size_t t) const {
+        const int size = map_->size();
+        const ShadowMapFace& face = map_->face(f);
+        const TriangleMeshView& mesh = casters_.mesh;
+        glm::vec3 q[3];
+        for (int c = 0; c < 3; ++c) {
+            q[c] = map_->project(f, mesh.vertex(t, c));
+            if (!(q[c].z > face.nearPlane)) return false;  // reaches behind the light's view: not this face's
+        }
+        const glm::vec2 e0(q[1] - q[0]), e1(q[2] - q[1]), e2(q[0] - q[2]);
+        const float longest = std::sqrt(std::max({glm::dot(e0, e0), glm::dot(e1, e1), glm::dot(e2, e2)}));
+        const float twiceArea = std::abs(e0.x * e2.y - e0.y * e2.x);
+        if (!(longest >= 1.0f) || twiceArea / longest >= 1.0f) return false;  // small or wide: the map sees it
+        // Thin in light space only because it is seen edge-on: part of a surface whose
+        // neighbours the map does see. Only triangles thin in the world can slip through.
+        const glm::vec3 a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
+        const float longestWorld = std::max({glm::distance(a, b), glm::distance(b, c), glm::distance(c, a)});
+        const float altitudeWorld = glm::length(glm::cross(b - a, c - a)) / std::max(longestWorld, 1e-30f);
+        const float nearestDepth = std::min({q[0].z, q[1].z, q[2].z});
+        const float texelWorld = 2.0f * face.halfExtent * (face.perspective ? nearestDepth : 1.0f) / float(size);
+        return altitudeWorld < texelWorld;
+    }
+
+    void markTexelsOf(int f, size_t t, FaceMarks& marks) const {
+        const int size = map_->size();
+        glm::vec3 q[3];
+        for (int c = 0; c < 3; ++c) q[c] = map_->project(f, casters_.mesh.vertex(t, c));
+        const float loX = std::min({q[0].x, q[1].x, q[2].x}), hiX = std::max({q[0].x, q[1].x, q[2].x});
+        const float loY = std::min({q[0].y, q[1].y, q[2].y}), hiY = std::max({q[0].y, q[1].y, q[2].y});
+        const int x0 = std::max(0, int(std::floor(loX)) - 1), x1 = std::min(size - 1, int(std::floor(hiX)) + 1);
+        const int y0 = std::max(0, int(std::floor(loY)) - 1), y1 = std::min(size - 1, int(std::floor(hiY)) + 1);
+        const float nearest = std::min({q[0].z, q[1].z, q[2].z});
+        const glm::vec2 a(q[0]), b(q[1]), c(q[2]);
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                if (distanceToTriangle(glm::vec2(float(x) + 0.5f, float(y) + 0.5f), a, b, c) > 0.7072f) continue;
+                float& d = marks.thinDepth[size_t(y) * size + x];
+                d = std::min(d, nearest);
+            }
+    }
+
+    const raster::Light& light_;
+    const ShadowCasters& casters_;
+    const ShadowOptions& options_;
+    float rayOffset_ = 0.0f;
+    std::vector<glm::vec2> disk_;
+    std::unique_ptr<ShadowMap> map_;
+    std::vector<FaceMarks> faces_;
+};
+
+}  // namespace
+
+bool castsShadows(const raster::Light& light) {
+    return light.intensity.x > 0.0f || light.intensity.y > 0.0f || light.intensity.z > 0.0f;
+}
+
+ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting,
+                           const ShadowCasters& casters, const ShadowOptions& options) {
+    ShadowMasks out;
+    out.width = surfaces.width;
+    out.height = surfaces.height;
+    out.visibility.resize(size_t(lighting.lightCount));
+    if (options.mode == ShadowMode::None || casters.mesh.triangleCount() == 0) return out;
+    const size_t pixels = size_t(surfaces.width) * surfaces.height;
+    out.marked.assign(pixels, 0);
+    for (int l = 0; l < lighting.lightCount; ++l) {
+        const raster::Light& light = lighting.lights[l];
+        if (!castsShadows(light)) continue;
+        ++out.stats.lightsShadowed;
+        LightShadows shadows(light, casters, options);
+        double t0 = raster::nowMs();
+        if (options.mode != ShadowMode::RayTraced) shadows.prepareMap();
+        out.stats.mapMs += raster::nowMs() - t0;
+        t0 = raster::nowMs();
+        std::vector<float>& mask = out.visibility[size_t(l)];
+        mask.assign(pixels, 1.0f);
+        // Counters per row, summed in row order: integers, so the totals are exact anyway.
+        std::vector<std::array<uint64_t, 3>> rowCounts(size_t(surfaces.height));
+        raster::parallelFor(size_t(surfaces.height), [&](size_t y) {
+            std::array<uint64_t, 3>& c = rowCounts[y];
+            for (int x = 0; x < surfaces.width; ++x) {
+                const size_t i = y * surfaces.width + x;
+                if (!surfaces.covered(i)) continue;
+                const Incidence in = incidence(light, surfaces.position[i], surfaces.normal[i]);
+                if (!in.reaches) {
+                    mask[i] = 0.0f;  // the shading gives this light nothing here anyway
+                    continue;
+                }
+                ++c[0];
+                bool marked = false;
+                mask[i] = shadows.visibility(surfaces.position[i], surfaces.normal[i], in, &marked, &c[2]);
+                if (marked) {
+                    ++c[1];
+                    out.marked[i] = 1;
+                }
+            }
+        });
+        for (const auto& c : rowCounts) {
+            out.stats.receiverPixels += c[0];
+            out.stats.markedPixels += c[1];
+            out.stats.raysTraced += c[2];
+        }
+        out.stats.maskMs += raster::nowMs() - t0;
+    }
+    return out;
+}
+
+}  // namespace cuberille::rt

@@ -1,0 +1,74 @@
+#pragma once
+// The shadow stage: for each shadow-casting light, the fraction of it that reaches the surface
+// seen at each pixel, as a screen-space mask the shade stage multiplies in (raster::Light::
+// visibility). Four modes trade accuracy for time (Lauterbach section 6.3):
+//
+//   None       no stage at all.
+//   Map        shadow maps alone: one lookup per pixel, wrong near shadow edges and under thin
+//              casters, where a map's texels cannot resolve the geometry.
+//   Hybrid     the map decides where it is provably right; the rest, the potentially incorrect
+//              pixels (PIP), get shadow rays through the BVH. Hard shadows mark a pixel when the
+//              map's 3x3 texels around it disagree about it (each compared with the receiver's
+//              plane carried to that texel: the receiver-angle test) or when a caster thin in
+//              light space lies there (found by marking each thin triangle's texels
+//              conservatively). Soft shadows also mark every pixel within the light's projected
+//              penumbra width of a depth discontinuity, and trace N x N rays there.
+//   RayTraced  a shadow ray per pixel (N x N for soft): the reference.
+//
+// Determinism: every pixel's value is a pure function of its surface, the map and the BVH;
+// sample positions on area lights are a fixed stratified pattern.
+
+#include <cstdint>
+#include <vector>
+
+#include "raster/draw.h"
+#include "rt/aabb.h"
+#include "rt/bvh.h"
+#include "rt/screen_surfaces.h"
+#include "rt/triangle_mesh.h"
+
+namespace cuberille::rt {
+
+enum class ShadowMode : uint8_t { None, Map, Hybrid, RayTraced };
+
+struct ShadowOptions {
+    ShadowMode mode = ShadowMode::None;
+    bool soft = false;
+    /// Area lights (--soft): the radius of a disk facing the receiver, in world units for point
+    /// and spot lights; for directional lights the tangent of the angular radius (0.0047 is the sun).
+    float lightRadius = 0.05f;
+    int mapSizeTexels = 2048;
+    int softSamplesPerSide = 4;  // N x N rays per pixel that needs them
+};
+
+struct ShadowStats {
+    int lightsShadowed = 0;
+    uint64_t receiverPixels = 0;  // pixel-light pairs whose surface faces the light
+    uint64_t markedPixels = 0;    // of those, the pairs given rays
+    uint64_t raysTraced = 0;
+    double mapMs = 0.0;   // shadow maps drawn and their hybrid marks (thin casters, discontinuities)
+    double maskMs = 0.0;  // every receiver decided: map lookups, marking, rays
+};
+
+struct ShadowMasks {
+    int width = 0, height = 0;
+    std::vector<std::vector<float>> visibility;  // per light of the Lighting; empty: unshadowed
+    std::vector<uint8_t> marked;                 // per pixel: rays were traced for some light
+    ShadowStats stats;
+};
+
+/// The geometry that casts shadows, in world space, with its BVH (needed by Hybrid and
+/// RayTraced only; null for Map).
+struct ShadowCasters {
+    TriangleMeshView mesh;
+    const Bvh* bvh = nullptr;
+    Aabb bounds;
+};
+
+ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting,
+                           const ShadowCasters& casters, const ShadowOptions& options);
+
+/// Whether a light casts shadows at all in this stage (a light of zero intensity does not).
+bool castsShadows(const raster::Light& light);
+
+}  // namespace cuberille::rt
