@@ -63,6 +63,10 @@ std::vector<glm::vec2> diskSamples(int n) {
         for (int i = 0; i < n; ++i) {
             const float a = 2.0f * (float(i) + 0.5f) / float(n) - 1.0f, b = 2.0f * (float(j) + 0.5f) / float(n) - 1.0f;
             float r, phi;
+            if (a == 0.0f && b == 0.0f) {  // the centre (odd N): the angle is undefined
+                samples.push_back({0.0f, 0.0f});
+                continue;
+            }
             if (std::abs(a) > std::abs(b)) {
                 r = a;
                 phi = 0.78539816f * (b / a);
@@ -190,13 +194,15 @@ private:
         return int(std::min(std::ceil(world) + 1.0f, 1e6f));
     }
 
+    /// Whether a depth discontinuity nearer the light than this receiver lies within the widest
+    /// penumbra it could see: only such an edge can cast a partial shadow on it.
     bool nearDiscontinuity(const Receiver& r, const ShadowMapTexel& t) const {
         const int reach = penumbraTexels(r, t);
         const FaceMarks& marks = faces_[size_t(t.face)];
         const int size = map_->size();
         const int x0 = std::max(0, t.x - reach), y0 = std::max(0, t.y - reach);
         const int x1 = std::min(size - 1, t.x + reach), y1 = std::min(size - 1, t.y + reach);
-        return marks.discontinuitiesIn(x0, y0, x1, y1, size) > 0;
+        return marks.nearestDiscontinuityOver(x0, y0, x1, y1) < r.depth - r.bias;
     }
 
     /// Map mode, soft: the fraction of lit texels over the penumbra's width (PCF).
@@ -247,14 +253,26 @@ private:
     // ---- per-face marks for the hybrid method -------------------------------------------------
 
     struct FaceMarks {
-        std::vector<float> thinDepth;              // nearest thin caster over each texel; +inf: none
-        std::vector<uint32_t> discontinuitySums;   // summed-area table of discontinuity texels
-        float nearestDepth = 0.0f;                 // the nearest caster depth in the face
+        std::vector<float> thinDepth;  // nearest thin caster over each texel; +inf: none
+        // A min pyramid of discontinuity depths: level 0 holds, per texel, the near side's depth
+        // of a discontinuity there (+inf: none); each level above the minimum of 2x2 below.
+        std::vector<std::vector<float>> discontinuityDepth;
+        std::vector<int> levelSize;
+        float nearestDepth = 0.0f;  // the nearest caster depth in the face
 
-        uint32_t discontinuitiesIn(int x0, int y0, int x1, int y1, int size) const {
-            const size_t w = size_t(size) + 1;
-            auto at = [&](int x, int y) { return discontinuitySums[size_t(y) * w + size_t(x)]; };
-            return at(x1 + 1, y1 + 1) - at(x0, y1 + 1) - at(x1 + 1, y0) + at(x0, y0);
+        /// The nearest discontinuity over texels [x0, x1] x [y0, y1], read conservatively: from
+        /// the finest level where the box spans at most four texels a side, so from up to 16
+        /// texels that cover it (and a little more, which only marks more).
+        float nearestDiscontinuityOver(int x0, int y0, int x1, int y1) const {
+            size_t level = 0;
+            while (level + 1 < discontinuityDepth.size() && ((x1 >> level) - (x0 >> level) > 3 || (y1 >> level) - (y0 >> level) > 3))
+                ++level;
+            const std::vector<float>& d = discontinuityDepth[level];
+            const int n = levelSize[level];
+            float nearest = ShadowMap::kEmpty;
+            for (int y = y0 >> level; y <= (y1 >> level); ++y)
+                for (int x = x0 >> level; x <= (x1 >> level); ++x) nearest = std::min(nearest, d[size_t(y) * n + x]);
+            return nearest;
         }
     };
 
@@ -268,16 +286,15 @@ private:
             for (int x = 0; x < size; ++x) marks.nearestDepth = std::min(marks.nearestDepth, map_->depthAt(f, x, y));
         if (!options_.soft) return;
         // A discontinuity: a texel whose 3x3 neighbourhood spans more depth than a surface four
-        // texels steep would (or meets an empty texel: a silhouette against nothing). A thin
-        // caster counts as one: its penumbra is as wide as any other's.
+        // texels steep would (or meets an empty texel: a silhouette against nothing), at the depth
+        // of its near side, the one that casts. A thin caster counts as one: its penumbra is as
+        // wide as any other's.
         const ShadowMapFace& face = map_->face(f);
-        const size_t w = size_t(size) + 1;
-        marks.discontinuitySums.assign(w * (size_t(size) + 1), 0);
-        for (int y = 0; y < size; ++y) {
-            uint32_t row = 0;
+        std::vector<float> level0(size_t(size) * size, ShadowMap::kEmpty);
+        raster::parallelFor(size_t(size), [&](size_t yy) {
+            const int y = int(yy);
             for (int x = 0; x < size; ++x) {
-                const float s = map_->depthAt(f, x, y);
-                float lo = s, hi = s;
+                float lo = map_->depthAt(f, x, y), hi = lo;
                 for (int dy = -1; dy <= 1; ++dy)
                     for (int dx = -1; dx <= 1; ++dx) {
                         if (x + dx < 0 || y + dy < 0 || x + dx >= size || y + dy >= size) continue;
@@ -285,11 +302,23 @@ private:
                         lo = std::min(lo, d), hi = std::max(hi, d);
                     }
                 const float texel = 2.0f * face.halfExtent * (face.perspective ? std::min(lo, face.farPlane) : 1.0f) / float(size);
-                const bool edge = (hi - lo > 4.0f * texel) || std::isinf(hi) != std::isinf(lo) ||
-                                  marks.thinDepth[size_t(y) * size + x] < ShadowMap::kEmpty;
-                row += edge;
-                marks.discontinuitySums[size_t(y + 1) * w + size_t(x + 1)] = marks.discontinuitySums[size_t(y) * w + size_t(x + 1)] + row;
+                const bool edge = (hi - lo > 4.0f * texel) || std::isinf(hi) != std::isinf(lo);
+                level0[size_t(y) * size + x] = std::min(edge ? lo : ShadowMap::kEmpty, marks.thinDepth[size_t(y) * size + x]);
             }
+        });
+        marks.discontinuityDepth.push_back(std::move(level0));
+        marks.levelSize.push_back(size);
+        while (marks.levelSize.back() > 1) {
+            const int below = marks.levelSize.back(), n = (below + 1) / 2;
+            const std::vector<float>& b = marks.discontinuityDepth.back();
+            std::vector<float> up(size_t(n) * n, ShadowMap::kEmpty);
+            for (int y = 0; y < below; ++y)
+                for (int x = 0; x < below; ++x) {
+                    float& u = up[size_t(y / 2) * n + x / 2];
+                    u = std::min(u, b[size_t(y) * below + x]);
+                }
+            marks.discontinuityDepth.push_back(std::move(up));
+            marks.levelSize.push_back(n);
         }
     }
 

@@ -7,7 +7,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sys/wait.h>
+
+#include <nlohmann/json.hpp>
 
 namespace {
 
@@ -173,6 +176,61 @@ TEST_F(Cli, TurntableWritesNumberedFramesThatDiffer) {
     EXPECT_FALSE(fs::exists(dir_ / "t_003.exr"));
     EXPECT_EQ(run("render " + write("flat.tri", "0 0 1 0 0 1 1\n").string() + " --turntable 2 --out " +
                   (dir_ / "f.png").string()).exitCode, 2);
+}
+
+TEST_F(Cli, ShadowModesRenderAndReportWhatTheyTraced) {
+    // A box floating over a floor, lit from above: every mode renders; none traces nothing, the
+    // map traces nothing, hybrid traces some receivers and raytraced all of them.
+    const fs::path obj = write("box.obj",
+                               "v -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\n"
+                               "v -1 1 -1\nv 1 1 -1\nv 1 1 1\nv -1 1 1\nv -1 2 -1\nv 1 2 -1\nv 1 2 1\nv -1 2 1\n"
+                               "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 9 11 10\nf 9 12 11\n"
+                               "f 5 10 6\nf 5 9 10\nf 6 11 7\nf 6 10 11\nf 7 12 8\nf 7 11 12\nf 8 9 5\nf 8 12 9\n");
+    std::map<std::string, nlohmann::json> stats;
+    std::map<std::string, std::string> images;
+    for (const std::string mode : {"none", "map", "hybrid", "raytraced"}) {
+        const fs::path out = dir_ / (mode + ".png"), json = dir_ / (mode + ".json");
+        const CommandRun r = run("render " + obj.string() + " --width 96 --height 64 --shadows " + mode +
+                                 " --shadow-map-size 256 --out " + out.string() + " --stats " + json.string());
+        ASSERT_EQ(r.exitCode, 0) << mode << ": " << r.output;
+        stats[mode] = nlohmann::json::parse(std::ifstream(json));
+        std::ifstream in(out, std::ios::binary);
+        images[mode] = std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    }
+    EXPECT_FALSE(stats["none"].contains("shadows")) << "no shadow stage without --shadows";
+    EXPECT_EQ(stats["map"]["shadows"]["raysTraced"], 0);
+    const uint64_t receivers = stats["raytraced"]["shadows"]["receiverPixels"];
+    EXPECT_GT(receivers, 300u);
+    EXPECT_EQ(stats["raytraced"]["shadows"]["raysTraced"], receivers);
+    EXPECT_GT(stats["hybrid"]["shadows"]["raysTraced"], 0);
+    EXPECT_LT(stats["hybrid"]["shadows"]["raysTraced"], receivers / 2);
+    EXPECT_NE(images["none"], images["raytraced"]) << "the box casts a shadow";
+    EXPECT_EQ(images["hybrid"], images["raytraced"]);
+
+    // The traced pixels, and the soft variant.
+    EXPECT_EQ(run("render " + obj.string() + " --width 96 --height 64 --shadows hybrid --view shadow-pixels --soft "
+                  "--soft-samples 2 --out " + (dir_ / "pixels.png").string()).exitCode, 0);
+    EXPECT_TRUE(fs::exists(dir_ / "pixels.png"));
+}
+
+TEST_F(Cli, ShadowOptionsAreCheckedWithExitTwoAndNothingWritten) {
+    const fs::path obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const fs::path tri = write("flat.tri", "0 0 1 0 0 1 1\n");
+    const fs::path out = dir_ / "o.png";
+    const std::pair<std::string, std::string> cases[] = {
+        {"render " + obj.string() + " --shadows soft", "--shadows"},
+        {"render " + obj.string() + " --shadows map --shadow-map-size 8", "--shadow-map-size"},
+        {"render " + obj.string() + " --shadows map --soft-samples 0", "--soft-samples"},
+        {"render " + obj.string() + " --shadows map --light-radius -1", "--light-radius"},
+        {"render " + obj.string() + " --view shadow-pixels", "--view shadow-pixels"},
+        {"render " + tri.string() + " --shadows hybrid", "--shadows"},
+    };
+    for (const auto& [args, message] : cases) {
+        const CommandRun r = run(args + " --out " + out.string());
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
+        EXPECT_FALSE(fs::exists(out)) << args;
+    }
 }
 
 TEST_F(Cli, HelpOnEveryLevel) {
