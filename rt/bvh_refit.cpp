@@ -1,5 +1,7 @@
 #include "rt/bvh_refit.h"
 
+#include <cmath>
+
 #include "raster/parallel.h"
 
 namespace cuberille::rt {
@@ -36,7 +38,7 @@ double refitSubtree(Bvh& bvh, const TriangleMeshView& mesh, uint32_t index) {
     const Aabb l = bvh.nodes[left].box(), r = bvh.nodes[right].box();
     const Aabb box = merged(l, r);
     node.setBox(box);
-    return leftSum + rightSum + double(areaRatio(box, l, r) - bvh.buildAreaRatio[index]);
+    return leftSum + rightSum + std::abs(double(areaRatio(box, l, r)) - double(bvh.buildAreaRatio[index]));
 }
 
 }  // namespace
@@ -54,7 +56,7 @@ double bvhDegradation(const Bvh& bvh) {
     for (uint32_t i = 0; i < bvh.nodes.size(); ++i) {
         const BvhNode& n = bvh.nodes[i];
         if (n.isLeaf()) continue;
-        sum += double(areaRatio(n.box(), bvh.nodes[n.first].box(), bvh.nodes[n.first + 1].box()) - bvh.buildAreaRatio[i]);
+        sum += std::abs(double(areaRatio(n.box(), bvh.nodes[n.first].box(), bvh.nodes[n.first + 1].box())) - double(bvh.buildAreaRatio[i]));
         ++inner;
     }
     return inner ? sum / double(inner) : 0.0;

@@ -1,5 +1,7 @@
 #include "rt/lazy_refit.h"
 
+#include <cmath>
+
 #include "raster/parallel.h"
 
 namespace cuberille::rt {
@@ -42,11 +44,19 @@ double LazyRefit::update(const TriangleMeshView& mesh) {
             const Aabb l = bvh_->nodes[node.first].box(), r = bvh_->nodes[node.first + 1].box();
             const Aabb box = merged(l, r);
             node.setBox(box);
-            sum += double(areaRatio(box, l, r) - bvh_->buildAreaRatio[i]);
+            sum += std::abs(double(areaRatio(box, l, r)) - double(bvh_->buildAreaRatio[i]));
             ++inner;
         }
     }
     return inner ? sum / double(inner) : 0.0;
+}
+
+void LazyRefit::updateAfterFullRefit(const TriangleMeshView& mesh) {
+    mesh_ = mesh;
+    ++frame_;
+    if (frame_ == kRefreshing) frame_ = 1;
+    refreshed_->store(0, std::memory_order_relaxed);
+    for (size_t i = 0; i < bvh_->nodes.size(); ++i) stamp_[i].store(frame_, std::memory_order_relaxed);
 }
 
 Aabb LazyRefit::boxFromTriangles(uint32_t node) const {

@@ -35,6 +35,10 @@ public:
     /// level (the lower ones are not refitted, so not measured).
     double update(const TriangleMeshView& mesh);
 
+    /// A new frame whose boxes the caller has already refitted in full (refitBvh on the same
+    /// tree): every box is current, none is refreshed by queries.
+    void updateAfterFullRefit(const TriangleMeshView& mesh);
+
     RayHit closestHit(const Ray& ray) const;
     bool anyHit(const Ray& ray) const;
 

@@ -11,6 +11,7 @@
 #include "raster/parallel.h"
 #include "rt/bvh_build.h"
 #include "rt/bvh_refit.h"
+#include "rt/deforming_bvh.h"
 #include "rt/lazy_refit.h"
 #include "rt/ray_query.h"
 #include "tests/rt/rt_test_support.h"
@@ -179,6 +180,47 @@ TEST(LazyRefit, ConcurrentQueriesGiveTheSameHitsAsSerialOnes) {
     raster::ThreadLimit limit(4);
     raster::parallelFor(rays.size(), [&](size_t i) { parallel[i] = lazy.closestHit(rays[i]).triangle; });
     EXPECT_EQ(serial, parallel);
+}
+
+
+TEST(DeformingBvh, RebuildsWhenTheCriterionFiresAndAnswersLikeBruteForceThroughout) {
+    // An exploding soup under each update method: refit and lazy rebuild once the degradation
+    // passes their threshold (and not before), every method answers every ray as brute force does.
+    const OwnedMesh rest = testing::uvSphere(16, 32);
+    OwnedMesh soup;
+    std::vector<glm::vec3> velocity;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    for (size_t t = 0; t < rest.indices.size() / 3; ++t) {
+        const glm::vec3 v(unit(rng), unit(rng), unit(rng));
+        for (int c = 0; c < 3; ++c) {
+            soup.positions.push_back(rest.positions[rest.indices[3 * t + c]]);
+            soup.indices.push_back(uint32_t(soup.positions.size() - 1));
+            velocity.push_back(v);
+        }
+    }
+    for (const BvhUpdateMethod method : {BvhUpdateMethod::Refit, BvhUpdateMethod::Lazy, BvhUpdateMethod::Rebuild}) {
+        SCOPED_TRACE(int(method));
+        OwnedMesh moved = soup;
+        DeformingBvh bvh(moved.view(), method);
+        int rebuilt = 0;
+        for (int frame = 1; frame <= 16; ++frame) {
+            for (size_t i = 0; i < soup.positions.size(); ++i) moved.positions[i] = soup.positions[i] + 0.15f * float(frame) * velocity[i];
+            const BvhUpdateReport report = bvh.update(moved.view());
+            rebuilt += report.rebuilt;
+            if (method != BvhUpdateMethod::Rebuild) {
+                EXPECT_EQ(report.rebuilt, report.measured && report.degradation > 0.4) << "frame " << frame;
+            }
+            for (const Ray& ray : randomRays(100, uint32_t(frame))) {
+                ASSERT_EQ(bvh.closestHit(ray).triangle, closestHitBruteForce(moved.view(), ray).triangle);
+                ASSERT_EQ(bvh.anyHit(ray), anyHitBruteForce(moved.view(), ray));
+            }
+        }
+        if (method == BvhUpdateMethod::Rebuild) EXPECT_EQ(rebuilt, 16);
+        else EXPECT_GT(rebuilt, 0) << "an exploding mesh must trigger a rebuild";
+        EXPECT_EQ(rebuilt, bvh.rebuilds());
+        expectWellFormed(bvh.bvh(), moved.view());
+    }
 }
 
 }  // namespace

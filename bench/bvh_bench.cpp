@@ -1,0 +1,392 @@
+// BVHs and shadows, side by side with Embree in the same run (docs/performance.md).
+//
+//   bvh_bench [--models dragon,horse,1m] [--animation brainstem] [--shadow-scenes vc,dragon,brainstem]
+//
+// Part 1, per model: build (binned SAH against Embree's default quality, spatial median against
+// Embree's low quality), refit after a deformation (ours, full and lazy, against Embree's refit
+// quality), and ray throughput (closest hit for random rays, any hit for shadow rays from the
+// surface) against Embree's rtcIntersect1 / rtcOccluded1, one ray at a time on every core.
+// Part 2: a skinned animation, every frame refitted, lazily updated and rebuilt, with
+// Lauterbach's degradation. Part 3: each shadow mode and map size, its time and the share of
+// pixels that differ from the ray-traced reference.
+
+#include <embree3/rtcore.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+
+#include "apps/scene_shadows.h"
+#include "bench/bench_support.h"
+#include "bench/procedural_meshes.h"
+#include "raster/clock.h"
+#include "raster/parallel.h"
+#include "rt/bvh_build.h"
+#include "rt/bvh_refit.h"
+#include "rt/lazy_refit.h"
+#include "rt/ray_query.h"
+#include "scene/model_scene.h"
+
+namespace {
+
+using namespace cuberille;
+namespace fs = std::filesystem;
+
+struct Geometry {
+    std::vector<glm::vec3> positions;
+    std::vector<uint32_t> indices;
+    rt::TriangleMeshView view() const { return {positions, indices}; }
+    size_t triangles() const { return indices.size() / 3; }
+};
+
+fs::path dataPath(const std::string& name) {
+    const fs::path data = fs::path(CUBERILLE_SOURCE_DIR) / ".." / "shared" / "data";
+    if (name == "vc") return data / "gltf" / "VC" / "VC.glb";
+    if (name == "brainstem") return data / "gltf" / "BrainStem" / "BrainStem.glb";
+    if (name == "cesiumman") return data / "gltf" / "CesiumMan" / "CesiumMan.glb";
+    return bench::scanPath(name, CUBERILLE_SOURCE_DIR);
+}
+
+std::optional<scene::Scene> loadScene(const std::string& name, float time = 0.0f) {
+    const fs::path path = dataPath(name);
+    if (!fs::exists(path)) return std::nullopt;
+    return scene::loadModelScene(path, {30.0f, 20.0f, -1, time}, [](const std::string&) {});
+}
+
+Geometry concatenate(const scene::Scene& s) {
+    Geometry g;
+    for (const scene::Mesh& m : s.meshes) {
+        const uint32_t base = uint32_t(g.positions.size());
+        g.positions.insert(g.positions.end(), m.positions.begin(), m.positions.end());
+        for (uint32_t i : m.indices) g.indices.push_back(base + i);
+    }
+    return g;
+}
+
+std::optional<Geometry> loadGeometry(const std::string& name) {
+    if (name == "1m" || name == "10m") {
+        const scene::Mesh m = bench::bumpySphere(name == "1m" ? 1'000'000ull : 10'000'000ull);
+        return Geometry{m.positions, m.indices};
+    }
+    const auto s = loadScene(name);
+    if (!s) return std::nullopt;
+    return concatenate(*s);
+}
+
+template <class F>
+double medianMs(int runs, F&& f) {
+    std::vector<double> t;
+    for (int i = 0; i < runs; ++i) {
+        const double t0 = raster::nowMs();
+        f();
+        t.push_back(raster::nowMs() - t0);
+    }
+    return bench::median(t);
+}
+
+// ---- Embree ---------------------------------------------------------------------------------
+
+class EmbreeScene {
+public:
+    EmbreeScene(RTCDevice device, const Geometry& g, RTCBuildQuality quality, bool refittable)
+        : vertices_(g.positions.size() + 1) {  // Embree reads 16 bytes at the last vertex: pad
+        std::copy(g.positions.begin(), g.positions.end(), vertices_.begin());
+        scene_ = rtcNewScene(device);
+        rtcSetSceneBuildQuality(scene_, quality);
+        if (refittable) rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_DYNAMIC);
+        geometry_ = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        rtcSetSharedGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices_.data(), 0,
+                                   sizeof(glm::vec3), g.positions.size());
+        rtcSetSharedGeometryBuffer(geometry_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, g.indices.data(), 0,
+                                   3 * sizeof(uint32_t), g.triangles());
+        rtcSetGeometryBuildQuality(geometry_, refittable ? RTC_BUILD_QUALITY_REFIT : quality);
+        rtcCommitGeometry(geometry_);
+        rtcAttachGeometry(scene_, geometry_);
+    }
+    ~EmbreeScene() {
+        rtcReleaseGeometry(geometry_);
+        rtcReleaseScene(scene_);
+    }
+    void commit() { rtcCommitScene(scene_); }
+    void update(const std::vector<glm::vec3>& positions) {
+        std::copy(positions.begin(), positions.end(), vertices_.begin());
+        rtcUpdateGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(geometry_);
+        rtcCommitScene(scene_);
+    }
+    bool closest(const rt::Ray& r, uint32_t* triangle) const {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRayHit h{};
+        h.ray.org_x = r.origin.x, h.ray.org_y = r.origin.y, h.ray.org_z = r.origin.z;
+        h.ray.dir_x = r.direction.x, h.ray.dir_y = r.direction.y, h.ray.dir_z = r.direction.z;
+        h.ray.tnear = r.tMin, h.ray.tfar = r.tMax, h.ray.mask = ~0u;
+        h.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene_, &context, &h);
+        *triangle = h.hit.primID;
+        return h.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    }
+    bool occluded(const rt::Ray& r) const {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRay ray{};
+        ray.org_x = r.origin.x, ray.org_y = r.origin.y, ray.org_z = r.origin.z;
+        ray.dir_x = r.direction.x, ray.dir_y = r.direction.y, ray.dir_z = r.direction.z;
+        ray.tnear = r.tMin, ray.tfar = r.tMax, ray.mask = ~0u;
+        rtcOccluded1(scene_, &context, &ray);
+        return ray.tfar < 0.0f;
+    }
+
+private:
+    std::vector<glm::vec3> vertices_;
+    RTCScene scene_;
+    RTCGeometry geometry_;
+};
+
+/// A wave through the model: every vertex moves, neighbours together.
+std::vector<glm::vec3> deformed(const Geometry& g, float amount) {
+    rt::Aabb b;
+    for (const glm::vec3& p : g.positions) b.grow(p);
+    const float size = glm::length(b.extent());
+    std::vector<glm::vec3> out(g.positions.size());
+    for (size_t i = 0; i < out.size(); ++i) {
+        const glm::vec3 p = g.positions[i];
+        out[i] = p + amount * size * glm::vec3(std::sin(6.0f * p.y / size), std::sin(6.0f * p.z / size), std::sin(6.0f * p.x / size));
+    }
+    return out;
+}
+
+/// Camera-like rays at the model (closest hit) and shadow rays from points on it toward a light.
+void makeRays(const Geometry& g, std::vector<rt::Ray>& primary, std::vector<rt::Ray>& shadow, size_t count) {
+    rt::Aabb b;
+    for (const glm::vec3& p : g.positions) b.grow(p);
+    const glm::vec3 c = b.centre();
+    const float r = 0.5f * glm::length(b.extent());
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    const glm::vec3 light = glm::normalize(glm::vec3(0.4f, 1.0f, 0.3f));
+    for (size_t i = 0; i < count; ++i) {
+        const glm::vec3 from = c + 2.5f * r * glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)));
+        const glm::vec3 to = c + 0.5f * r * glm::vec3(unit(rng), unit(rng), unit(rng));
+        const size_t t = rng() % g.triangles();
+        float u = 0.5f * (unit(rng) + 1.0f), v = 0.5f * (unit(rng) + 1.0f);
+        if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+        const glm::vec3 p0 = g.positions[g.indices[3 * t]], p1 = g.positions[g.indices[3 * t + 1]], p2 = g.positions[g.indices[3 * t + 2]];
+        const glm::vec3 cross = glm::cross(p1 - p0, p2 - p0);
+        if (!(glm::length(cross) > 0.0f)) {  // degenerate: no normal to leave it by
+            --i;
+            continue;
+        }
+        const glm::vec3 n = glm::normalize(cross);
+        const glm::vec3 p = p0 + u * (p1 - p0) + v * (p2 - p0) + n * (1e-4f * r) * (glm::dot(n, light) >= 0 ? 1.0f : -1.0f);
+        primary.push_back(rt::Ray{from, to - from});
+        shadow.push_back(rt::Ray{p, light});
+    }
+}
+
+template <class F>
+double raysPerSecondM(size_t rays, F&& trace) {
+    constexpr size_t kChunk = 4096;
+    const double ms = medianMs(3, [&] {
+        raster::parallelFor((rays + kChunk - 1) / kChunk, [&](size_t c) {
+            for (size_t i = c * kChunk; i < std::min(rays, (c + 1) * kChunk); ++i) trace(i);
+        });
+    });
+    return double(rays) / ms / 1000.0;
+}
+
+void benchModel(RTCDevice device, const std::string& name) {
+    const std::optional<Geometry> g = loadGeometry(name);
+    if (!g) {
+        std::printf("%-9s skipped: not found\n", name.c_str());
+        return;
+    }
+    const double mtri = double(g->triangles()) / 1e6;
+    rt::Bvh sah, median;
+    const double sahMs = medianMs(3, [&] { sah = rt::buildBvh(g->view(), {.method = rt::BvhBuildMethod::BinnedSah}); });
+    const double medianMsValue = medianMs(3, [&] { median = rt::buildBvh(g->view(), {.method = rt::BvhBuildMethod::SpatialMedian}); });
+    const double embreeMs = medianMs(3, [&] { EmbreeScene e(device, *g, RTC_BUILD_QUALITY_MEDIUM, false); e.commit(); });
+    const double embreeLowMs = medianMs(3, [&] { EmbreeScene e(device, *g, RTC_BUILD_QUALITY_LOW, false); e.commit(); });
+
+    // Refit after a deformation.
+    Geometry moved = *g;
+    moved.positions = deformed(*g, 0.01f);
+    rt::Bvh refitted = sah;
+    double degradation = 0.0;
+    const double refitMs = medianMs(3, [&] { degradation = rt::refitBvh(refitted, moved.view()); });
+    rt::Bvh lazyTree = sah;
+    rt::LazyRefit lazy(lazyTree);
+    const double lazyMs = medianMs(3, [&] { lazy.update(moved.view()); });
+    EmbreeScene dynamic(device, *g, RTC_BUILD_QUALITY_REFIT, true);
+    dynamic.commit();
+    const double embreeRefitMs = medianMs(3, [&] { dynamic.update(moved.positions); });
+
+    // Rays against the undeformed model.
+    std::vector<rt::Ray> primary, shadow;
+    const size_t rayCount = 1'000'000;
+    makeRays(*g, primary, shadow, rayCount);
+    EmbreeScene embree(device, *g, RTC_BUILD_QUALITY_MEDIUM, false);
+    embree.commit();
+    std::vector<uint8_t> ours(rayCount), theirs(rayCount);
+    const double oursClosest = raysPerSecondM(rayCount, [&](size_t i) { ours[i] = rt::closestHit(sah, g->view(), primary[i]).hit(); });
+    const double embreeClosest = raysPerSecondM(rayCount, [&](size_t i) {
+        uint32_t t;
+        theirs[i] = embree.closest(primary[i], &t);
+    });
+    size_t agree = 0;
+    for (size_t i = 0; i < rayCount; ++i) agree += ours[i] == theirs[i];
+    const double oursShadow = raysPerSecondM(rayCount, [&](size_t i) { ours[i] = rt::anyHit(sah, g->view(), shadow[i]); });
+    const double embreeShadow = raysPerSecondM(rayCount, [&](size_t i) { theirs[i] = embree.occluded(shadow[i]); });
+    for (size_t i = 0; i < rayCount; ++i) agree += ours[i] == theirs[i];
+
+    std::printf("%-9s %7.2f | %8.1f %8.1f %6.2f | %8.1f %8.1f %6.2f | %7.1f %7.1f %7.1f %6.2f %6.3f | %6.2f %6.2f %5.2f | %6.2f %6.2f %5.2f | %7.4f\n",
+                name.c_str(), mtri, sahMs, embreeMs, sahMs / embreeMs, medianMsValue, embreeLowMs, medianMsValue / embreeLowMs,
+                refitMs, lazyMs, embreeRefitMs, refitMs / embreeRefitMs, degradation, oursClosest, embreeClosest,
+                embreeClosest / oursClosest, oursShadow, embreeShadow, embreeShadow / oursShadow,
+                double(agree) / double(2 * rayCount));
+}
+
+// ---- part 2: a skinned animation ------------------------------------------------------------
+
+void benchAnimation(RTCDevice device, const std::string& name, int frames) {
+    std::vector<Geometry> poses;
+    for (int f = 0; f < frames; ++f) {
+        const auto s = loadScene(name, 0.1f * float(f));
+        if (!s) {
+            std::printf("%s skipped: not found\n", name.c_str());
+            return;
+        }
+        poses.push_back(concatenate(*s));
+    }
+    std::printf("\n# animation %s: %zu triangles, %d frames 0.1 s apart; ms per frame (median), degradation max\n",
+                name.c_str(), poses[0].triangles(), frames);
+    rt::Bvh refitted = rt::buildBvh(poses[0].view()), lazyTree = refitted;
+    rt::LazyRefit lazy(lazyTree);
+    std::vector<double> refit, lazyUpdate, rebuild, embreeRefit, embreeRebuild;
+    double worst = 0.0;
+    EmbreeScene dynamic(device, poses[0], RTC_BUILD_QUALITY_REFIT, true);
+    dynamic.commit();
+    for (int f = 1; f < frames; ++f) {
+        double t0 = raster::nowMs();
+        worst = std::max(worst, rt::refitBvh(refitted, poses[size_t(f)].view()));
+        refit.push_back(raster::nowMs() - t0);
+        t0 = raster::nowMs();
+        lazy.update(poses[size_t(f)].view());
+        lazyUpdate.push_back(raster::nowMs() - t0);
+        t0 = raster::nowMs();
+        const rt::Bvh fresh = rt::buildBvh(poses[size_t(f)].view());
+        rebuild.push_back(raster::nowMs() - t0);
+        t0 = raster::nowMs();
+        dynamic.update(poses[size_t(f)].positions);
+        embreeRefit.push_back(raster::nowMs() - t0);
+        t0 = raster::nowMs();
+        EmbreeScene full(device, poses[size_t(f)], RTC_BUILD_QUALITY_MEDIUM, false);
+        full.commit();
+        embreeRebuild.push_back(raster::nowMs() - t0);
+    }
+    std::printf("refit %.2f  lazy %.3f  rebuild %.2f | embree refit %.2f  rebuild %.2f | refit/embree %.2f  "
+                "rebuild/embree %.2f | degradation max %.3f (rebuild past 0.4)\n",
+                bench::median(refit), bench::median(lazyUpdate), bench::median(rebuild), bench::median(embreeRefit),
+                bench::median(embreeRebuild), bench::median(refit) / bench::median(embreeRefit),
+                bench::median(rebuild) / bench::median(embreeRebuild), worst);
+}
+
+// ---- part 3: shadow modes --------------------------------------------------------------------
+
+/// A ground quad under the scene's meshes (scans float in space otherwise).
+void addGround(scene::Scene& s) {
+    scene::Bounds b = scene::boundsOf(s.meshes);
+    const glm::vec3 c = 0.5f * (b.min + b.max);
+    const float r = glm::length(b.max - b.min);
+    scene::Mesh ground;
+    ground.positions = {{c.x - r, b.min.y, c.z - r}, {c.x + r, b.min.y, c.z - r}, {c.x + r, b.min.y, c.z + r}, {c.x - r, b.min.y, c.z + r}};
+    ground.normals.assign(4, glm::vec3(0, 1, 0));
+    ground.indices = {0, 2, 1, 0, 3, 2};
+    ground.doubleSided = true;
+    s.meshes.push_back(std::move(ground));
+}
+
+void benchShadows(const std::string& name, int width, int height, const std::vector<int>& mapSizes) {
+    std::optional<scene::Scene> s = loadScene(name, name == "brainstem" ? 1.0f : 0.0f);
+    if (!s) {
+        std::printf("%s skipped: not found\n", name.c_str());
+        return;
+    }
+    if (name != "vc") addGround(*s);
+    struct Run {
+        std::string label;
+        rt::ShadowOptions options;
+    };
+    std::vector<Run> runs;
+    for (const bool soft : {false, true}) {
+        rt::ShadowOptions base;
+        base.soft = soft;
+        base.lightRadius = 0.02f;
+        base.softSamplesPerSide = 4;
+        base.mode = rt::ShadowMode::RayTraced;
+        runs.push_back({"raytraced", base});
+        for (const int size : mapSizes)
+            for (const rt::ShadowMode mode : {rt::ShadowMode::Map, rt::ShadowMode::Hybrid}) {
+                rt::ShadowOptions o = base;
+                o.mode = mode;
+                o.mapSizeTexels = size;
+                runs.push_back({std::string(apps::shadowModeName(mode)) + " " + std::to_string(size), o});
+            }
+    }
+    std::printf("\n# shadows on %s (%zu triangles), %dx%d: stage ms (median of 3; BVH build once, not included), share "
+                "of receiver pixels differing from ray traced, share traced\n",
+                name.c_str(), s->triangleCount(), width, height);
+    std::printf("%-5s %-15s %9s %8s %10s %9s %9s\n", "soft", "mode", "ms", "x ref", "differ", "traced", "bvh ms");
+    std::vector<float> reference;
+    double referenceMs = 0.0;
+    for (const Run& run : runs) {
+        apps::SceneShadows shadows(*s, run.options);
+        std::vector<float> mask;
+        apps::ShadowFrameStats stats;
+        const double ms = medianMs(3, [&] {
+            const raster::Lighting lit = shadows.run(*s, width, height, stats);
+            mask.assign(lit.lights[0].visibility, lit.lights[0].visibility + size_t(width) * height);
+        });
+        if (run.options.mode == rt::ShadowMode::RayTraced) reference = mask, referenceMs = ms;
+        size_t differ = 0;
+        for (size_t i = 0; i < mask.size(); ++i) differ += mask[i] != reference[i];
+        const double receivers = double(std::max<uint64_t>(1, stats.shadows.receiverPixels));
+        std::printf("%-5s %-15s %9.1f %8.2f %9.4f%% %8.2f%% %9.1f\n", run.options.soft ? "soft" : "hard", run.label.c_str(), ms,
+                    ms / referenceMs, 100.0 * double(differ) / receivers, 100.0 * double(stats.shadows.markedPixels) / receivers,
+                    stats.bvhBuildMs);
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"BVH build, refit and rays against Embree; shadow modes against ray-traced shadows"};
+    std::string models = "bunny,horse,dragon,1m", animation = "brainstem", shadowScenes = "vc,dragon,brainstem", sizes = "1024,2048,4096";
+    int frames = 12, width = 1280, height = 720;
+    app.add_option("--models", models, "bunny, horse, dragon, 1m, 10m (bumpy spheres)")->capture_default_str();
+    app.add_option("--animation", animation, "A skinned glTF (brainstem, cesiumman)")->capture_default_str();
+    app.add_option("--frames", frames, "Animation frames")->capture_default_str();
+    app.add_option("--shadow-scenes", shadowScenes, "vc (Virtual City), a scan on a ground plane, brainstem")->capture_default_str();
+    app.add_option("--map-sizes", sizes, "Shadow map sizes")->capture_default_str();
+    app.add_option("--width", width)->capture_default_str();
+    app.add_option("--height", height)->capture_default_str();
+    CLI11_PARSE(app, argc, argv);
+    const int threads = raster::hardwareThreads();
+    const std::string config = "threads=" + std::to_string(threads);
+    RTCDevice device = rtcNewDevice(config.c_str());
+    std::printf("# %d threads; Embree %s; build ms (ratio ours/Embree), refit ms, rays in millions a second (ratio "
+                "Embree/ours), agreement of hit/miss between the two\n",
+                threads, RTC_VERSION_STRING);
+    std::printf("%-9s %7s | %8s %8s %6s | %8s %8s %6s | %7s %7s %7s %6s %6s | %6s %6s %5s | %6s %6s %5s | %7s\n", "model",
+                "Mtri", "SAH", "embree", "ratio", "median", "emb.low", "ratio", "refit", "lazy", "emb.ref", "ratio",
+                "degr", "closest", "embree", "x", "shadow", "embree", "x", "agree");
+    for (const std::string& m : bench::splitList(models)) benchModel(device, m);
+    if (!animation.empty()) benchAnimation(device, animation, frames);
+    std::vector<int> mapSizes;
+    for (const std::string& s : bench::splitList(sizes)) mapSizes.push_back(std::stoi(s));
+    for (const std::string& s : bench::splitList(shadowScenes)) benchShadows(s, width, height, mapSizes);
+    rtcReleaseDevice(device);
+    return 0;
+}

@@ -1,0 +1,70 @@
+#include "rt/deforming_bvh.h"
+
+#include "raster/clock.h"
+
+namespace cuberille::rt {
+
+DeformingBvh::DeformingBvh(const TriangleMeshView& mesh, BvhUpdateMethod method, const BvhBuildOptions& build,
+                           double rebuildThreshold)
+    : method_(method),
+      build_(build),
+      threshold_(rebuildThreshold),
+      mesh_(mesh) {
+    bvh_ = std::make_unique<Bvh>(buildBvh(mesh, build_));
+    if (method_ == BvhUpdateMethod::Lazy) lazy_.emplace(*bvh_);
+}
+
+void DeformingBvh::rebuild() {
+    lazy_.reset();
+    *bvh_ = buildBvh(mesh_, build_);
+    if (method_ == BvhUpdateMethod::Lazy) {
+        lazy_.emplace(*bvh_);
+        lazy_->update(mesh_);
+    }
+    ++rebuilds_;
+}
+
+BvhUpdateReport DeformingBvh::update(const TriangleMeshView& mesh) {
+    const double t0 = raster::nowMs();
+    mesh_ = mesh;
+    BvhUpdateReport report;
+    switch (method_) {
+        case BvhUpdateMethod::Rebuild:
+            rebuild();
+            report.rebuilt = true;
+            break;
+        case BvhUpdateMethod::Refit:
+            report.degradation = refitBvh(*bvh_, mesh);
+            report.measured = true;
+            break;
+        case BvhUpdateMethod::Lazy:
+            if (++frame_ % kLazyCriterionInterval == 0) {
+                report.degradation = refitBvh(*bvh_, mesh);
+                report.measured = true;
+                lazy_->updateAfterFullRefit(mesh);
+            } else {
+                report.degradation = lazy_->update(mesh);
+            }
+            break;
+    }
+    // Lauterbach 4.1.5: past the threshold the refitted tree costs more to trace than a rebuild.
+    if (report.measured && report.degradation > threshold_) {
+        rebuild();
+        report.rebuilt = true;
+    }
+    report.milliseconds = raster::nowMs() - t0;
+    return report;
+}
+
+RayHit DeformingBvh::closestHit(const Ray& ray) const {
+    return lazy_ ? lazy_->closestHit(ray) : rt::closestHit(*bvh_, mesh_, ray);
+}
+
+bool DeformingBvh::anyHit(const Ray& ray) const { return lazy_ ? lazy_->anyHit(ray) : rt::anyHit(*bvh_, mesh_, ray); }
+
+const Bvh& DeformingBvh::bvh() const {
+    if (lazy_) lazy_->refreshAll();
+    return *bvh_;
+}
+
+}  // namespace cuberille::rt

@@ -1,0 +1,52 @@
+#pragma once
+// A hierarchy that follows a deforming mesh from frame to frame: refitted (fully, or lazily after
+// Larsson) while Lauterbach's degradation stays under the threshold, rebuilt when it passes it,
+// or rebuilt every frame. Each update reports what it did and what it cost.
+
+#include <memory>
+#include <optional>
+
+#include "rt/bvh.h"
+#include "rt/bvh_build.h"
+#include "rt/bvh_refit.h"
+#include "rt/lazy_refit.h"
+#include "rt/ray_query.h"
+
+namespace cuberille::rt {
+
+/// Lazy updates refit only the upper half of the tree, and the upper levels alone cannot tell
+/// rigid motion from an explosion (a turning mesh changes their ratios by up to 0.19, an exploding
+/// one levels off near 0.39: tests/rt/bvh_refit_test.cpp). So every this many frames the lazy
+/// method refits the whole tree instead, and Lauterbach's criterion is decided on that.
+constexpr int kLazyCriterionInterval = 8;
+
+class DeformingBvh {
+public:
+    /// Builds over the first pose. `rebuildThreshold` is Lauterbach's 0.4 by default.
+    DeformingBvh(const TriangleMeshView& mesh, BvhUpdateMethod method, const BvhBuildOptions& build = {},
+                 double rebuildThreshold = 0.4);
+
+    /// The next pose: same indices, moved positions (which must stay alive until the next update).
+    BvhUpdateReport update(const TriangleMeshView& mesh);
+
+    RayHit closestHit(const Ray& ray) const;
+    bool anyHit(const Ray& ray) const;
+
+    /// The tree with every box current (a lazy tree is brought up to date first).
+    const Bvh& bvh() const;
+    int rebuilds() const { return rebuilds_; }
+
+private:
+    void rebuild();
+
+    BvhUpdateMethod method_;
+    BvhBuildOptions build_;
+    double threshold_;
+    TriangleMeshView mesh_;
+    std::unique_ptr<Bvh> bvh_;  // stable address: the lazy updater holds it
+    std::optional<LazyRefit> lazy_;
+    int rebuilds_ = 0;
+    int frame_ = 0;
+};
+
+}  // namespace cuberille::rt
