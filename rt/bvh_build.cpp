@@ -274,6 +274,7 @@ private:
             next += 2;
         }
         bvh.primitiveIndices = std::move(indices_);
+        gatherLeafVertices(bvh, mesh_);
     }
 
     const TriangleMeshView& mesh_;
@@ -287,6 +288,15 @@ private:
 }  // namespace
 
 Bvh buildBvh(const TriangleMeshView& mesh, const BvhBuildOptions& options) { return Builder(mesh, options).build(); }
+
+void gatherLeafVertices(Bvh& bvh, const TriangleMeshView& mesh) {
+    const size_t n = bvh.primitiveIndices.size();
+    bvh.leafVertices.resize(3 * n);
+    raster::parallelFor((n + kChunkPrimitives - 1) / kChunkPrimitives, [&](size_t chunk) {
+        for (size_t i = chunk * kChunkPrimitives; i < std::min(n, (chunk + 1) * kChunkPrimitives); ++i)
+            for (int c = 0; c < 3; ++c) bvh.leafVertices[3 * i + c] = mesh.vertex(bvh.primitiveIndices[i], c);
+    });
+}
 
 Aabb meshBounds(const TriangleMeshView& mesh) {
     Aabb b;

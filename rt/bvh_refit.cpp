@@ -10,10 +10,15 @@ namespace {
 // Subtrees over more primitives than this refit their two halves as parallel tasks.
 constexpr uint32_t kParallelSubtreePrimitives = 4096;
 
-Aabb leafBox(const Bvh& bvh, const TriangleMeshView& mesh, const BvhNode& leaf) {
+/// A leaf's box from its triangles' new positions, copied into leafVertices on the way.
+Aabb refitLeaf(Bvh& bvh, const TriangleMeshView& mesh, const BvhNode& leaf) {
     Aabb box;
     for (uint32_t i = leaf.first; i < leaf.first + leaf.primitiveCount; ++i)
-        box.grow(mesh.triangleBounds(bvh.primitiveIndices[i]));
+        for (int c = 0; c < 3; ++c) {
+            const glm::vec3 p = mesh.vertex(bvh.primitiveIndices[i], c);
+            bvh.leafVertices[3 * size_t(i) + c] = p;
+            box.grow(p);
+        }
     return box;
 }
 
@@ -23,7 +28,7 @@ Aabb leafBox(const Bvh& bvh, const TriangleMeshView& mesh, const BvhNode& leaf) 
 double refitSubtree(Bvh& bvh, const TriangleMeshView& mesh, uint32_t index) {
     BvhNode& node = bvh.nodes[index];
     if (node.isLeaf()) {
-        node.setBox(leafBox(bvh, mesh, node));
+        node.setBox(refitLeaf(bvh, mesh, node));
         return 0.0;
     }
     const uint32_t left = node.first, right = node.first + 1;

@@ -84,16 +84,24 @@ Aabb LazyRefit::currentBox(uint32_t node) const {
     return boxFromTriangles(node);
 }
 
+// Lazy queries read the triangles from the mesh: the tree's leafVertices are as old as its last
+// full refit, and refreshing them eagerly would undo the laziness.
 RayHit LazyRefit::closestHit(const Ray& ray) const {
-    return detail::traverse<false>(*bvh_, mesh_, ray, [this](uint32_t node) { return currentBox(node); });
+    return detail::traverse<false>(
+        *bvh_, ray, [this](uint32_t node) { return currentBox(node); },
+        [this](uint32_t slot, int corner) { return mesh_.vertex(bvh_->primitiveIndices[slot], corner); });
 }
 
 bool LazyRefit::anyHit(const Ray& ray) const {
-    return detail::traverse<true>(*bvh_, mesh_, ray, [this](uint32_t node) { return currentBox(node); }).hit();
+    return detail::traverse<true>(
+               *bvh_, ray, [this](uint32_t node) { return currentBox(node); },
+               [this](uint32_t slot, int corner) { return mesh_.vertex(bvh_->primitiveIndices[slot], corner); })
+        .hit();
 }
 
 void LazyRefit::refreshAll() const {
     raster::parallelFor(bvh_->nodes.size(), [&](size_t i) { currentBox(uint32_t(i)); });
+    gatherLeafVertices(*bvh_, mesh_);
 }
 
 size_t LazyRefit::upperNodeCount() const {

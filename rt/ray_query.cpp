@@ -8,18 +8,23 @@ struct NodeBoxes {
     Aabb operator()(uint32_t node) const { return bvh.nodes[node].box(); }
 };
 
+struct LeafVertices {
+    const Bvh& bvh;
+    const glm::vec3& operator()(uint32_t slot, int corner) const { return bvh.leafVertices[3 * size_t(slot) + corner]; }
+};
+
 }  // namespace
 
-RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray) {
-    return detail::traverse<false>(bvh, mesh, ray, NodeBoxes{bvh});
+RayHit closestHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray) {
+    return detail::traverse<false>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh});
 }
 
-RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray, TraversalCounters& counters) {
-    return detail::traverse<false>(bvh, mesh, ray, NodeBoxes{bvh}, &counters);
+RayHit closestHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray, TraversalCounters& counters) {
+    return detail::traverse<false>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}, &counters);
 }
 
-bool anyHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray) {
-    return detail::traverse<true>(bvh, mesh, ray, NodeBoxes{bvh}).hit();
+bool anyHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray) {
+    return detail::traverse<true>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}).hit();
 }
 
 RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray) {

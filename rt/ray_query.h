@@ -12,6 +12,8 @@
 
 namespace cuberille::rt {
 
+/// The tree answers from its own copy of the vertices (leafVertices, as of its last build or
+/// refit); the mesh is the one it was built or refitted over.
 RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray);
 bool anyHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray);
 
@@ -36,9 +38,10 @@ constexpr float kEntrySlack = 1.0f + 64.0f * std::numeric_limits<float>::epsilon
 
 /// The traversal both queries and both update schemes share. `boxOf(node)` yields the node's
 /// current box: the node's own for an up-to-date tree, or one refreshed on first touch for the
-/// lazy update (rt/lazy_refit.h).
-template <bool kAnyHit, class BoxOf>
-RayHit traverse(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray, BoxOf&& boxOf,
+/// lazy update (rt/lazy_refit.h). `vertexOf(slot, corner)` yields a leaf triangle's vertex:
+/// from the tree's leafVertices, or from the mesh for the lazy update (the same values).
+template <bool kAnyHit, class BoxOf, class VertexOf>
+RayHit traverse(const Bvh& bvh, const Ray& ray, BoxOf&& boxOf, VertexOf&& vertexOf,
                 TraversalCounters* counters = nullptr) {
     RayHit best;
     best.t = ray.tMax;
@@ -61,8 +64,7 @@ RayHit traverse(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray, Bo
                 const uint32_t triangle = bvh.primitiveIndices[i];
                 if (counters) ++counters->trianglesTested;
                 RayHit candidate;
-                if (!triangleTest.intersect(mesh.vertex(triangle, 0), mesh.vertex(triangle, 1), mesh.vertex(triangle, 2),
-                                            ray.tMin, best.t, &candidate))
+                if (!triangleTest.intersect(vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), ray.tMin, best.t, &candidate))
                     continue;
                 candidate.triangle = triangle;
                 if (kAnyHit) return candidate;
