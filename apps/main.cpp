@@ -55,6 +55,11 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
         ->capture_default_str();
     render->add_option("--turntable", o.turntable,
                        "Write N frames turning around the scene (OUT_000.png, OUT_001.png, ...)");
+    render->add_option("--animate", o.animate,
+                       "glTF: write N frames of the first animation from --time, --fps apart (OUT_000.png, ...)");
+    render->add_option("--fps", o.fps, "With --animate: frames a second of animation time")->capture_default_str();
+    render->add_flag("--frustum-cull", o.frustumCull,
+                     "3D scenes: cull triangles against the view frustum through a BVH (refitted per --animate frame)");
     render->add_option("--pixel-error", o.pixelError,
                        "Voxel models: refine blocks until a voxel projects to at most this many pixels "
                        "(0: always the finest level)")

@@ -38,6 +38,12 @@ void validate(const RenderOptions& o) {
         throw InputError("--shadows and --view shadow-pixels: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + o.scene);
     if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
         throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
+    if (o.frustumCull && !threeD) throw InputError("--frustum-cull: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + o.scene);
+    if (o.animate < 0 || o.animate > 3600) throw InputError("--animate: 0 to 3600 frames");
+    if (o.animate > 0 && !(o.scene.ends_with(".gltf") || o.scene.ends_with(".glb")))
+        throw InputError("--animate: only for glTF files (.gltf, .glb), not " + o.scene);
+    if (o.animate > 0 && o.turntable > 0) throw InputError("--animate and --turntable: one or the other");
+    if (!(o.fps > 0.0f && o.fps <= 1000.0f)) throw InputError("--fps: must be in (0, 1000]");
 }
 
 raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) {
@@ -149,8 +155,11 @@ void showShadowPixels(const std::vector<uint8_t>& marked, raster::Image& image) 
 
 // A 3D scene's frame: the shadow stage first when asked for (its masks go to the shade stage
 // with the lights), then the draws.
-void renderFrame(const scene::Scene& s, const RenderOptions& o, SceneShadows* shadows, RenderResult& result) {
+void renderFrame(scene::Scene& s, const RenderOptions& o, SceneFrustumCull* culling, SceneShadows* shadows,
+                 RenderResult& result) {
     result.sceneTriangles = s.triangleCount();
+    // Shadows first: casters outside the view still cast into it (the shadow stage keeps its own
+    // copy of every caster), then the frustum cull trims what the frame draws.
     std::optional<raster::Lighting> shadowed;
     if (shadows) {
         result.shadows.emplace();
@@ -158,6 +167,7 @@ void renderFrame(const scene::Scene& s, const RenderOptions& o, SceneShadows* sh
         if (shadows->active()) shadowed = shadows->run(s, o.width, o.height, *result.shadows);
         result.shadows->totalMs = raster::nowMs() - t0;
     }
+    if (culling) result.culling = culling->cull(s, float(o.width) / float(o.height));
     renderFrame(o, s.background, [&](raster::Pipeline& p) {
         s.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
     }, result);
@@ -224,12 +234,14 @@ RenderResult renderScene(const RenderOptions& o) {
     }
     const double t0 = raster::nowMs();
     if (!isTriFile(o)) {
-        const scene::Scene s = load3dScene(o);
+        scene::Scene s = load3dScene(o);
         result.loadMs = raster::nowMs() - t0;
         result.load = s.loadStats;
         std::optional<SceneShadows> shadows;
         if (o.shadows.mode != rt::ShadowMode::None) shadows.emplace(s, o.shadows);
-        renderFrame(s, o, shadows ? &*shadows : nullptr, result);
+        std::optional<SceneFrustumCull> culling;
+        if (o.frustumCull) culling.emplace(s);
+        renderFrame(s, o, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, result);
         return result;
     }
     const scene::TriScene s = scene::loadTriScene(o.scene);
@@ -264,6 +276,18 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
                       {"facesEmitted", v.facesEmitted},
                       {"selectMs", v.selectMs},
                       {"expandMs", v.expandMs}};
+    }
+    if (r.culling) {
+        const FrustumCullStats& c = *r.culling;
+        j["frustumCull"] = {{"trianglesIn", c.trianglesIn},
+                            {"trianglesKept", c.trianglesKept},
+                            {"nodesVisited", c.counters.nodesVisited},
+                            {"subtreesAccepted", c.counters.subtreesAccepted},
+                            {"subtreesRejected", c.counters.subtreesRejected},
+                            {"bvhMs", c.buildMs},
+                            {"degradation", c.degradation},
+                            {"rebuilt", c.rebuilt},
+                            {"cullMs", c.cullMs}};
     }
     if (r.shadows) {
         const ShadowFrameStats& sh = *r.shadows;
@@ -338,6 +362,14 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
     std::printf("  effects: %llu texture samples, %llu light evaluations, %llu pixels alpha-tested, %llu blended\n",
                 (unsigned long long)c.textureSamples, (unsigned long long)c.lightEvaluations,
                 (unsigned long long)c.pixelsAlphaTested, (unsigned long long)c.pixelsBlended);
+    if (r.culling) {
+        const FrustumCullStats& c = *r.culling;
+        std::printf("  frustum cull: %llu of %llu triangles kept, %llu nodes visited; %.1f ms (bvh %s %.1f, "
+                    "degradation %.3f)\n",
+                    (unsigned long long)c.trianglesKept, (unsigned long long)c.trianglesIn,
+                    (unsigned long long)c.counters.nodesVisited, c.cullMs, c.rebuilt ? "build" : "refit", c.buildMs,
+                    c.degradation);
+    }
     if (r.shadows) {
         const rt::ShadowStats& st = r.shadows->shadows;
         std::printf("  shadows (%s%s): %d light%s, %llu receiver pixels, %llu marked (%.2f%%), %llu rays; %.1f ms "
@@ -352,12 +384,14 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
 }
 
 int runTurntable(const RenderOptions& o);
+int runAnimation(const RenderOptions& o);
 
 int runRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png or .exr)");
     imageFormatFor(o.out);  // reject a bad extension before any work
     if (o.turntable > 0 && isVoxelFile(o)) throw scene::InputError("--turntable: not for voxel models yet");
     if (o.turntable > 0) return runTurntable(o);
+    if (o.animate > 0) return runAnimation(o);
     const RenderResult r = renderScene(o);
     writeImageAtomically(o.out, r.image);
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, statsToJson(o, r));
@@ -378,17 +412,55 @@ int runTurntable(const RenderOptions& o) {
     const scene::Camera start = s.camera;
     std::optional<SceneShadows> shadows;
     if (o.shadows.mode != rt::ShadowMode::None) shadows.emplace(s, o.shadows);
+    std::optional<SceneFrustumCull> culling;
+    const std::vector<scene::Mesh> uncut = o.frustumCull ? s.meshes : std::vector<scene::Mesh>{};
+    if (o.frustumCull) culling.emplace(s);
     nlohmann::json frames = nlohmann::json::array();
     for (int i = 0; i < o.turntable; ++i) {
         s.camera = orbit(start, 360.0f * float(i) / float(o.turntable));
         RenderResult r;
         r.loadMs = i == 0 ? loadMs : 0.0;
         r.load = s.loadStats;
-        renderFrame(s, o, shadows ? &*shadows : nullptr, r);
+        if (culling)  // each frame culls from the whole scene again
+            for (size_t m = 0; m < s.meshes.size(); ++m) s.meshes[m].indices = uncut[m].indices;
+        renderFrame(s, o, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, r);
         const std::filesystem::path file = frameFileName(o.out, i);
         writeImageAtomically(file, r.image);
         if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
         if (!o.quiet) printSummary(o, file, r);
+    }
+    if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, {{"frames", frames}});
+    return 0;
+}
+
+// --animate N: frame i poses the first animation at --time + i / --fps and is written as
+// OUT_00i.ext. The glTF loader poses at load, so each frame loads the file again; the frustum
+// cull's hierarchy is built on the first pose and refitted to each next one (rebuilt when
+// Lauterbach's criterion fires), which --stats reports per frame.
+int runAnimation(const RenderOptions& o) {
+    validate(o);
+    raster::ThreadLimit threadLimit(o.threads);
+    std::optional<SceneFrustumCull> culling;
+    nlohmann::json frames = nlohmann::json::array();
+    for (int i = 0; i < o.animate; ++i) {
+        RenderOptions frame = o;
+        frame.timeSeconds = o.timeSeconds + float(i) / o.fps;
+        const double t0 = raster::nowMs();
+        scene::Scene s = load3dScene(frame);
+        RenderResult r;
+        r.loadMs = raster::nowMs() - t0;
+        r.load = s.loadStats;
+        if (o.frustumCull) {
+            if (culling) culling->update(s);
+            else culling.emplace(s);
+        }
+        std::optional<SceneShadows> shadows;
+        if (o.shadows.mode != rt::ShadowMode::None) shadows.emplace(s, o.shadows);
+        renderFrame(s, frame, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, r);
+        const std::filesystem::path file = frameFileName(o.out, i);
+        writeImageAtomically(file, r.image);
+        if (!o.statsPath.empty()) frames.push_back(statsToJson(frame, r));
+        if (!o.quiet) printSummary(frame, file, r);
     }
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, {{"frames", frames}});
     return 0;

@@ -10,6 +10,7 @@
 
 #include "raster/resolve.h"
 #include "raster/stats.h"
+#include "apps/scene_culling.h"
 #include "apps/scene_shadows.h"
 #include "lod/voxel_scene.h"
 #include "rt/shadows.h"
@@ -32,6 +33,9 @@ struct RenderOptions {
     int cameraIndex = -1;     // a camera of the file (glTF), instead of framing the model
     float timeSeconds = 0.0f; // glTF animation time
     int turntable = 0;        // > 0: that many frames around the scene, OUT_000.ext ...
+    int animate = 0;          // glTF, > 0: that many frames of the animation from --time, OUT_000.ext ...
+    float fps = 30.0f;        // --animate: frames a second of animation time
+    bool frustumCull = false; // 3D scenes: cull triangles against the frustum through a BVH
     float pixelError = 1.0f;  // voxel models: largest projected voxel in pixels (0: finest level)
     bool noHybrid = false;    // voxel models: never draw source triangles
     bool noOcclusion = false; // voxel models: no occlusion culling
@@ -51,6 +55,7 @@ struct RenderResult {
     scene::LoadStats load;
     std::optional<lod::VoxelFrameStats> voxel;  // voxel models only
     std::optional<ShadowFrameStats> shadows;    // when a shadow mode was asked for
+    std::optional<FrustumCullStats> culling;    // with --frustum-cull
 };
 
 View parseView(const std::string& name);  // throws scene::InputError

@@ -12,6 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tests/scene/gltf_builder.h"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -41,7 +43,7 @@ protected:
         fs::remove_all(dir_);
         fs::create_directories(dir_);
     }
-    void TearDown() override { fs::remove_all(dir_); }
+    void TearDown() override { if (!getenv("KEEP_CLI_DIRS")) fs::remove_all(dir_); }
     fs::path write(const std::string& name, const std::string& text) {
         std::ofstream(dir_ / name) << text;
         return dir_ / name;
@@ -231,6 +233,68 @@ TEST_F(Cli, ShadowOptionsAreCheckedWithExitTwoAndNothingWritten) {
         EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
         EXPECT_FALSE(fs::exists(out)) << args;
     }
+}
+
+// An animated glTF made in code: a floor, a cube sliding along x under the scene's light, and a
+// row of cubes far to the side that the camera never sees.
+void writeAnimatedGltf(const fs::path& path) {
+    cuberille::testing::GltfBuilder b;
+    std::vector<glm::vec3> cube;
+    for (int c = 0; c < 8; ++c) cube.push_back({(c & 1) ? 0.5f : -0.5f, (c & 2) ? 0.5f : -0.5f, (c & 4) ? 0.5f : -0.5f});
+    const std::vector<uint16_t> cubeIndices = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                               2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+    const int cubeMesh = b.push("meshes", {{"primitives", {{{"attributes", {{"POSITION", b.positions(cube)}}},
+                                                            {"indices", b.indices(cubeIndices)}}}}});
+    const int floorMesh = b.push(
+        "meshes", {{"primitives", {{{"attributes", {{"POSITION", b.positions({{-6, 0, -6}, {6, 0, -6}, {6, 0, 6}, {-6, 0, 6}})}}},
+                                    {"indices", b.indices({0, 2, 1, 0, 3, 2})}}}}});
+    std::vector<int> roots = {b.push("nodes", {{"mesh", floorMesh}}), b.push("nodes", {{"mesh", cubeMesh}, {"translation", {-2, 1, 0}}})};
+    for (int i = 0; i < 20; ++i) roots.push_back(b.push("nodes", {{"mesh", cubeMesh}, {"translation", {40 + 3 * i, 1, 0}}}));
+    const int camera = b.push("cameras", {{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}, {"zfar", 100}}}});
+    roots.push_back(b.push("nodes", {{"camera", camera}, {"translation", {0, 4, 10}}, {"rotation", {-0.1305262f, 0, 0, 0.9914449f}}}));
+    const int times = b.floats({0.0f, 1.0f}, 1, true);
+    const int moves = b.vec3s({{-2, 1, 0}, {2, 1, 0}});
+    b.push("animations", {{"samplers", {{{"input", times}, {"output", moves}}}},
+                          {"channels", {{{"sampler", 0}, {"target", {{"node", 1}, {"path", "translation"}}}}}}});
+    b.json()["scenes"] = {{{"nodes", roots}}};
+    b.json()["scene"] = 0;
+    b.write(path);
+}
+
+std::string fileBytes(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST_F(Cli, AnimatedGltfWithFrustumCullingAndShadowsIsTheSameForAnyThreadCount) {
+    const fs::path gltf = dir_ / "slide.gltf";
+    writeAnimatedGltf(gltf);
+    const std::string common = "render " + gltf.string() + " --camera-index 0 --animate 3 --fps 2 --width 96 --height 64 "
+                               "--shadows hybrid --shadow-map-size 256 ";
+    for (const auto& [name, extra] : std::vector<std::pair<std::string, std::string>>{
+             {"one", "--frustum-cull --threads 1"}, {"two", "--frustum-cull --threads 2"}, {"uncut", "--threads 2"}}) {
+        const CommandRun r = run(common + extra + " --out " + (dir_ / (name + ".png")).string() + " --stats " +
+                                 (dir_ / (name + ".json")).string());
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+    }
+    for (const char* frame : {"_000.png", "_001.png", "_002.png"}) {
+        const std::string one = fileBytes(dir_ / (std::string("one") + frame));
+        ASSERT_FALSE(one.empty()) << frame;
+        EXPECT_EQ(one, fileBytes(dir_ / (std::string("two") + frame))) << frame << ": thread count changed the image";
+        EXPECT_EQ(one, fileBytes(dir_ / (std::string("uncut") + frame))) << frame << ": culling changed the image";
+    }
+    EXPECT_NE(fileBytes(dir_ / "one_000.png"), fileBytes(dir_ / "one_002.png")) << "the cube moves";
+    const nlohmann::json stats = nlohmann::json::parse(std::ifstream(dir_ / "one.json"));
+    ASSERT_EQ(stats["frames"].size(), 3u);
+    const nlohmann::json& first = stats["frames"][0]["frustumCull"];
+    EXPECT_LT(first["trianglesKept"].get<uint64_t>(), first["trianglesIn"].get<uint64_t>() / 2) << "the side row is culled";
+    EXPECT_TRUE(first["rebuilt"].get<bool>()) << "built on the first pose";
+    EXPECT_FALSE(stats["frames"][1]["frustumCull"]["rebuilt"].get<bool>()) << "refitted to the next";
+    EXPECT_GT(stats["frames"][1]["shadows"]["receiverPixels"].get<uint64_t>(), 0u);
+    // --animate is for glTF only, and exclusive with --turntable.
+    EXPECT_EQ(run("render " + write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").string() + " --animate 2 --out " +
+                  (dir_ / "x.png").string()).exitCode, 2);
+    EXPECT_EQ(run("render " + gltf.string() + " --animate 2 --turntable 2 --out " + (dir_ / "x.png").string()).exitCode, 2);
 }
 
 TEST_F(Cli, HelpOnEveryLevel) {
