@@ -115,21 +115,36 @@ private:
         std::array<std::array<Aabb, kMaxBins>, 3> box{};
     };
 
-    int binOf(const glm::vec3& c, const Aabb& centres, int axis) const {
-        const int bins = std::clamp(options_.sahBins, 2, kMaxBins);
-        const float extent = centres.hi[axis] - centres.lo[axis];
-        const int bin = int((c[axis] - centres.lo[axis]) * (float(bins) / extent));
-        return std::clamp(bin, 0, bins - 1);
-    }
+    /// Which bin a centroid falls in along each axis: one multiply, the scale computed once per
+    /// node (binning and partitioning use this same arithmetic, so they agree exactly).
+    struct Binning {
+        glm::vec3 lo, scale;
+        int bins;
+        bool axisUsable[3];
 
-    void binRange(uint32_t b, uint32_t e, const Aabb& centres, Bins& bins) const {
+        Binning(const Aabb& centres, int binCount) : lo(centres.lo), bins(binCount) {
+            for (int a = 0; a < 3; ++a) {
+                axisUsable[a] = centres.hi[a] > centres.lo[a];
+                scale[a] = axisUsable[a] ? float(bins) / (centres.hi[a] - centres.lo[a]) : 0.0f;
+            }
+        }
+        int bin(const glm::vec3& c, int axis) const {
+            return std::clamp(int((c[axis] - lo[axis]) * scale[axis]), 0, bins - 1);
+        }
+    };
+
+    Binning binningFor(const Aabb& centres) const { return Binning(centres, std::clamp(options_.sahBins, 2, kMaxBins)); }
+
+    void binRange(uint32_t b, uint32_t e, const Binning& binning, Bins& bins) const {
         for (uint32_t i = b; i < e; ++i) {
             const uint32_t p = indices_[i];
+            const Aabb& box = boxes_[p];
+            const glm::vec3& c = centres_[p];
             for (int axis = 0; axis < 3; ++axis) {
-                if (!(centres.hi[axis] > centres.lo[axis])) continue;
-                const int bin = binOf(centres_[p], centres, axis);
+                if (!binning.axisUsable[axis]) continue;
+                const int bin = binning.bin(c, axis);
                 ++bins.count[axis][bin];
-                bins.box[axis][bin].grow(boxes_[p]);
+                bins.box[axis][bin].grow(box);
             }
         }
     }
@@ -138,13 +153,14 @@ private:
         const int binCount = std::clamp(options_.sahBins, 2, kMaxBins);
         Bins bins;
         const uint32_t chunks = (e - b + kChunkPrimitives - 1) / kChunkPrimitives;
+        const Binning binning = binningFor(bounds.centres);
         if (chunks < 2) {
-            binRange(b, e, bounds.centres, bins);
+            binRange(b, e, binning, bins);
         } else {
             std::vector<Bins> partial(chunks);
             raster::parallelFor(chunks, [&](size_t c) {
                 const uint32_t cb = b + uint32_t(c) * kChunkPrimitives;
-                binRange(cb, std::min(e, cb + kChunkPrimitives), bounds.centres, partial[c]);
+                binRange(cb, std::min(e, cb + kChunkPrimitives), binning, partial[c]);
             });
             for (const Bins& p : partial)  // in chunk order: exact anyway (counts, min, max)
                 for (int axis = 0; axis < 3; ++axis)
@@ -181,7 +197,8 @@ private:
     }
 
     uint32_t partitionByBin(uint32_t b, uint32_t e, const Aabb& centres, const SplitChoice& choice) {
-        auto goesLeft = [&](uint32_t p) { return binOf(centres_[p], centres, choice.axis) <= choice.lastLeftBin; };
+        const Binning binning = binningFor(centres);
+        auto goesLeft = [&](uint32_t p) { return binning.bin(centres_[p], choice.axis) <= choice.lastLeftBin; };
         return uint32_t(std::partition(indices_.begin() + b, indices_.begin() + e, goesLeft) - indices_.begin());
     }
 
