@@ -36,7 +36,7 @@ golden: build
 # The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (`make asan`, in CI), and
 # the threaded and streaming tests under ThreadSanitizer (`make tsan`) (docs/robustness.md).
 # Only what the tests need is built.
-TSAN_TESTS := Determinism.*:*.SameVoxelsForAnyThreadCount:Simplify.SerialAndParallelGiveIdenticalPyramids:VoxelDeterminism.*:BlockLoader.*:BlockPool.*:Streaming.ResidentMemory*:Streaming.TheFirstImage*:Streaming.ACorruptBlock*
+TSAN_TESTS := Determinism.*:*.SameVoxelsForAnyThreadCount:Simplify.SerialAndParallelGiveIdenticalPyramids:VoxelDeterminism.*:BlockLoader.*:BlockPool.*:Streaming.ResidentMemory*:Streaming.TheFirstImage*:Streaming.ACorruptBlock*:LazyRefit.*:BvhBuild.SameTreeForAnyThreadCount:BvhRefit.SameBoxesAndDegradationForAnyThreadCount:Shadows.SameMasksForAnyThreadCount
 sanitize: asan tsan
 
 asan: setup
