@@ -178,11 +178,10 @@ private:
 
     // ---- soft shadows: where the penumbra can be -----------------------------------------------
 
-    /// The widest penumbra a receiver at this depth can see, in texels: a blocker as near the
-    /// light as the nearest caster in the map, and the light's full radius.
-    int penumbraTexels(const Receiver& r, const ShadowMapTexel& t) const {
+    /// The widest penumbra a receiver at this depth can see from blockers no nearer the light
+    /// than `nearest`, in texels: the light's radius carried over the gap between them.
+    int penumbraTexels(const Receiver& r, const ShadowMapTexel& t, float nearest) const {
         const ShadowMapFace& face = map_->face(t.face);
-        const float nearest = faces_[size_t(t.face)].nearestDepth;
         const float gap = std::max(0.0f, r.depth - nearest);
         float world;  // lateral reach of the penumbra at the blocker's depth, in texels there
         if (face.perspective) {
@@ -193,16 +192,31 @@ private:
         }
         return int(std::min(std::ceil(world) + 1.0f, 1e6f));
     }
+    int penumbraTexels(const Receiver& r, const ShadowMapTexel& t) const {
+        return penumbraTexels(r, t, faces_[size_t(t.face)].nearestDepth);
+    }
 
     /// Whether a depth discontinuity nearer the light than this receiver lies within the widest
     /// penumbra it could see: only such an edge can cast a partial shadow on it.
+    ///
+    /// The reach shrinks in a few rounds, each conservative: every discontinuity that can reach
+    /// the receiver lies within the current reach, so none is nearer the light than the nearest
+    /// discontinuity found there, so none reaches farther than that one would.
     bool nearDiscontinuity(const Receiver& r, const ShadowMapTexel& t) const {
-        const int reach = penumbraTexels(r, t);
         const FaceMarks& marks = faces_[size_t(t.face)];
         const int size = map_->size();
-        const int x0 = std::max(0, t.x - reach), y0 = std::max(0, t.y - reach);
-        const int x1 = std::min(size - 1, t.x + reach), y1 = std::min(size - 1, t.y + reach);
-        return marks.nearestDiscontinuityOver(x0, y0, x1, y1) < r.depth - r.bias;
+        int reach = penumbraTexels(r, t);
+        float nearest = ShadowMap::kEmpty;
+        for (int round = 0; round < 3; ++round) {
+            const int x0 = std::max(0, t.x - reach), y0 = std::max(0, t.y - reach);
+            const int x1 = std::min(size - 1, t.x + reach), y1 = std::min(size - 1, t.y + reach);
+            nearest = marks.nearestDiscontinuityOver(x0, y0, x1, y1);
+            if (!(nearest < r.depth - r.bias)) return false;  // nothing within reach can shadow it
+            const int tighter = penumbraTexels(r, t, nearest);
+            if (tighter >= reach) break;
+            reach = tighter;
+        }
+        return true;
     }
 
     /// Map mode, soft: the fraction of lit texels over the penumbra's width (PCF).

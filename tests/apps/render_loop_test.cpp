@@ -47,7 +47,9 @@ TEST(RenderLoop, TenThousandRendersHoldFlatMemory) {
     const raster::Image first = apps::renderScene(o).image;
     for (int i = 0; i < renders; ++i) {
         const apps::RenderResult r = apps::renderScene(o);
-        if (i % 1000 == 0) ASSERT_EQ(r.image.rgba, first.rgba) << "render " << i << " differs";
+        if (i % 1000 == 0) {
+            ASSERT_EQ(r.image.rgba, first.rgba) << "render " << i << " differs";
+        }
     }
     const uint64_t after = residentBytes();
     if (kSanitized) GTEST_SKIP() << "resident set not checked under a sanitizer (quarantine); 1000 renders identical";
