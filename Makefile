@@ -5,7 +5,7 @@ PRESET ?= release
 BUILD_DIR := build/$(PRESET)
 JOBS ?= $(shell nproc)
 
-.PHONY: all setup configure build demo test bench golden sanitize asan tsan fuzz format clean
+.PHONY: all setup configure build demo test bench golden pipeline-docs sanitize asan tsan fuzz format clean
 
 all: build
 
@@ -30,8 +30,13 @@ bench: build
 	@$(BUILD_DIR)/bench/raster_bench
 
 # Regenerate reference_images/ from the current renderer (review the diff before committing).
-golden: build
+golden: build pipeline-docs
 	@CUBERILLE_UPDATE_GOLDEN=1 ctest --preset $(PRESET) -L golden
+
+# The pictures of docs/pipeline.md, drawn by `cuberille explain` for apps::kExplainTriangle (the same
+# triangle; golden-tested as reference_images/explain_*).
+pipeline-docs: build
+	@build/$(PRESET)/apps/cuberille explain --triangle "1.3 1.7 14.6 4.2 5.1 12.8" --out-dir docs/images/pipeline --quiet
 
 # The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (`make asan`, in CI), and
 # the threaded and streaming tests under ThreadSanitizer (`make tsan`) (docs/robustness.md).

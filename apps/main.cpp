@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "apps/explain_command.h"
 #include "apps/fly_command.h"
 #include "apps/render_command.h"
 #include "apps/voxel_commands.h"
@@ -86,6 +87,21 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_option("--soft-samples", o.shadows.softSamplesPerSide, "With --soft: N, for N x N rays per pixel")
         ->capture_default_str();
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
+}
+
+void addExplainCommand(CLI::App& app, cuberille::apps::ExplainOptions& o) {
+    CLI::App* explain = app.add_subcommand(
+        "explain", "Show the rasterization pipeline stage by stage for a .tri scene or one triangle, as magnified images");
+    explain->add_option("scene", o.scene, "A .tri scene (or give --triangle)");
+    explain->add_option("--triangle", o.triangle, "One triangle \"x0 y0 x1 y1 x2 y2\" in pixels, of value 1");
+    explain->add_option("--out-dir", o.outDir, "Directory for the stage images and 3-edges.csv")->required();
+    explain->add_option("--width", o.width, "Framebuffer width (0: the scene's bounds and a margin)");
+    explain->add_option("--height", o.height, "Framebuffer height (0: the scene's bounds and a margin)");
+    explain->add_option("--scale", o.scale, "Image pixels per framebuffer pixel, 4..64")->capture_default_str();
+    explain->add_option("--row", o.row, "The row whose edge values 3-edges shows and writes (default: the triangle's middle)");
+    explain->add_option("--triangle-index", o.triangleIndex, "The triangle whose set-up and edges are drawn")
+        ->capture_default_str();
+    explain->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 
 void addPackCommand(CLI::App& app, cuberille::apps::PackOptions& o) {
@@ -199,6 +215,8 @@ int main(int argc, char** argv) {
     addInfoCommand(app, infoOptions);
     cuberille::apps::FlyOptions flyOptions;
     addFlyCommand(app, flyOptions);
+    cuberille::apps::ExplainOptions explainOptions;
+    addExplainCommand(app, explainOptions);
 
     try {
         app.parse(argc, argv);
@@ -222,6 +240,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("isosurface")) return cuberille::apps::runIsosurfaceCommand(isosurfaceOptions);
         if (app.got_subcommand("info")) return cuberille::apps::runInfoCommand(infoOptions);
         if (app.got_subcommand("fly")) return cuberille::apps::runFlyCommand(flyOptions);
+        if (app.got_subcommand("explain")) return cuberille::apps::runExplainCommand(explainOptions);
     } catch (const cuberille::scene::InputError& e) {
         std::fprintf(stderr, "cuberille: %s\n", e.what());
         return kExitBadInput;

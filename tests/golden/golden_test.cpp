@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "apps/explain_command.h"
 #include "apps/image_io.h"
 #include "apps/render_command.h"
 #include "raster/pipeline.h"
@@ -269,6 +270,20 @@ raster::Image renderVoxels(apps::View view, int msaa, float pixelError) {
 
 TEST(Golden, VoxelModelAt4Samples) { compareWithGolden("voxels_msaa4", renderVoxels(apps::View::Color, 4, 1.0f)); }
 TEST(Golden, VoxelModelLodView) { compareWithGolden("voxels_lod", renderVoxels(apps::View::Lod, 1, 3.2f)); }
+
+
+// `cuberille explain` for the triangle docs/pipeline.md walks through: every stage's picture.
+// These are the pictures in docs/images/pipeline (`make pipeline-docs` writes them from the
+// same call), so a change to a stage that moves a picture fails here until both are renewed.
+TEST(Golden, ExplainStagesOfTheDocumentedTriangle) {
+    apps::ExplainOptions o;
+    const apps::ExplainResult r = apps::explainScene(scene::parseTriScene(std::string(apps::kExplainTriangle) + " 1\n", "--triangle"), o);
+    ASSERT_EQ(r.images.size(), 12u);
+    for (const auto& [name, image] : r.images) {
+        SCOPED_TRACE(name);
+        compareWithGolden("explain_" + name, image);
+    }
+}
 
 }  // namespace
 }  // namespace cuberille::testing
