@@ -5,7 +5,7 @@ PRESET ?= release
 BUILD_DIR := build/$(PRESET)
 JOBS ?= $(shell nproc)
 
-.PHONY: all setup configure build demo test bench golden pipeline-docs sanitize asan tsan fuzz format clean
+.PHONY: all setup configure build demo test bench golden pipeline-docs cli-docs sanitize asan tsan fuzz format clean
 
 all: build
 
@@ -32,6 +32,10 @@ bench: build
 # Regenerate reference_images/ from the current renderer (review the diff before committing).
 golden: build pipeline-docs
 	@CUBERILLE_UPDATE_GOLDEN=1 ctest --preset $(PRESET) -L golden
+
+# docs/cli-reference.md from the tool's own --help (checked by Cli.ReferenceIsTheToolsOwnHelp).
+cli-docs: build
+	@CUBERILLE_UPDATE_CLI_DOCS=1 build/$(PRESET)/tests/cuberille_tests --gtest_filter=Cli.ReferenceIsTheToolsOwnHelp --gtest_brief=1
 
 # The pictures of docs/pipeline.md, drawn by `cuberille explain` for apps::kExplainTriangle (the same
 # triangle; golden-tested as reference_images/explain_*).

@@ -200,7 +200,7 @@ void addFlyCommand(CLI::App& app, cuberille::apps::FlyOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    CLI::App app{"cuberille: a CPU renderer modelled on the GPU rasterization pipeline"};
+    CLI::App app{"cuberille: a CPU renderer modelled on the GPU rasterization pipeline", "cuberille"};
     app.require_subcommand(1);
     cuberille::apps::RenderOptions renderOptions;
     std::string view = "color", shadows = "none";
