@@ -26,7 +26,12 @@ void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int&
     command->add_option("--threads", threads, "Worker threads (0 = all cores)")->capture_default_str();
 }
 
-void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::string& view, std::string& shadows) {
+/// The render options parsed from names after CLI11 has read them.
+struct RenderNames {
+    std::string view = "color", shadows = "none", textureFilter = "file";
+};
+
+void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNames& names) {
     CLI::App* render = app.add_subcommand(
         "render", "Render one frame of a scene to an image (PNG: sRGB 8-bit; EXR: linear float)");
     std::string scenes;
@@ -37,7 +42,7 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     addFrameOptions(render, o.width, o.height, o.msaa, o.threads);
     render->add_option("--out", o.out, "Output image, .png or .exr")->required();
     render->add_option("--stats", o.statsPath, "Write per-stage counters and timings as JSON");
-    render->add_option("--view", view, "What to show: color, depth, tiles (coarse block "
+    render->add_option("--view", names.view, "What to show: color, depth, tiles (coarse block "
                                        "classes), overdraw (depth-passing samples), lod (voxel models: "
                                        "blocks coloured by level) or visibility (voxel models: drawn green, "
                                        "source triangles yellow, occlusion-culled red) or shadow-pixels "
@@ -59,6 +64,13 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_option("--animate", o.animate,
                        "glTF: write N frames of the first animation from --time, --fps apart (OUT_000.png, ...)");
     render->add_option("--fps", o.fps, "With --animate: frames a second of animation time")->capture_default_str();
+    render->add_option("--supersample", o.supersample,
+                       "Render N x N times the pixels and box-filter down: N² samples per pixel on a grid (1..16)")
+        ->capture_default_str();
+    render->add_option("--texture-filter", names.textureFilter,
+                       "Texture filtering: file (each texture's own sampler), or nearest, bilinear or trilinear for "
+                       "every texture")
+        ->capture_default_str();
     render->add_flag("--frustum-cull", o.frustumCull,
                      "3D scenes: cull triangles against the view frustum through a BVH (refitted per --animate frame)");
     render->add_option("--pixel-error", o.pixelError,
@@ -73,7 +85,7 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, std::str
     render->add_option("--warmup", o.warmup,
                        "Voxel models: frames rendered first so occlusion culling has the frame before to learn from")
         ->capture_default_str();
-    render->add_option("--shadows", shadows,
+    render->add_option("--shadows", names.shadows,
                        "Shadows from the scene's lights: none, map (shadow maps), hybrid (maps, with shadow rays "
                        "for the pixels a map may get wrong) or raytraced (a shadow ray per pixel, the reference)")
         ->capture_default_str();
@@ -203,8 +215,8 @@ int main(int argc, char** argv) {
     CLI::App app{"cuberille: a CPU renderer modelled on the GPU rasterization pipeline", "cuberille"};
     app.require_subcommand(1);
     cuberille::apps::RenderOptions renderOptions;
-    std::string view = "color", shadows = "none";
-    addRenderCommand(app, renderOptions, view, shadows);
+    RenderNames renderNames;
+    addRenderCommand(app, renderOptions, renderNames);
     cuberille::apps::PackOptions packOptions;
     addPackCommand(app, packOptions);
     cuberille::apps::VoxelizeCommandOptions voxelizeOptions;
@@ -231,8 +243,9 @@ int main(int argc, char** argv) {
 
     try {
         if (app.got_subcommand("render")) {
-            renderOptions.view = cuberille::apps::parseView(view);
-            renderOptions.shadows.mode = cuberille::apps::parseShadowMode(shadows);
+            renderOptions.view = cuberille::apps::parseView(renderNames.view);
+            renderOptions.shadows.mode = cuberille::apps::parseShadowMode(renderNames.shadows);
+            renderOptions.textureFilter = cuberille::apps::parseTextureFilter(renderNames.textureFilter);
             return cuberille::apps::runRenderCommand(renderOptions);
         }
         if (app.got_subcommand("pack")) return cuberille::apps::runPackCommand(packOptions);

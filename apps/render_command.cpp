@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
+#include <unordered_map>
 
 #include "raster/clock.h"
 #include "apps/atomic_file.h"
@@ -12,6 +14,7 @@
 #include "raster/parallel.h"
 #include "raster/pipeline.h"
 #include "raster/sample_pattern.h"
+#include "raster/texture.h"
 #include "scene/input_error.h"
 #include "scene/model_scene.h"
 #include "scene/procedural.h"
@@ -113,6 +116,24 @@ View parseView(const std::string& name) {
     throw scene::InputError("--view: '" + name + "' is not color, depth, tiles, overdraw, lod, visibility or shadow-pixels");
 }
 
+TextureFilterOverride parseTextureFilter(const std::string& name) {
+    if (name == "file") return TextureFilterOverride::File;
+    if (name == "nearest") return TextureFilterOverride::Nearest;
+    if (name == "bilinear") return TextureFilterOverride::Bilinear;
+    if (name == "trilinear") return TextureFilterOverride::Trilinear;
+    throw scene::InputError("--texture-filter: '" + name + "' is not file, nearest, bilinear or trilinear");
+}
+
+const char* textureFilterName(TextureFilterOverride f) {
+    switch (f) {
+        case TextureFilterOverride::File: return "file";
+        case TextureFilterOverride::Nearest: return "nearest";
+        case TextureFilterOverride::Bilinear: return "bilinear";
+        case TextureFilterOverride::Trilinear: return "trilinear";
+    }
+    return "?";
+}
+
 namespace {
 
 bool isTriFile(const RenderOptions& o) { return o.scene.ends_with(".tri"); }
@@ -129,6 +150,34 @@ scene::Scene load3dScene(const RenderOptions& o) {
                                      });
     throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz, .obj, .gltf "
                             "or .glb file, or a built-in scene name");
+}
+
+// --texture-filter other than file: every texture of the scene gets the one filter. Textures are
+// shared between meshes, so each distinct one is copied once (the map is only a lookup; nothing
+// is ordered by address).
+void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
+    if (which == TextureFilterOverride::File) return;
+    raster::TextureFilter filter;
+    filter.magnifyNearest = which == TextureFilterOverride::Nearest;
+    filter.minify = which == TextureFilterOverride::Nearest  ? raster::MinFilter::Nearest
+                    : which == TextureFilterOverride::Bilinear ? raster::MinFilter::Linear
+                                                               : raster::MinFilter::LinearMipmapLinear;
+    std::unordered_map<const raster::Texture*, std::shared_ptr<const raster::Texture>> replaced;
+    auto retarget = [&](scene::MeshTexture& slot) {
+        if (!slot.texture) return;
+        auto& copy = replaced[slot.texture.get()];
+        if (!copy) {
+            auto t = std::make_shared<raster::Texture>(*slot.texture);
+            t->setFilter(filter);
+            copy = std::move(t);
+        }
+        slot.texture = copy;
+    };
+    for (scene::Mesh& m : s.meshes) {
+        scene::MeshTextures& t = m.textures;
+        for (scene::MeshTexture* slot : {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive})
+            retarget(*slot);
+    }
 }
 
 // One frame: submit(pipeline) records the draws, whose arrays stay alive until endFrame
@@ -218,9 +267,9 @@ void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     }
 }
 
-}  // namespace
-
-RenderResult renderScene(const RenderOptions& o) {
+// The frame; `windowScale` scales a .tri scene's window-space coordinates (pixels) with the
+// frame when supersampling, as 3D scenes scale through their projection.
+RenderResult renderAtScale(const RenderOptions& o, float windowScale) {
     validate(o);
     raster::ThreadLimit threadLimit(o.threads);
     RenderResult result;
@@ -235,6 +284,7 @@ RenderResult renderScene(const RenderOptions& o) {
     const double t0 = raster::nowMs();
     if (!isTriFile(o)) {
         scene::Scene s = load3dScene(o);
+        overrideTextureFilters(s, o.textureFilter);
         result.loadMs = raster::nowMs() - t0;
         result.load = s.loadStats;
         std::optional<SceneShadows> shadows;
@@ -244,11 +294,52 @@ RenderResult renderScene(const RenderOptions& o) {
         renderFrame(s, o, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, result);
         return result;
     }
-    const scene::TriScene s = scene::loadTriScene(o.scene);
+    scene::TriScene s = scene::loadTriScene(o.scene);
+    for (glm::vec3& p : s.positions) p *= windowScale;
     result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.triangleCount();
     renderFrame(o, glm::vec4(0.0f), [&](raster::Pipeline& p) { p.draw(s.drawCall()); }, result);
     return result;
+}
+
+// --supersample N: the frame at N x N times the pixels, each N x N block box-filtered into one
+// pixel (summed in double): N² samples per pixel on a regular grid through the same pipeline, the
+// ground truth of `cuberille accuracy` (256 samples at N = 16).
+RenderResult renderSupersampled(const RenderOptions& o) {
+    validate(o);
+    if (o.view != View::Color) throw scene::InputError("--supersample: only with --view color");
+    const int n = o.supersample;
+    if (int64_t(o.width) * n > raster::kMaxFramebufferPixels || int64_t(o.height) * n > raster::kMaxFramebufferPixels)
+        throw scene::InputError("--supersample: " + std::to_string(o.width) + "x" + std::to_string(o.height) + " times " +
+                                std::to_string(n) + " exceeds " + std::to_string(raster::kMaxFramebufferPixels) + " pixels a side");
+    RenderOptions big = o;
+    big.width *= n;
+    big.height *= n;
+    big.supersample = 1;
+    RenderResult r = renderAtScale(big, float(n));
+    raster::Image small;
+    small.width = o.width;
+    small.height = o.height;
+    small.rgba.resize(size_t(o.width) * o.height * 4);
+    raster::parallelFor(size_t(o.height), [&](size_t y) {
+        for (int x = 0; x < o.width; ++x)
+            for (int c = 0; c < 4; ++c) {
+                double sum = 0.0;
+                for (int j = 0; j < n; ++j)
+                    for (int i = 0; i < n; ++i) sum += r.image.pixel(x * n + i, int(y) * n + j)[c];
+                small.pixel(x, int(y))[c] = float(sum / double(n * n));
+            }
+    });
+    r.image = std::move(small);
+    return r;
+}
+
+}  // namespace
+
+RenderResult renderScene(const RenderOptions& o) {
+    if (o.supersample < 1 || o.supersample > 16) throw scene::InputError("--supersample: must be 1 to 16");
+    if (o.supersample > 1) return renderSupersampled(o);
+    return renderAtScale(o, 1.0f);
 }
 
 nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
@@ -259,6 +350,7 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
     j["width"] = o.width;
     j["height"] = o.height;
     j["msaa"] = o.msaa;
+    j["supersample"] = o.supersample;
     j["threads"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
     j["view"] = viewName(o.view);
     j["sceneTriangles"] = r.sceneTriangles;
@@ -346,8 +438,9 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
 
 void printSummary(const RenderOptions& o, const std::filesystem::path& file, const RenderResult& r) {
     const raster::StageCounters& c = r.stats.counters;
-    std::printf("wrote %s (%dx%d, %d sample%s, view %s)\n", file.c_str(), o.width, o.height, o.msaa,
-                o.msaa > 1 ? "s" : "", viewName(o.view));
+    const int samplesPerPixel = o.msaa * o.supersample * o.supersample;
+    std::printf("wrote %s (%dx%d, %d sample%s%s, view %s)\n", file.c_str(), o.width, o.height, samplesPerPixel,
+                samplesPerPixel > 1 ? "s" : "", o.supersample > 1 ? " by supersampling" : "", viewName(o.view));
     std::printf("  %zu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms a frame "
                 "(vertex %.1f, front end %.1f, back end %.1f, resolve %.1f)\n",
                 r.sceneTriangles, (unsigned long long)c.trianglesSetUp,

@@ -18,6 +18,9 @@
 
 namespace cuberille::apps {
 
+/// --texture-filter: the file's samplers, or one filter for every texture (an accuracy knob).
+enum class TextureFilterOverride { File, Nearest, Bilinear, Trilinear };
+
 enum class View { Color, Depth, Tiles, Overdraw, Lod, Visibility, ShadowPixels };
 
 struct RenderOptions {
@@ -36,6 +39,8 @@ struct RenderOptions {
     int animate = 0;          // glTF, > 0: that many frames of the animation from --time, OUT_000.ext ...
     float fps = 30.0f;        // --animate: frames a second of animation time
     bool frustumCull = false; // 3D scenes: cull triangles against the frustum through a BVH
+    int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)
+    TextureFilterOverride textureFilter = TextureFilterOverride::File;
     float pixelError = 1.0f;  // voxel models: largest projected voxel in pixels (0: finest level)
     bool noHybrid = false;    // voxel models: never draw source triangles
     bool noOcclusion = false; // voxel models: no occlusion culling
@@ -59,6 +64,8 @@ struct RenderResult {
 };
 
 View parseView(const std::string& name);  // throws scene::InputError
+TextureFilterOverride parseTextureFilter(const std::string& name);  // throws scene::InputError
+const char* textureFilterName(TextureFilterOverride filter);
 /// The frame options every rendering command takes (--width, --height, --msaa, --threads);
 /// throws scene::InputError naming the option.
 void validateFrameOptions(int width, int height, int msaa, int threads);

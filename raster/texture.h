@@ -39,6 +39,10 @@ public:
     Texture(int width, int height, std::vector<glm::vec4> rgba, WrapMode wrapU = WrapMode::Repeat,
             WrapMode wrapV = WrapMode::Repeat, TextureFilter filter = {});
 
+    /// The same texels under other filters (an accuracy knob: `render --texture-filter`).
+    void setFilter(TextureFilter filter) { filter_ = filter; }
+    TextureFilter filter() const { return filter_; }
+
     int width(int level = 0) const { return levels_[level].width; }
     int height(int level = 0) const { return levels_[level].height; }
     int levelCount() const { return int(levels_.size()); }
