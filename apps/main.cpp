@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "apps/accuracy_command.h"
 #include "apps/explain_command.h"
 #include "apps/fly_command.h"
 #include "apps/render_command.h"
@@ -114,6 +115,24 @@ void addExplainCommand(CLI::App& app, cuberille::apps::ExplainOptions& o) {
     explain->add_option("--triangle-index", o.triangleIndex, "The triangle whose set-up and edges are drawn")
         ->capture_default_str();
     explain->add_flag("--quiet", o.quiet, "Print nothing on success");
+}
+
+void addAccuracyCommand(CLI::App& app, cuberille::apps::AccuracyOptions& o) {
+    CLI::App* a = app.add_subcommand(
+        "accuracy", "Sweep every accuracy knob that applies to a scene against a 256-sample ground truth: time, "
+                    "memory and error per setting, as report.csv, report.json and index.html with plots");
+    a->add_option("scene", o.scene, "A scene as `render` takes it")->required();
+    a->add_option("--out", o.outDir, "Directory for the report, its renders and crops")->required();
+    a->add_option("--width", o.width, "Image width in pixels (the truth renders 16 times as wide)")->capture_default_str();
+    a->add_option("--height", o.height, "Image height in pixels")->capture_default_str();
+    a->add_option("--frames", o.frames, "Runs per setting; time is their median")->capture_default_str();
+    a->add_option("--threads", o.threads, "Worker threads of every run (0 = all cores)")->capture_default_str();
+    a->add_option("--azimuth", o.azimuth, "Camera azimuth for mesh files and voxel models, degrees")->capture_default_str();
+    a->add_option("--elevation", o.elevation, "Camera elevation, degrees")->capture_default_str();
+    a->add_option("--camera-index", o.cameraIndex, "Use the file's N-th camera (glTF)");
+    a->add_option("--time", o.timeSeconds, "glTF: the first animation's pose at this time, in seconds")->capture_default_str();
+    a->add_flag("--soft", o.soft, "Soft shadows in every shadowed setting and the truth");
+    a->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 
 void addPackCommand(CLI::App& app, cuberille::apps::PackOptions& o) {
@@ -229,6 +248,8 @@ int main(int argc, char** argv) {
     addFlyCommand(app, flyOptions);
     cuberille::apps::ExplainOptions explainOptions;
     addExplainCommand(app, explainOptions);
+    cuberille::apps::AccuracyOptions accuracyOptions;
+    addAccuracyCommand(app, accuracyOptions);
 
     try {
         app.parse(argc, argv);
@@ -254,6 +275,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("info")) return cuberille::apps::runInfoCommand(infoOptions);
         if (app.got_subcommand("fly")) return cuberille::apps::runFlyCommand(flyOptions);
         if (app.got_subcommand("explain")) return cuberille::apps::runExplainCommand(explainOptions);
+        if (app.got_subcommand("accuracy")) return cuberille::apps::runAccuracyCommand(accuracyOptions);
     } catch (const cuberille::scene::InputError& e) {
         std::fprintf(stderr, "cuberille: %s\n", e.what());
         return kExitBadInput;

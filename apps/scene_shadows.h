@@ -25,7 +25,7 @@ struct ShadowFrameStats {
     size_t casterTriangles = 0;
     double bvhBuildMs = 0.0;  // once per scene, reported with the first frame
     double surfacesMs = 0.0;  // the visibility buffer and surface reconstruction
-    double totalMs = 0.0;     // the whole stage this frame, BVH build included on the first
+    double totalMs = 0.0;     // the whole stage this frame; the BVH build (at construction) is not in it
 };
 
 class SceneShadows {

@@ -517,3 +517,13 @@ TEST_F(Cli, FlyRejectsBadOptionsWithExitTwoAndWritesNothing) {
 }
 
 }  // namespace
+
+TEST_F(Cli, AccuracyNamesTheSceneItCannotRenderAndTheLimitsItKeeps) {
+    const CommandRun missing = run("accuracy " + (dir_ / "missing.tri").string() + " --out " + (dir_ / "r").string());
+    EXPECT_EQ(missing.exitCode, 2);
+    EXPECT_NE(missing.output.find("missing.tri: cannot open file"), std::string::npos) << missing.output;
+    const CommandRun wide = run("accuracy demo --width 5000 --out " + (dir_ / "r").string());
+    EXPECT_EQ(wide.exitCode, 2);
+    EXPECT_NE(wide.output.find("--width and --height: 8 to 1024 pixels"), std::string::npos) << wide.output;
+    EXPECT_FALSE(fs::exists(dir_ / "r" / "report.json"));
+}

@@ -1,0 +1,215 @@
+// `cuberille accuracy`: the report's invariants on a small edge-dominated scene, and the image
+// error measures it is built on.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/accuracy_command.h"
+#include "apps/accuracy_report.h"
+#include "apps/image_error.h"
+#include "apps/image_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace cuberille::apps;
+using cuberille::raster::Image;
+
+Image flatImage(int width, int height, float value) {
+    Image im;
+    im.width = width;
+    im.height = height;
+    im.rgba.assign(size_t(width) * height * 4, value);
+    return im;
+}
+
+fs::path tempDir(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() /
+                         ("cuberille-accuracy-" + std::to_string(getpid()) + "-" + name);  // ctest runs tests in parallel processes
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+// Thin slivers and long edges at many slopes: almost every covered pixel is an edge pixel, where
+// only more samples help.
+fs::path writeEdgeScene(const fs::path& dir) {
+    std::ofstream out(dir / "edges.tri");
+    for (int i = 0; i < 12; ++i) {
+        const double x = 2 + 3.7 * i, slope = 0.3 + 0.11 * i;
+        out << x << " 1 " << x + 2.3 << " 1.5 " << x + 30 * slope * 0.2 << " 30.5 " << 0.2 + 0.06 * i << "\n";
+    }
+    out << "1.5 20.2 46.5 24.9 1.2 22.7 1\n";
+    return dir / "edges.tri";
+}
+
+class AccuracyReportOnEdges : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        dir_ = new fs::path(tempDir("edges"));
+        AccuracyOptions o;
+        o.scene = writeEdgeScene(*dir_).string();
+        o.outDir = *dir_ / "report";
+        o.width = 48;
+        o.height = 32;
+        o.frames = 1;
+        o.threads = 2;
+        o.quiet = true;
+        o.executable = CUBERILLE_BINARY;
+        report_ = new AccuracyReport(runAccuracy(o));
+    }
+    static void TearDownTestSuite() {
+        fs::remove_all(*dir_);
+        delete report_;
+        delete dir_;
+    }
+    static const AccuracyRow& row(const std::string& knob, const std::string& value) {
+        for (const AccuracyRow& r : report_->rows)
+            if (r.setting.knob == knob && r.setting.value == value) return r;
+        ADD_FAILURE() << "no row " << knob << " " << value;
+        return report_->rows.front();
+    }
+    static fs::path* dir_;
+    static AccuracyReport* report_;
+};
+fs::path* AccuracyReportOnEdges::dir_ = nullptr;
+AccuracyReport* AccuracyReportOnEdges::report_ = nullptr;
+
+TEST_F(AccuracyReportOnEdges, ErrorFallsAsSamplesRise) {
+    const double one = row("samples per pixel", "1").error.rmse, four = row("samples per pixel", "4").error.rmse,
+                 sixteen = row("samples per pixel", "16").error.rmse;
+    EXPECT_GT(one, 0.0);
+    EXPECT_LT(four, one);
+    EXPECT_LT(sixteen, four);
+    EXPECT_GT(sixteen, 0.0);  // 16 samples are not 256
+}
+
+TEST_F(AccuracyReportOnEdges, GroundTruthAgainstItselfIsZero) {
+    const AccuracyRow& truth = report_->rows.back();
+    ASSERT_EQ(truth.setting.knob, "ground truth");
+    EXPECT_EQ(truth.error.rmse, 0.0);
+    EXPECT_EQ(truth.error.maxError, 0.0);
+    EXPECT_TRUE(truth.deterministic);
+    EXPECT_GE(truth.frameMs.size(), 2u);  // run twice even when one frame is asked for
+    EXPECT_NE(truth.commandLine.find("--supersample 16"), std::string::npos);
+}
+
+TEST_F(AccuracyReportOnEdges, EveryRowHasTheCommandLineThatMadeIt) {
+    for (const AccuracyRow& r : report_->rows) {
+        EXPECT_EQ(r.commandLine.rfind("cuberille render ", 0), 0u) << r.commandLine;
+        for (const std::string& arg : r.setting.args) EXPECT_NE(r.commandLine.find(arg), std::string::npos);
+    }
+    // Rerun one row's command line: the same image.
+    const AccuracyRow& r = row("samples per pixel", "8");
+    const fs::path again = *dir_ / "again.exr";
+    std::string command = r.commandLine.substr(std::string("cuberille").size());
+    const size_t out = command.find(" --out ");
+    command = std::string(CUBERILLE_BINARY) + command.substr(0, out) + " --out " + again.string() + " --quiet";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    EXPECT_EQ(readImage(again).rgba, readImage(*dir_ / "report" / "renders" / (r.id + ".exr")).rgba);
+}
+
+TEST_F(AccuracyReportOnEdges, OnlySamplesPerPixelApplyToATriScene) {
+    EXPECT_FALSE(report_->traits.threeD || report_->traits.textured || report_->traits.shadowed);
+    for (const AccuracyRow& r : report_->rows)
+        EXPECT_TRUE(r.setting.knob == "samples per pixel" || r.setting.knob == "preset" ||
+                    r.setting.knob == "defaults" || r.setting.knob == "ground truth")
+            << r.setting.knob;
+}
+
+TEST_F(AccuracyReportOnEdges, WritesCsvJsonAndHtmlWithEveryRow) {
+    const fs::path dir = *dir_ / "report";
+    std::ifstream csv(dir / "report.csv");
+    std::string line;
+    size_t lines = 0;
+    while (std::getline(csv, line)) ++lines;
+    EXPECT_EQ(lines, report_->rows.size() + 1);  // the header
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "report.json"));
+    ASSERT_EQ(j.at("rows").size(), report_->rows.size());
+    EXPECT_EQ(j.at("threads").get<int>(), 2);
+    std::stringstream html;
+    html << std::ifstream(dir / "index.html").rdbuf();
+    size_t plots = 0;
+    for (size_t at = 0; (at = html.str().find("<svg", at)) != std::string::npos; ++at) ++plots;
+    EXPECT_EQ(plots, 2u);
+    for (const AccuracyRow& r : report_->rows) {
+        EXPECT_TRUE(fs::exists(dir / "crops" / (r.id + ".png"))) << r.id;
+        EXPECT_NE(html.str().find(r.id + ".png"), std::string::npos) << r.id;
+    }
+    // The front's fastest point is the fastest row, and the truth (zero error) is on it.
+    EXPECT_TRUE(report_->rows.back().pareto);
+}
+
+TEST(AccuracySweep, CoversTheKnobsThatApplyAroundTheBalancedPreset) {
+    SceneTraits all;
+    all.threeD = all.textured = all.shadowed = true;
+    std::set<std::string> knobs;
+    for (const AccuracySetting& s : accuracySweep(all, false)) knobs.insert(s.knob);
+    EXPECT_EQ(knobs, (std::set<std::string>{"samples per pixel", "texture filter", "shadow mode", "map shadow-map size",
+                                            "hybrid shadow-map size", "preset", "defaults", "ground truth"}));
+    SceneTraits voxel;
+    voxel.voxel = true;
+    const std::vector<AccuracySetting> v = accuracySweep(voxel, false);
+    EXPECT_EQ(v.back().knob, "ground truth");
+    bool lod = false;
+    for (const AccuracySetting& s : v) lod = lod || s.knob == "LOD pixel error";
+    EXPECT_TRUE(lod);
+    for (const std::string& a : v.back().args) EXPECT_NE(a, "--shadows");  // no shadow knob for voxels
+}
+
+TEST(AccuracyProbe, FindsTexturesAndShadowCastingLightsInTheDemoScene) {
+    const fs::path dir = tempDir("probe");
+    AccuracyOptions o;
+    o.scene = "demo";
+    o.outDir = dir;
+    o.executable = CUBERILLE_BINARY;
+    fs::create_directories(dir / "logs");
+    const SceneTraits t = probeScene(o);
+    EXPECT_TRUE(t.threeD && t.textured && t.shadowed);
+    EXPECT_FALSE(t.voxel);
+    fs::remove_all(dir);
+}
+
+TEST(ImageError, IdenticalImagesHaveZeroErrorAndInfinitePsnr) {
+    const ImageError e = compareImages(flatImage(5, 4, 0.3f), flatImage(5, 4, 0.3f));
+    EXPECT_EQ(e.rmse, 0.0);
+    EXPECT_TRUE(std::isinf(e.psnrDb));
+    EXPECT_EQ(e.shareOver1, 0.0);
+}
+
+TEST(ImageError, OnePixelOffIsMeasuredOnEncodedValues) {
+    Image a = flatImage(4, 4, 0.0f), b = flatImage(4, 4, 0.0f);
+    b.pixel(2, 1)[0] = 1.0f;  // one channel of one pixel: encoded 0 -> 1
+    const ImageError e = compareImages(a, b);
+    EXPECT_DOUBLE_EQ(e.rmse, std::sqrt(1.0 / 48.0));
+    EXPECT_DOUBLE_EQ(e.maxError, 1.0);
+    EXPECT_DOUBLE_EQ(e.shareOver1, 1.0 / 16.0);
+    EXPECT_DOUBLE_EQ(e.shareOver8, 1.0 / 16.0);
+    b.pixel(2, 1)[0] = 0.0005f;  // encoded 0.00646: over 1/255, under 8/255
+    const ImageError small = compareImages(a, b);
+    EXPECT_DOUBLE_EQ(small.shareOver1, 1.0 / 16.0);
+    EXPECT_EQ(small.shareOver8, 0.0);
+}
+
+TEST(ImageError, WorstRegionFindsAPlantedBlock) {
+    Image a = flatImage(40, 30, 0.5f), b = flatImage(40, 30, 0.5f);
+    for (int y = 17; y < 23; ++y)
+        for (int x = 25; x < 31; ++x) b.pixel(x, y)[1] = 0.9f;
+    const PixelRect r = worstRegion(a, b, 6);
+    EXPECT_EQ(r.x, 25);
+    EXPECT_EQ(r.y, 17);
+    EXPECT_EQ(r.width, 6);
+    const Image crop = comparisonCrop(a, b, r, 4);
+    EXPECT_EQ(crop.height, 24);
+    EXPECT_GT(crop.width, 3 * 24);
+    EXPECT_THROW(compareImages(a, flatImage(4, 4, 0.0f)), std::runtime_error);
+}
+
+}  // namespace
