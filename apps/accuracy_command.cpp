@@ -116,6 +116,7 @@ struct Knobs {
     std::string shadows = "hybrid";
     int mapSizeTexels = 1024;
     float pixelError = 1.0f;
+    bool reversedDepth = false;
     int supersample = 1;
 };
 
@@ -137,6 +138,7 @@ std::vector<std::string> knobArgs(const Knobs& k, const SceneTraits& t, bool sof
         if (soft && k.shadows != "none") a.push_back("--soft");
     }
     if (t.voxel) a.insert(a.end(), {"--pixel-error", formatNumber(k.pixelError)});
+    if ((t.threeD || t.voxel) && k.reversedDepth) a.insert(a.end(), {"--depth", "reversed"});
     return a;
 }
 
@@ -176,6 +178,12 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft) {
                 add(std::string(mode) + " shadow-map size", std::to_string(size), size, k);
             }
     }
+    if (t.threeD || t.voxel)
+        for (bool reversed : {false, true}) {
+            Knobs k = balanced;
+            k.reversedDepth = reversed;
+            add("depth precision", reversed ? "reversed" : "standard", reversed, k);
+        }
     if (t.voxel)
         for (float e : {8.0f, 4.0f, 2.0f, 1.0f, 0.5f, 0.25f}) {
             Knobs k = balanced;
@@ -194,6 +202,7 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft) {
     exact.msaa = 16;
     exact.shadows = "raytraced";
     exact.pixelError = 0.25f;
+    exact.reversedDepth = true;
     add("preset", "exact", 2, exact);
     sweep.push_back({"defaults", "defaults", 0, {}, true});  // what `render` does with no knob given
     Knobs truth;
@@ -201,6 +210,7 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft) {
     truth.msaa = 1;
     truth.shadows = "raytraced";
     truth.pixelError = 0.0f;  // finest level, source triangles wherever the model keeps them
+    truth.reversedDepth = true;  // the more precise depth
     add("ground truth", "256 samples", 0, truth);
     return sweep;
 }
@@ -461,10 +471,8 @@ void checkMonotone(const std::vector<AccuracyRow>& rows, std::vector<std::string
 }
 
 void noteKnobsNotSwept(const SceneTraits& t, std::vector<std::string>& notes) {
-    notes.push_back("depth precision (standard against reversed float depth): not swept; the renderer has one depth "
-                    "format (32-bit float, LESS, [0, 1]) and reversed depth is not built yet.");
     if (!t.threeD && !t.voxel)
-        notes.push_back("texture filtering, shadows and LOD: do not apply to a .tri scene (flat-coloured "
+        notes.push_back("texture filtering, shadows, depth precision and LOD: do not apply to a .tri scene (flat-coloured "
                         "window-space triangles); only samples per pixel is swept.");
     if (t.threeD && !t.textured) notes.push_back("texture filter: the scene samples no texture; not swept.");
     if (t.threeD && !t.shadowed) notes.push_back("shadows: the scene has no shadow-casting light; not swept.");

@@ -6,8 +6,9 @@
 // rerun any point of the report, and its peak memory is its own. Each knob is swept on its own
 // around the balanced preset, and the fast, balanced and exact presets and the tool's defaults are
 // run as they are. Each image is compared with the ground truth: the same scene with 256 samples
-// per pixel (a 16 x 16 grid, `--supersample 16`), ray-traced shadows, trilinear filtering of
-// level-0-dominated textures, and source triangles in place of voxels (`--pixel-error 0`).
+// per pixel (a 16 x 16 grid, `--supersample 16`), ray-traced shadows, reversed depth, trilinear
+// filtering of level-0-dominated textures, and source triangles in place of voxels
+// (`--pixel-error 0`).
 
 #include <filesystem>
 #include <string>

@@ -29,7 +29,7 @@ void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int&
 
 /// The render options parsed from names after CLI11 has read them.
 struct RenderNames {
-    std::string view = "color", shadows = "none", textureFilter = "file";
+    std::string view = "color", shadows = "none", textureFilter = "file", depth = "standard";
 };
 
 void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNames& names) {
@@ -71,6 +71,10 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
     render->add_option("--texture-filter", names.textureFilter,
                        "Texture filtering: file (each texture's own sampler), or nearest, bilinear or trilinear for "
                        "every texture")
+        ->capture_default_str();
+    render->add_option("--depth", names.depth,
+                       "Depth convention: standard (0 near, 1 far) or reversed (1 near, 0 far: float precision "
+                       "where distant surfaces need it)")
         ->capture_default_str();
     render->add_flag("--frustum-cull", o.frustumCull,
                      "3D scenes: cull triangles against the view frustum through a BVH (refitted per --animate frame)");
@@ -267,6 +271,7 @@ int main(int argc, char** argv) {
             renderOptions.view = cuberille::apps::parseView(renderNames.view);
             renderOptions.shadows.mode = cuberille::apps::parseShadowMode(renderNames.shadows);
             renderOptions.textureFilter = cuberille::apps::parseTextureFilter(renderNames.textureFilter);
+            renderOptions.depth = cuberille::apps::parseDepthConvention(renderNames.depth);
             return cuberille::apps::runRenderCommand(renderOptions);
         }
         if (app.got_subcommand("pack")) return cuberille::apps::runPackCommand(packOptions);

@@ -54,6 +54,7 @@ raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) 
     d.widthPixels = o.width;
     d.heightPixels = o.height;
     d.samples = o.msaa;
+    d.depthConvention = o.depth;
     d.clearColor = background;
     d.recordOverdraw = o.view == View::Overdraw;
     d.recordBlockClasses = o.view == View::Tiles;
@@ -124,6 +125,12 @@ TextureFilterOverride parseTextureFilter(const std::string& name) {
     throw scene::InputError("--texture-filter: '" + name + "' is not file, nearest, bilinear or trilinear");
 }
 
+raster::DepthConvention parseDepthConvention(const std::string& name) {
+    if (name == "standard") return raster::DepthConvention::Standard;
+    if (name == "reversed") return raster::DepthConvention::Reversed;
+    throw scene::InputError("--depth: '" + name + "' is not standard or reversed");
+}
+
 const char* textureFilterName(TextureFilterOverride f) {
     switch (f) {
         case TextureFilterOverride::File: return "file";
@@ -140,8 +147,9 @@ bool isTriFile(const RenderOptions& o) { return o.scene.ends_with(".tri"); }
 bool isVoxelFile(const RenderOptions& o) { return o.scene.ends_with(".cvox"); }
 
 
-// Built-in or mesh-file scenes: everything but .tri.
-scene::Scene load3dScene(const RenderOptions& o) {
+void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which);
+
+scene::Scene loadScene(const RenderOptions& o) {
     if (scene::isProceduralScene(o.scene)) return scene::makeProceduralScene(o.scene, o.detail);
     if (scene::isModelFile(o.scene))
         return scene::loadModelScene(o.scene, {o.azimuth, o.elevation, o.cameraIndex, o.timeSeconds},
@@ -150,6 +158,15 @@ scene::Scene load3dScene(const RenderOptions& o) {
                                      });
     throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz, .obj, .gltf "
                             "or .glb file, or a built-in scene name");
+}
+
+// Built-in or mesh-file scenes: everything but .tri, with the accuracy knobs that change the
+// scene rather than the frame (--texture-filter, --depth).
+scene::Scene load3dScene(const RenderOptions& o) {
+    scene::Scene s = loadScene(o);
+    overrideTextureFilters(s, o.textureFilter);
+    s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
+    return s;
 }
 
 // --texture-filter other than file: every texture of the scene gets the one filter. Textures are
@@ -242,6 +259,7 @@ std::filesystem::path frameFileName(const std::filesystem::path& out, int frame)
 void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     const double t0 = raster::nowMs();
     lod::VoxelScene s(voxel::readCvox(o.scene), o.azimuth, o.elevation);
+    s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
     result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.model().triangleCount();
     lod::VoxelRenderOptions vo;
@@ -284,7 +302,6 @@ RenderResult renderAtScale(const RenderOptions& o, float windowScale) {
     const double t0 = raster::nowMs();
     if (!isTriFile(o)) {
         scene::Scene s = load3dScene(o);
-        overrideTextureFilters(s, o.textureFilter);
         result.loadMs = raster::nowMs() - t0;
         result.load = s.loadStats;
         std::optional<SceneShadows> shadows;
@@ -351,6 +368,7 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
     j["height"] = o.height;
     j["msaa"] = o.msaa;
     j["supersample"] = o.supersample;
+    j["depth"] = o.depth == raster::DepthConvention::Reversed ? "reversed" : "standard";
     j["threads"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
     j["view"] = viewName(o.view);
     j["sceneTriangles"] = r.sceneTriangles;

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "raster/framebuffer.h"
 #include "raster/resolve.h"
 #include "raster/stats.h"
 #include "apps/scene_culling.h"
@@ -41,6 +42,7 @@ struct RenderOptions {
     bool frustumCull = false; // 3D scenes: cull triangles against the frustum through a BVH
     int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)
     TextureFilterOverride textureFilter = TextureFilterOverride::File;
+    raster::DepthConvention depth = raster::DepthConvention::Standard;  // --depth standard|reversed
     float pixelError = 1.0f;  // voxel models: largest projected voxel in pixels (0: finest level)
     bool noHybrid = false;    // voxel models: never draw source triangles
     bool noOcclusion = false; // voxel models: no occlusion culling
@@ -66,6 +68,7 @@ struct RenderResult {
 View parseView(const std::string& name);  // throws scene::InputError
 TextureFilterOverride parseTextureFilter(const std::string& name);  // throws scene::InputError
 const char* textureFilterName(TextureFilterOverride filter);
+raster::DepthConvention parseDepthConvention(const std::string& name);  // throws scene::InputError
 /// The frame options every rendering command takes (--width, --height, --msaa, --threads);
 /// throws scene::InputError naming the option.
 void validateFrameOptions(int width, int height, int msaa, int threads);

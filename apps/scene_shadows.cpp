@@ -38,8 +38,11 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     if (!active_) return lighting;
     const rt::TriangleMeshView casters{positions_, indices_};
     double t0 = raster::nowMs();
+    // The visibility buffer is a pass of its own, always in the standard depth convention.
+    scene::Camera standard = s.camera;
+    standard.reversedDepth = false;
     const rt::ScreenSurfaces surfaces =
-        rt::findScreenSurfaces(casters, ranges_, s.camera.clipFromWorld(float(width) / float(height)), width, height);
+        rt::findScreenSurfaces(casters, ranges_, standard.clipFromWorld(float(width) / float(height)), width, height);
     stats.surfacesMs = raster::nowMs() - t0;
     masks_ = rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &*bvh_ : nullptr, bounds_}, options_);
     stats.shadows = masks_.stats;

@@ -41,8 +41,8 @@ void Framebuffer::touchTile(int tile) {
     if (tileTouched_[tile]) return;
     tileTouched_[tile] = 1;
     std::fill_n(tileColor(tile), samplesPerTile(), desc_.clearColor);
-    std::fill_n(tileDepth(tile), samplesPerTile(), desc_.clearDepth);
-    std::fill_n(tileBlockMaxDepth(tile), kBlocksPerTile, desc_.clearDepth);
+    std::fill_n(tileDepth(tile), samplesPerTile(), clearDepthKey(desc_));
+    std::fill_n(tileBlockMaxDepth(tile), kBlocksPerTile, clearDepthKey(desc_));
 }
 
 }  // namespace cuberille::raster

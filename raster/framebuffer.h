@@ -19,16 +19,32 @@
 
 namespace cuberille::raster {
 
+/// How window depth maps to distance. Standard: 0 at the near plane, 1 at the far plane. Reversed:
+/// 1 at the near plane, 0 at the far plane, so distant surfaces get float's dense values near 0
+/// instead of its sparse ones near 1 (the projection must be built for it: scene::Camera's
+/// reversedDepth). Either way the rasterizer stores and compares a depth *key* with LESS: the
+/// depth itself (standard) or its negation (reversed), an exact sign flip, so the depth test,
+/// hierarchical Z and every bound keep one direction (raster/depth.h).
+enum class DepthConvention : uint8_t { Standard, Reversed };
+
 struct FramebufferDesc {
     int widthPixels = 0;
     int heightPixels = 0;
     int samples = 1;
     glm::vec4 clearColor{0.0f};
-    float clearDepth = 1.0f;
+    float clearDepth = 1.0f;  // how far a cleared sample is, 1 = the far plane (either convention)
+    DepthConvention depthConvention = DepthConvention::Standard;
     bool recordOverdraw = false;     // depth-passing samples per pixel
     bool recordBlockClasses = false; // coarse classifications per 8x8 block
     bool hierarchicalDepth = true;   // reject hidden 8x8 blocks before per-sample depth tests
 };
+
+/// The stored key of a window depth, and back (exact: a sign flip).
+inline float depthKeySign(DepthConvention c) { return c == DepthConvention::Reversed ? -1.0f : 1.0f; }
+/// The key a cleared sample holds: 1 - clearDepth as a reversed depth, negated.
+inline float clearDepthKey(const FramebufferDesc& d) {
+    return d.depthConvention == DepthConvention::Reversed ? d.clearDepth - 1.0f : d.clearDepth;
+}
 
 class Framebuffer {
 public:

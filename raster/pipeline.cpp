@@ -23,8 +23,10 @@ ClipVolume clipVolumeFor(const DrawCall& draw, const Framebuffer& fb) {
 }
 
 SetupContext setupContextFor(const DrawCall& draw, const Framebuffer& fb, const VaryingLayout& layout) {
-    return SetupContext::forDraw(draw.space, fb.width(), fb.height(),
-                                 standardSamplePattern(fb.samples()), draw.state.cull, layout.count);
+    SetupContext c = SetupContext::forDraw(draw.space, fb.width(), fb.height(), standardSamplePattern(fb.samples()),
+                                           draw.state.cull, layout.count);
+    c.depthKeySign = depthKeySign(fb.desc().depthConvention);
+    return c;
 }
 
 ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {

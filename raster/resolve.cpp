@@ -66,10 +66,16 @@ void resolveDepth(const Framebuffer& fb, Image& out) {
     prepare(fb, out);
     const int n = fb.samples();
     forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
+        // Keys back to depth as the standard convention reads it (0 near, 1 far), so the view
+        // looks the same either way.
         float d = fb.desc().clearDepth;
         if (fb.tileTouched(tile)) {
+            const bool reversed = fb.desc().depthConvention == DepthConvention::Reversed;
             double sum = 0;
-            for (int i = 0; i < n; ++i) sum += fb.tileDepth(tile)[first + i];
+            for (int i = 0; i < n; ++i) {
+                const float key = fb.tileDepth(tile)[first + i];
+                sum += reversed ? 1.0 + double(key) : double(key);
+            }
             d = float(sum / n);
         }
         store(out, x, y, glm::vec4(d, d, d, 1.0f));

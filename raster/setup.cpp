@@ -117,6 +117,7 @@ SetupResult setupTriangle(const WindowVertex& w0, const WindowVertex& w1, const 
     setEdge(t, 2, v[0], v[1]);
     t.invDoubleArea = 1.0 / static_cast<double>(doubleArea);
     setDepthPlane(t, v[0], v[1], v[2], t.invDoubleArea);
+    t.depthKeySign = context.depthKeySign;
     t.backFacing = !frontFacing;
     for (int k = 0; k < 3; ++k) {
         t.invW[k] = v[k].invW;

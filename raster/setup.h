@@ -38,6 +38,7 @@ struct TriangleSetup {
     // Depth plane: z = depthAtOrigin + depthPerSubpixelX * (X - originX) + ... (Y - originY).
     int32_t originXSubpixels, originYSubpixels;
     float depthAtOrigin, depthPerSubpixelX, depthPerSubpixelY;
+    float depthKeySign;  // +1 standard, -1 reversed: the stored key is this times the depth
 
     float invW[3];         // 1 / clip w per vertex, for perspective-correct barycentrics
     double invDoubleArea;  // 1 / (A·X + B·Y + C of edge k at vertex k), in 1/subpixels²
@@ -59,6 +60,7 @@ struct SetupContext {
     const SamplePattern* samples = nullptr;
     CullMode cull = CullMode::None;
     int varyingCount = 0;
+    float depthKeySign = 1.0f;  // the framebuffer's DepthConvention
 
     static SetupContext forDraw(PositionSpace space, int widthPixels, int heightPixels,
                                 const SamplePattern& samples, CullMode cull, int varyingCount);

@@ -1,6 +1,7 @@
 #include "raster/tile_raster.h"
 
 #include <algorithm>
+#include <limits>
 #include <bit>
 
 #include "raster/coarse.h"
@@ -111,7 +112,7 @@ private:
 
     struct FullBlockResult {
         bool everySamplePassed = true;
-        float maxDepthWritten = 0.0f;
+        float maxDepthWritten = -std::numeric_limits<float>::infinity();  // keys are negative when reversed
     };
 
     // Full block: every sample is covered, no edge test at all.
@@ -122,7 +123,7 @@ private:
             int64_t e[3];  // stepped for the shader's barycentrics only
             edgesAtPixelCentre(t_, r.minX, y, e);
             for (int x = r.minX; x <= r.maxX; ++x) {
-                float maxDepth = 0.0f;
+                float maxDepth = -std::numeric_limits<float>::infinity();
                 const uint32_t pass = depthAndQueue(x, y, all, e, &maxDepth);
                 result.everySamplePassed = result.everySamplePassed && pass == all;
                 result.maxDepthWritten = std::max(result.maxDepthWritten, maxDepth);
@@ -198,7 +199,7 @@ private:
         if (target_.overdraw) target_.overdraw[size_t(y) * target_.imageWidth + x] += passed;
         if (!state.depthWrite) return;
         mergeDepth<S>(target_.depth + first, pass, depth);
-        float written = 0.0f;
+        float written = -std::numeric_limits<float>::infinity();
         for (int s = 0; s < S; ++s)
             if (pass & (1u << s)) written = std::max(written, depth[s]);
         if (maxDepthPassed) *maxDepthPassed = written;

@@ -12,9 +12,25 @@ glm::mat4 Camera::viewFromWorld() const { return glm::lookAtRH(position, target,
 glm::mat4 Camera::clipFromView(float aspect) const {
     if (orthographic) {
         const float h = orthographicHalfHeight;
-        return glm::orthoRH_ZO(-h * aspect, h * aspect, -h, h, nearPlane, farPlane);
+        glm::mat4 m = glm::orthoRH_ZO(-h * aspect, h * aspect, -h, h, nearPlane, farPlane);
+        if (reversedDepth) {  // z' = 1 - z, with the constants computed directly
+            const double n = nearPlane, f = farPlane;
+            m[2][2] = float(1.0 / (f - n));
+            m[3][2] = float(f / (f - n));
+        }
+        return m;
     }
-    return glm::perspectiveRH_ZO(glm::radians(verticalFovDegrees), aspect, nearPlane, farPlane);
+    glm::mat4 m = glm::perspectiveRH_ZO(glm::radians(verticalFovDegrees), aspect, nearPlane, farPlane);
+    if (reversedDepth) {
+        // z_clip = n/(f-n) z_view + f n/(f-n) and w = -z_view: at view distance d the depth is
+        // n (f - d) / ((f - n) d), 1 at the near plane and 0 at the far one, falling like 1/d.
+        // Built directly rather than as 1 - z, whose cancellation near 1 would throw away the
+        // precision reversed depth exists for.
+        const double n = nearPlane, f = farPlane;
+        m[2][2] = float(n / (f - n));
+        m[3][2] = float(f * n / (f - n));
+    }
+    return m;
 }
 
 Camera frameBounds(const glm::vec3& boundsMin, const glm::vec3& boundsMax, float azimuthDegrees,

@@ -15,6 +15,9 @@ struct Camera {
     float farPlane = 1000.0f;
     bool orthographic = false;
     float orthographicHalfHeight = 1.0f;  // world units, when orthographic
+    /// Depth 1 at the near plane and 0 at the far plane, for a framebuffer with
+    /// raster::DepthConvention::Reversed (`render --depth reversed`).
+    bool reversedDepth = false;
 
     glm::mat4 viewFromWorld() const;
     glm::mat4 clipFromView(float aspect) const;

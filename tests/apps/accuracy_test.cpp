@@ -153,7 +153,8 @@ TEST(AccuracySweep, CoversTheKnobsThatApplyAroundTheBalancedPreset) {
     std::set<std::string> knobs;
     for (const AccuracySetting& s : accuracySweep(all, false)) knobs.insert(s.knob);
     EXPECT_EQ(knobs, (std::set<std::string>{"samples per pixel", "texture filter", "shadow mode", "map shadow-map size",
-                                            "hybrid shadow-map size", "preset", "defaults", "ground truth"}));
+                                            "hybrid shadow-map size", "depth precision", "preset", "defaults",
+                                            "ground truth"}));
     SceneTraits voxel;
     voxel.voxel = true;
     const std::vector<AccuracySetting> v = accuracySweep(voxel, false);

@@ -1,6 +1,7 @@
 // Depth-tested rendering: hierarchical Z is only an acceleration. Random depth-tested scenes
 // (interpenetrating, nearly coplanar, clipped by near and far) render bit for bit the same with
-// it and without it, for every sample count, in every depth-write mode.
+// it and without it, for every sample count, in every depth-write mode, in both depth
+// conventions; and reversed depth keeps apart what standard float depth merges.
 
 #include <gtest/gtest.h>
 
@@ -10,6 +11,7 @@
 
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
+#include "scene/camera.h"
 #include "tests/raster/test_support.h"
 
 namespace cuberille::testing {
@@ -39,16 +41,32 @@ struct RandomDepthScene {
     }
 };
 
-raster::Image render(const RandomDepthScene& s, int samples, bool hiz, bool depthWrite,
-                     bool depthTest, raster::PipelineStats* stats = nullptr) {
+// The camera's projection at the origin looking down -z, in either convention (the real
+// scene::Camera code, which builds the reversed matrix directly).
+glm::mat4 clipFromView(float fovYRadians, float aspect, float nearPlane, float farPlane,
+                       raster::DepthConvention convention) {
+    scene::Camera c;
+    c.position = glm::vec3(0.0f);
+    c.target = glm::vec3(0, 0, -1);
+    c.verticalFovDegrees = glm::degrees(fovYRadians);
+    c.nearPlane = nearPlane;
+    c.farPlane = farPlane;
+    c.reversedDepth = convention == raster::DepthConvention::Reversed;
+    return c.clipFromWorld(aspect);
+}
+
+raster::Image render(const RandomDepthScene& s, int samples, bool hiz, bool depthWrite, bool depthTest,
+                     raster::PipelineStats* stats = nullptr,
+                     raster::DepthConvention convention = raster::DepthConvention::Standard) {
     raster::DrawCall d;
-    d.clipFromObject = glm::perspectiveRH_ZO(1.0f, 1.5f, 0.5f, 8.0f);
+    d.clipFromObject = clipFromView(1.0f, 1.5f, 0.5f, 8.0f, convention);
     d.positions = s.positions;
     d.triangleColors = s.colors;
     d.state.depthTest = depthTest;
     d.state.depthWrite = depthWrite;
     raster::FramebufferDesc desc = frame(150, 100, samples);
     desc.hierarchicalDepth = hiz;
+    desc.depthConvention = convention;
     raster::Pipeline p;
     p.beginFrame(desc);
     // Two draws: the second sees the first's depths (and its hierarchical Z bounds).
@@ -82,8 +100,79 @@ TEST_P(HierarchicalDepth, NeverChangesTheImage) {
     EXPECT_GT(culled, 0u) << "the scenes must exercise hierarchical Z";
 }
 
+TEST_P(HierarchicalDepth, NeverChangesTheImageWithReversedDepth) {
+    const int samples = GetParam();
+    uint64_t culled = 0;
+    for (uint32_t seed = 1; seed <= 30; ++seed) {
+        const RandomDepthScene s(seed * 104729u + samples);
+        for (auto [test, write] : {std::pair{true, true}, std::pair{true, false}, std::pair{false, true}}) {
+            raster::PipelineStats withStats, withoutStats;
+            const auto reversed = raster::DepthConvention::Reversed;
+            const raster::Image with = render(s, samples, true, write, test, &withStats, reversed);
+            const raster::Image without = render(s, samples, false, write, test, &withoutStats, reversed);
+            ASSERT_EQ(with.rgba, without.rgba) << "seed " << seed << " test " << test << " write " << write;
+            ASSERT_EQ(withStats.counters.samplesPassed, withoutStats.counters.samplesPassed);
+            culled += withStats.counters.blocksDepthCulled;
+        }
+    }
+    EXPECT_GT(culled, 0u) << "hierarchical Z must work on reversed keys too";
+}
+
 INSTANTIATE_TEST_SUITE_P(SampleCounts, HierarchicalDepth, ::testing::Values(1, 2, 4, 8, 16),
                          [](const auto& info) { return std::to_string(info.param) + "x"; });
+
+// Ordinary ranges: both conventions draw the same surfaces; they may differ only where two
+// surfaces meet within a rounding of each other (interpenetrating triangles).
+TEST(ReversedDepth, DrawsWhatStandardDepthDrawsOnOrdinaryScenes) {
+    size_t differing = 0, pixels = 0;
+    for (uint32_t seed = 1; seed <= 20; ++seed) {
+        const RandomDepthScene s(seed * 31u);
+        const raster::Image a = render(s, 4, true, true, true);
+        const raster::Image b = render(s, 4, true, true, true, nullptr, raster::DepthConvention::Reversed);
+        for (size_t i = 0; i < a.rgba.size(); i += 4) {
+            ++pixels;
+            differing += !std::equal(a.rgba.begin() + i, a.rgba.begin() + i + 4, b.rgba.begin() + i);
+        }
+    }
+    EXPECT_LT(double(differing), 0.002 * double(pixels)) << differing << " of " << pixels;
+}
+
+// Near 1e-4 and far 1e7: at 100 units standard depth sits within a few ULPs of 1 and two
+// surfaces half a unit apart round to the same value, so the draw order decides (the documented
+// limit of Depth.ExtremeRangeKeepsOrder). Reversed depth puts them near 1e-6, where float still has
+// 24 bits to tell them apart, so the nearer one wins in either order.
+TEST(ReversedDepth, KeepsApartSurfacesStandardDepthMerges) {
+    auto centre = [](raster::DepthConvention convention, bool nearFirst) {
+        raster::DrawCall d;
+        d.clipFromObject = clipFromView(0.8f, 1.0f, 1e-4f, 1e7f, convention);
+        std::vector<glm::vec3> positions;
+        std::vector<glm::vec4> colors;
+        auto quad = [&](float z, glm::vec4 color) {
+            const float h = 0.3f * z;
+            positions.insert(positions.end(), {{-h, -h, -z}, {h, -h, -z}, {h, h, -z}, {-h, -h, -z}, {h, h, -z}, {-h, h, -z}});
+            colors.insert(colors.end(), 2, color);
+        };
+        if (nearFirst) quad(100.0f, {1, 0, 0, 1});
+        quad(100.5f, {0, 1, 0, 1});
+        if (!nearFirst) quad(100.0f, {1, 0, 0, 1});
+        d.positions = positions;
+        d.triangleColors = colors;
+        raster::FramebufferDesc desc = frame(32, 32, 1);
+        desc.depthConvention = convention;
+        raster::Pipeline p;
+        p.beginFrame(desc);
+        p.draw(d);
+        p.endFrame();
+        raster::Image img;
+        raster::resolveColor(p.framebuffer(), img);
+        return glm::vec4(img.pixel(16, 16)[0], img.pixel(16, 16)[1], img.pixel(16, 16)[2], 1.0f);
+    };
+    const glm::vec4 red(1, 0, 0, 1);
+    EXPECT_EQ(centre(raster::DepthConvention::Reversed, true), red);
+    EXPECT_EQ(centre(raster::DepthConvention::Reversed, false), red);
+    // The limit reversed depth lifts: standard depth lets the later draw lose a tie it should win.
+    EXPECT_NE(centre(raster::DepthConvention::Standard, false), red);
+}
 
 }  // namespace
 }  // namespace cuberille::testing
