@@ -117,6 +117,7 @@ struct Knobs {
     int mapSizeTexels = 1024;
     float pixelError = 1.0f;
     bool reversedDepth = false;
+    uint32_t voxelResolution = 0;  // 0: the model's finest
     int supersample = 1;
 };
 
@@ -139,6 +140,7 @@ std::vector<std::string> knobArgs(const Knobs& k, const SceneTraits& t, bool sof
     }
     if (t.voxel) a.insert(a.end(), {"--pixel-error", formatNumber(k.pixelError)});
     if ((t.threeD || t.voxel) && k.reversedDepth) a.insert(a.end(), {"--depth", "reversed"});
+    if (t.voxel && k.voxelResolution) a.insert(a.end(), {"--voxel-resolution", std::to_string(k.voxelResolution)});
     return a;
 }
 
@@ -184,6 +186,12 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft) {
             k.reversedDepth = reversed;
             add("depth precision", reversed ? "reversed" : "standard", reversed, k);
         }
+    // Coarsest first; the finest is the balanced preset itself (no cap).
+    for (size_t level = t.voxelResolutions.size(); level-- > 0;) {
+        Knobs k = balanced;
+        k.voxelResolution = level ? t.voxelResolutions[level] : 0;
+        add("voxel resolution", std::to_string(t.voxelResolutions[level]), t.voxelResolutions[level], k);
+    }
     if (t.voxel)
         for (float e : {8.0f, 4.0f, 2.0f, 1.0f, 0.5f, 0.25f}) {
             Knobs k = balanced;
@@ -348,6 +356,11 @@ SceneTraits probeScene(const AccuracyOptions& o) {
     const nlohmann::json j = nlohmann::json::parse(readText(o.outDir / "logs" / "probe.json"));
     t.textured = j.at("stages").at("shade").at("textureSamples").get<uint64_t>() > 0;
     t.shadowed = j.contains("shadows") && j["shadows"].at("lightsShadowed").get<uint64_t>() > 0;
+    if (t.voxel) {
+        const uint32_t finest = j.at("voxel").at("modelResolution").get<uint32_t>();
+        const size_t levels = j.at("voxel").at("drawnPerLevel").size();
+        for (size_t level = 0; level < levels; ++level) t.voxelResolutions.push_back(finest >> level);
+    }
     fs::remove(image);
     return t;
 }
@@ -431,6 +444,9 @@ void checkMonotone(const std::vector<AccuracyRow>& rows, std::vector<std::string
         {"hybrid shadow-map size", true,
          "the hybrid's error is the few marked-pixel misses of its map, which change with where texel centres "
          "fall rather than shrink with them"},
+        {"voxel resolution", true,
+         "a coarser level's colours and normals are averages, which can land nearer the supersampled truth over a "
+         "region than a finer level's"},
         {"LOD pixel error", false,
          "a coarser level's voxel colours are averages, which can land nearer the supersampled truth over a "
          "region than a finer level's"},
@@ -477,9 +493,8 @@ void noteKnobsNotSwept(const SceneTraits& t, std::vector<std::string>& notes) {
     if (t.threeD && !t.textured) notes.push_back("texture filter: the scene samples no texture; not swept.");
     if (t.threeD && !t.shadowed) notes.push_back("shadows: the scene has no shadow-casting light; not swept.");
     if (t.voxel)
-        notes.push_back("voxel resolution: a .cvox holds one finest resolution and its coarser levels, which the "
-                        "LOD pixel-error sweep walks; finer models need `cuberille voxelize --resolution` and are "
-                        "not swept here.");
+        notes.push_back("voxel resolution: swept over the model's own levels (--voxel-resolution); a finer model "
+                        "than the file holds needs `cuberille voxelize --resolution` and is not swept here.");
 }
 
 std::string machineDescription() {

@@ -60,6 +60,7 @@ struct AccuracyRow {
 /// What applies to the scene, found by a small probe render.
 struct SceneTraits {
     bool threeD = false, voxel = false, textured = false, shadowed = false;
+    std::vector<uint32_t> voxelResolutions;  // voxel models: each level's, finest first
 };
 
 struct AccuracyReport {

@@ -82,6 +82,9 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
                        "Voxel models: refine blocks until a voxel projects to at most this many pixels "
                        "(0: always the finest level)")
         ->capture_default_str();
+    render->add_option("--voxel-resolution", o.voxelResolution,
+                       "Voxel models: refine no finer than this resolution, one of the model's levels (0: the finest)")
+        ->capture_default_str();
     render->add_flag("--no-hybrid", o.noHybrid,
                      "Voxel models: never draw source triangles where even the finest voxels are too coarse");
     render->add_flag("--no-occlusion", o.noOcclusion, "Voxel models: no occlusion culling");

@@ -255,6 +255,20 @@ std::filesystem::path frameFileName(const std::filesystem::path& out, int frame)
     return out.parent_path() / (out.stem().string() + suffix + out.extension().string());
 }
 
+// --voxel-resolution N: the level whose resolution is N (the finest level's halved per level).
+uint32_t finestLevelFor(const voxel::VoxelModel& model, uint32_t resolution) {
+    if (resolution == 0) return 0;
+    const uint32_t finest = model.grid.resolution;
+    const uint32_t levels = model.blocks.empty() ? 1 : model.blocks.front().level + 1;
+    std::string offered;
+    for (uint32_t level = 0; level < levels; ++level) {
+        if ((finest >> level) == resolution) return level;
+        offered += (level ? ", " : "") + std::to_string(finest >> level);
+    }
+    throw scene::InputError("--voxel-resolution: " + std::to_string(resolution) + " is not a level of the model (" +
+                            offered + ")");
+}
+
 /// A voxel model: blocks selected, expanded and drawn through the same pipeline.
 void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     const double t0 = raster::nowMs();
@@ -262,8 +276,10 @@ void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
     result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.model().triangleCount();
+    result.voxelResolution = s.model().grid.resolution;
     lod::VoxelRenderOptions vo;
     vo.selection.pixelError = o.pixelError;
+    vo.selection.finestLevel = finestLevelFor(s.model(), o.voxelResolution);
     vo.selection.hybrid = !o.noHybrid;
     vo.coloring = o.view == View::Lod          ? lod::BlockColoring::Level
                   : o.view == View::Visibility ? lod::BlockColoring::Visibility
@@ -374,7 +390,8 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
     j["sceneTriangles"] = r.sceneTriangles;
     if (r.voxel) {
         const lod::VoxelFrameStats& v = *r.voxel;
-        j["voxel"] = {{"blocksVisited", v.selection.blocksVisited},
+        j["voxel"] = {{"modelResolution", r.voxelResolution},
+                      {"blocksVisited", v.selection.blocksVisited},
                       {"frustumCulled", v.selection.frustumCulled},
                       {"occlusionCulled", v.occlusionCulled},
                       {"visibilityTests", v.visibilityTests},

@@ -44,6 +44,7 @@ struct RenderOptions {
     TextureFilterOverride textureFilter = TextureFilterOverride::File;
     raster::DepthConvention depth = raster::DepthConvention::Standard;  // --depth standard|reversed
     float pixelError = 1.0f;  // voxel models: largest projected voxel in pixels (0: finest level)
+    uint32_t voxelResolution = 0; // voxel models: render at most at this resolution (0: the model's)
     bool noHybrid = false;    // voxel models: never draw source triangles
     bool noOcclusion = false; // voxel models: no occlusion culling
     int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
@@ -61,6 +62,7 @@ struct RenderResult {
     double loadMs = 0;
     scene::LoadStats load;
     std::optional<lod::VoxelFrameStats> voxel;  // voxel models only
+    uint32_t voxelResolution = 0;               // voxel models: the finest level's
     std::optional<ShadowFrameStats> shadows;    // when a shadow mode was asked for
     std::optional<FrustumCullStats> culling;    // with --frustum-cull
 };

@@ -78,11 +78,11 @@ BlockSelection selectBlocks(const voxel::VoxelModel& model, const glm::dmat4& cl
             continue;
         }
         const bool tooCoarse = o.pixelError <= 0.0f || projectedVoxelPixels(model, b, camera, o) > o.pixelError;
-        if (tooCoarse && b.childMask) {
+        if (tooCoarse && b.childMask && b.level > o.finestLevel) {
             for (int k = __builtin_popcount(b.childMask); k-- > 0;) stack.push_back(b.firstChild + uint32_t(k));
             continue;
         }
-        if (tooCoarse && o.hybrid && b.hasTriangles()) {
+        if (tooCoarse && o.hybrid && b.level == 0 && b.hasTriangles()) {
             s.triangleBlocks.push_back(i);
             ++s.stats.hybridBlocks;
             continue;

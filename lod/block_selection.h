@@ -17,6 +17,9 @@ namespace cuberille::lod {
 struct SelectionOptions {
     float pixelError = 1.0f;  // largest projected voxel, in pixels; 0: always the finest level
     bool hybrid = true;       // draw source triangles where even the finest voxels are too coarse
+    /// The finest level refined into (--voxel-resolution): blocks there are drawn as voxels even
+    /// when too coarse, so the model renders as if voxelized at resolution / 2^finestLevel.
+    uint32_t finestLevel = 0;
     int viewportHeightPixels = 720;
     float verticalFovRadians = 0.7f;  // perspective only
     bool orthographic = false;

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -157,11 +158,20 @@ TEST(AccuracySweep, CoversTheKnobsThatApplyAroundTheBalancedPreset) {
                                             "ground truth"}));
     SceneTraits voxel;
     voxel.voxel = true;
+    voxel.voxelResolutions = {256, 128, 64};
     const std::vector<AccuracySetting> v = accuracySweep(voxel, false);
     EXPECT_EQ(v.back().knob, "ground truth");
     bool lod = false;
-    for (const AccuracySetting& s : v) lod = lod || s.knob == "LOD pixel error";
+    std::vector<std::string> resolutions;
+    for (const AccuracySetting& s : v) {
+        lod = lod || s.knob == "LOD pixel error";
+        if (s.knob != "voxel resolution") continue;
+        resolutions.push_back(s.value);
+        const bool capped = std::find(s.args.begin(), s.args.end(), "--voxel-resolution") != s.args.end();
+        EXPECT_EQ(capped, s.value != "256");  // the finest is the model as it is
+    }
     EXPECT_TRUE(lod);
+    EXPECT_EQ(resolutions, (std::vector<std::string>{"64", "128", "256"}));
     for (const std::string& a : v.back().args) EXPECT_NE(a, "--shadows");  // no shadow knob for voxels
 }
 

@@ -86,6 +86,19 @@ TEST(LodBound, HybridBlocksAreFinestLevelBlocksThatNeededRefining) {
     EXPECT_EQ(without.voxelBlocks.size(), with.voxelBlocks.size() + with.triangleBlocks.size());
 }
 
+TEST(LodBound, FinestLevelCapsRefinementAndDrawsVoxelsThere) {
+    const voxel::VoxelModel m = spherePyramid(256);
+    const glm::dvec3 eye(0.3, 0.1, 2.3);
+    const glm::mat4 clip = cameraAt(eye).clipFromWorld(1.0f);
+    lod::SelectionOptions o;
+    o.pixelError = 0.0f;  // refine as far as allowed
+    o.finestLevel = 1;    // the 128 voxel level
+    const lod::BlockSelection s = lod::selectBlocks(m, glm::dmat4(clip), eye, o);
+    EXPECT_EQ(s.triangleBlocks.size(), 0u);  // source triangles belong to level 0 alone
+    ASSERT_GT(s.voxelBlocks.size(), 0u);
+    for (uint32_t i : s.voxelBlocks) EXPECT_EQ(m.blocks[i].level, 1u);
+}
+
 /// Renders the scene's depth at 256x256 and returns it (1 where nothing was drawn).
 raster::Image renderDepth(lod::VoxelScene& scene, const lod::VoxelRenderOptions& o, lod::VoxelFrameStats* stats = nullptr) {
     raster::Pipeline p;
