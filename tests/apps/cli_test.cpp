@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "apps/image_io.h"
 #include "tests/scene/gltf_builder.h"
 
 namespace {
@@ -232,6 +233,44 @@ TEST_F(Cli, ShadowOptionsAreCheckedWithExitTwoAndNothingWritten) {
         EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
         EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
         EXPECT_FALSE(fs::exists(out)) << args;
+    }
+}
+
+TEST_F(Cli, AccuracyKnobsAreCheckedWithExitTwoAndNothingWritten) {
+    const fs::path obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const fs::path out = dir_ / "o.png";
+    const std::pair<std::string, std::string> cases[] = {
+        {"render " + obj.string() + " --supersample 17", "--supersample: must be 1 to 16"},
+        {"render " + obj.string() + " --supersample 0", "--supersample: must be 1 to 16"},
+        {"render " + obj.string() + " --supersample 16 --width 2000", "exceeds 16384 pixels a side"},
+        {"render " + obj.string() + " --supersample 2 --view depth", "--supersample: only with --view color"},
+        {"render " + obj.string() + " --texture-filter anisotropic", "--texture-filter: 'anisotropic'"},
+        {"render " + obj.string() + " --depth inverted", "--depth: 'inverted' is not standard or reversed"},
+    };
+    for (const auto& [args, message] : cases) {
+        const CommandRun r = run(args + " --out " + out.string());
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
+        EXPECT_FALSE(fs::exists(out)) << args;
+    }
+}
+
+// N x N supersampling is the box filter over N² grid samples: a pixel an edge halves at x = 10.5
+// resolves to exactly half (N even puts N/2 columns of samples on each side), whole pixels to the
+// value or to nothing, and the .tri coordinates scale with the frame.
+TEST_F(Cli, SupersamplingAveragesAGridOfSamplesPerPixel) {
+    const fs::path tri = write("box.tri", "2 2 10.5 2 10.5 6 0.8\n2 2 10.5 6 2 6 0.8\n");
+    const fs::path out = dir_ / "s.exr";
+    for (int n : {2, 4, 16}) {
+        const CommandRun r = run("render " + tri.string() + " --width 16 --height 8 --supersample " +
+                                 std::to_string(n) + " --out " + out.string());
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        const cuberille::raster::Image im = cuberille::apps::readImage(out);
+        ASSERT_EQ(im.width, 16);
+        EXPECT_EQ(im.pixel(5, 4)[0], 0.8f) << n;         // inside
+        EXPECT_EQ(im.pixel(10, 4)[0], 0.4f) << n;        // halved by the edge at x = 10.5
+        EXPECT_EQ(im.pixel(12, 4)[0], 0.0f) << n;        // outside
+        EXPECT_EQ(im.pixel(5, 6)[0], 0.0f) << n;         // below the box
     }
 }
 
