@@ -5,7 +5,7 @@ PRESET ?= release
 BUILD_DIR := build/$(PRESET)
 JOBS ?= $(shell nproc)
 
-.PHONY: all setup configure build demo test bench golden pipeline-docs cli-docs sanitize asan tsan fuzz format clean
+.PHONY: all setup configure build demo test bench golden pipeline-docs cli-docs sanitize asan asan-gcc tsan fuzz format clean
 
 all: build
 
@@ -43,12 +43,19 @@ pipeline-docs: build
 	@build/$(PRESET)/apps/cuberille explain --triangle "1.3 1.7 14.6 4.2 5.1 12.8" --out-dir docs/images/pipeline --quiet
 
 # The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (`make asan`, in CI), and
-# the threaded and streaming tests under ThreadSanitizer (`make tsan`) (docs/robustness.md).
-# Only what the tests need is built.
+# the threaded and streaming tests under ThreadSanitizer (`make tsan`, in CI) (docs/robustness.md).
+# `make asan` builds in the fuzz preset's tree (clang, ASan + UBSan, every finding fatal, libFuzzer
+# coverage), so the suite and the fuzz targets share one sanitizer build; `make asan-gcc` is the
+# same suite under GCC's sanitizers. Only what the tests need is built.
 TSAN_TESTS := Determinism.*:*.SameVoxelsForAnyThreadCount:Simplify.SerialAndParallelGiveIdenticalPyramids:VoxelDeterminism.*:BlockLoader.*:BlockPool.*:Streaming.ResidentMemory*:Streaming.TheFirstImage*:Streaming.ACorruptBlock*:LazyRefit.*:BvhBuild.SameTreeForAnyThreadCount:BvhRefit.SameBoxesAndDegradationForAnyThreadCount:Shadows.SameMasksForAnyThreadCount
 sanitize: asan tsan
 
 asan: setup
+	@cmake --preset fuzz >/dev/null
+	@cmake --build --preset fuzz -j $(JOBS) --target cuberille cuberille_tests cuberille_golden_tests
+	@ctest --test-dir build/fuzz -j $(JOBS) --output-on-failure
+
+asan-gcc: setup
 	@cmake --preset asan >/dev/null
 	@cmake --build --preset asan -j $(JOBS) --target cuberille cuberille_tests cuberille_golden_tests
 	@ctest --preset asan -j $(JOBS)
