@@ -566,3 +566,54 @@ TEST_F(Cli, AccuracyNamesTheSceneItCannotRenderAndTheLimitsItKeeps) {
     EXPECT_NE(wide.output.find("--width and --height: 8 to 1024 pixels"), std::string::npos) << wide.output;
     EXPECT_FALSE(fs::exists(dir_ / "r" / "report.json"));
 }
+
+// The message audit (docs/robustness.md): one malformed input per reader, each refused with exit
+// code 2 and a message that starts with the file's name and says where (a line, an element, a
+// node, a byte offset) and what is wrong. tinygltf's own parse errors name the file and the
+// problem only; that reader is the one place without a position.
+TEST_F(Cli, EveryReaderNamesTheFileThePlaceAndTheProblem) {
+    const fs::path tet = write("tet.obj", kTetrahedronObj), model = dir_ / "tet.cvox";
+    ASSERT_EQ(run("voxelize " + tet.string() + " --resolution 64 -o " + model.string()).exitCode, 0);
+    std::string head;
+    {
+        std::ifstream in(model, std::ios::binary);
+        head.assign(100, '\0');
+        in.read(head.data(), 100);
+    }
+    struct Case {
+        std::string command, file, place, problem;
+    };
+    const Case cases[] = {
+        {"render " + write("a.tri", "1 1 30 2 5 20 1\n1 2 3 4 5\n").string(), "a.tri", "a.tri:2:", "expected 7 numbers"},
+        {"render " + write("b.obj", "v 0 0 0\nv 1 0 zz\nf 1 2 3\n").string(), "b.obj", "b.obj:2:", "not a finite number"},
+        {"render " + write("c.obj", "v 0 0 0\nv 1 0 0\nf 1 2 7\n").string(), "c.obj", "c.obj:3:", "out of range"},
+        {"render " + write("d.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                    "property float z\nend_header\n0 0 0\n1 0 0\n0 1\n").string(),
+         "d.ply", "element 'vertex'", "cannot fit"},
+        {"render " + write("e.gltf", R"({"asset":{"version":"2.0"},"nodes":[{"children":[1]},{"children":[0]}],)"
+                                     R"("scenes":[{"nodes":[0]}]})").string(),
+         "e.gltf", "node 1", "deeper than 256"},
+        {"render " + write("f.gltf", R"({"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":)"
+                                     R"({"POSITION":5}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})").string(),
+         "f.gltf", "mesh 0 primitive 0, accessor 5", "does not exist"},
+        {"render " + write("g.cvox", head).string(), "g.cvox", "byte 96", "truncated"},
+        {"info " + write("h.cvox", head).string(), "h.cvox", "byte 96", "truncated"},
+        {"fly " + model.string() + " --path " + write("i.path", "0 0 5 0 0 0\n").string() + " --frames 2",
+         "i.path", "i.path", "at least two keyframes"},
+        {"isosurface " + write("j.raw", "abc").string() + " --dims 2 2 2 --iso 1", "j.raw", "j.raw", "need 8"},
+    };
+    for (const Case& c : cases) {
+        const fs::path out = dir_ / "out.png";
+        const CommandRun r = run(c.command + (c.command.rfind("render", 0) == 0 ? " --out " + out.string() : "") +
+                                 (c.command.rfind("fly", 0) == 0 ? " --out-dir " + (dir_ / "fly").string() : "") +
+                                 (c.command.rfind("isosurface", 0) == 0 ? " -o " + (dir_ / "iso.cvox").string() : ""));
+        EXPECT_EQ(r.exitCode, 2) << c.command << "\n" << r.output;
+        const size_t at = r.output.find("cuberille: ");
+        ASSERT_NE(at, std::string::npos) << r.output;
+        const std::string message = r.output.substr(at + 11);
+        EXPECT_NE(message.find(c.file), std::string::npos) << message;
+        EXPECT_NE(message.find(c.place), std::string::npos) << "no place in: " << message;
+        EXPECT_NE(message.find(c.problem), std::string::npos) << message;
+        EXPECT_FALSE(fs::exists(out));
+    }
+}
