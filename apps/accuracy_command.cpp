@@ -30,6 +30,7 @@ struct RunOutcome {
     double frameMs = 0, setupMs = 0, peakMib = 0;
     raster::Image image;
     std::string commandLine;
+    nlohmann::json stats;  // the run's --stats
 };
 
 void validate(const AccuracyOptions& o);
@@ -329,7 +330,8 @@ RunOutcome runOnce(const AccuracyOptions& o, const std::vector<std::string>& kno
         if (p.exitCode == 2) throw scene::InputError(what);
         throw std::runtime_error(what);
     }
-    const nlohmann::json j = nlohmann::json::parse(readText(stats));
+    r.stats = nlohmann::json::parse(readText(stats));
+    const nlohmann::json& j = r.stats;
     const nlohmann::json& t = j.at("timesMs");
     r.frameMs = t.at("frame").get<double>();
     r.setupMs = t.at("load").get<double>();
@@ -352,8 +354,7 @@ SceneTraits probeScene(const AccuracyOptions& o) {
     std::vector<std::string> knobs;
     if (t.threeD) knobs = {"--shadows", "raytraced"};
     const fs::path image = o.outDir / "logs" / "probe.exr";
-    runOnce(o, knobs, image, "probe", 64, 36);
-    const nlohmann::json j = nlohmann::json::parse(readText(o.outDir / "logs" / "probe.json"));
+    const nlohmann::json j = runOnce(o, knobs, image, "probe", 64, 36).stats;
     t.textured = j.at("stages").at("shade").at("textureSamples").get<uint64_t>() > 0;
     t.shadowed = j.contains("shadows") && j["shadows"].at("lightsShadowed").get<uint64_t>() > 0;
     if (t.voxel) {

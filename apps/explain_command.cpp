@@ -64,6 +64,11 @@ glm::vec2 snapped(const glm::vec3& p) {
             float(raster::snapToSubpixels(p.y)) / raster::kSubpixelsPerPixel};
 }
 
+/// Where sample k of pixel (x, y) lies, in pixels (the pattern's offsets are in 1/16 pixel).
+glm::vec2 samplePoint(const raster::SamplePattern& sp, int x, int y, int k) {
+    return {float(x) + 0.5f + float(sp.dx[size_t(k)]) / 16.0f, float(y) + 0.5f + float(sp.dy[size_t(k)]) / 16.0f};
+}
+
 /// Set-up of one triangle exactly as the pipeline does it (window space, no culling).
 bool setUp(const scene::TriScene& s, size_t triangle, int width, int height, raster::TriangleSetup& out) {
     const raster::SetupContext context = raster::SetupContext::forDraw(
@@ -248,9 +253,8 @@ raster::Image coverageStage(const scene::TriScene& s, const Region& r, const Exp
     for (int y = r.y0; y < r.y1; ++y)
         for (int x = r.x0; x < r.x1; ++x)
             for (int k = 0; k < n; ++k) {
-                const glm::vec2 p(float(x) + 0.5f + float(sp.dx[size_t(k)]) / 16.0f, float(y) + 0.5f + float(sp.dy[size_t(k)]) / 16.0f);
                 const bool hit = run.sample(x, y, k).r > 0.0f;
-                m.dot(p, hit ? 3.0f : 2.5f, hit ? ink::covered : ink::uncovered, hit);
+                m.dot(samplePoint(sp, x, y, k), hit ? 3.0f : 2.5f, hit ? ink::covered : ink::uncovered, hit);
             }
     allEdges(m, s);
     return std::move(m.image);
@@ -267,8 +271,7 @@ raster::Image shadedStage(const scene::TriScene& s, const Region& r, const Expla
     for (int y = r.y0; y < r.y1; ++y)
         for (int x = r.x0; x < r.x1; ++x)
             for (int k = 0; k < n; ++k) {
-                const glm::vec2 p(float(x) + 0.5f + float(sp.dx[size_t(k)]) / 16.0f, float(y) + 0.5f + float(sp.dy[size_t(k)]) / 16.0f);
-                m.dot(p, 2.5f, glm::vec3(run.sample(x, y, k)), true);
+                m.dot(samplePoint(sp, x, y, k), 2.5f, glm::vec3(run.sample(x, y, k)), true);
             }
     allEdges(m, s);
     return std::move(m.image);

@@ -527,6 +527,14 @@ int runRenderCommand(const RenderOptions& o) {
     return 0;
 }
 
+// Frame `index` of a sequence: OUT_00i.ext, its stats kept for {"frames": [...]}, its summary.
+void writeSequenceFrame(const RenderOptions& o, int index, const RenderResult& r, nlohmann::json& frames) {
+    const std::filesystem::path file = frameFileName(o.out, index);
+    writeImageAtomically(file, r.image);
+    if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
+    if (!o.quiet) printSummary(o, file, r);
+}
+
 // --turntable N: the scene is loaded once, then N frames go around it, the camera turned about
 // the world's up axis by 360/N degrees a frame; files are named OUT_000.ext, OUT_001.ext, ...
 int runTurntable(const RenderOptions& o) {
@@ -552,10 +560,7 @@ int runTurntable(const RenderOptions& o) {
         if (culling)  // each frame culls from the whole scene again
             for (size_t m = 0; m < s.meshes.size(); ++m) s.meshes[m].indices = uncut[m].indices;
         renderFrame(s, o, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, r);
-        const std::filesystem::path file = frameFileName(o.out, i);
-        writeImageAtomically(file, r.image);
-        if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
-        if (!o.quiet) printSummary(o, file, r);
+        writeSequenceFrame(o, i, r, frames);
     }
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, {{"frames", frames}});
     return 0;
@@ -585,10 +590,7 @@ int runAnimation(const RenderOptions& o) {
         std::optional<SceneShadows> shadows;
         if (o.shadows.mode != rt::ShadowMode::None) shadows.emplace(s, o.shadows);
         renderFrame(s, frame, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, r);
-        const std::filesystem::path file = frameFileName(o.out, i);
-        writeImageAtomically(file, r.image);
-        if (!o.statsPath.empty()) frames.push_back(statsToJson(frame, r));
-        if (!o.quiet) printSummary(frame, file, r);
+        writeSequenceFrame(frame, i, r, frames);
     }
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, {{"frames", frames}});
     return 0;

@@ -32,6 +32,28 @@ void wave(const OwnedMesh& rest, OwnedMesh& out, float time) {
     }
 }
 
+/// The mesh as a soup of unshared vertices, each triangle with its own random velocity: triangles
+/// that fly apart, so neighbours part and parents balloon (an exploding mesh).
+struct ExplodingSoup {
+    OwnedMesh mesh;
+    std::vector<glm::vec3> velocity;  // per vertex, the same for a triangle's three
+};
+
+ExplodingSoup explodingSoup(const OwnedMesh& rest, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    ExplodingSoup s;
+    for (size_t t = 0; t < rest.indices.size() / 3; ++t) {
+        const glm::vec3 v(unit(rng), unit(rng), unit(rng));
+        for (int c = 0; c < 3; ++c) {
+            s.mesh.positions.push_back(rest.positions[rest.indices[3 * t + c]]);
+            s.mesh.indices.push_back(uint32_t(s.mesh.positions.size() - 1));
+            s.velocity.push_back(v);
+        }
+    }
+    return s;
+}
+
 std::vector<Ray> randomRays(int count, uint32_t seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> unit(-1.5f, 1.5f);
@@ -75,19 +97,7 @@ TEST(BvhRefit, RigidMotionNeverTriggersARebuild) {
 
 TEST(BvhRefit, AnExplodingMeshTriggersARebuild) {
     // Every triangle flies off in its own direction: neighbours part, parents balloon.
-    const OwnedMesh rest = testing::uvSphere(32, 64);
-    std::vector<glm::vec3> velocity;
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-    OwnedMesh soup;  // unshared vertices, so triangles can part
-    for (size_t t = 0; t < rest.indices.size() / 3; ++t) {
-        const glm::vec3 v(unit(rng), unit(rng), unit(rng));
-        for (int c = 0; c < 3; ++c) {
-            soup.positions.push_back(rest.positions[rest.indices[3 * t + c]]);
-            soup.indices.push_back(uint32_t(soup.positions.size() - 1));
-            velocity.push_back(v);
-        }
-    }
+    const auto [soup, velocity] = explodingSoup(testing::uvSphere(32, 64), 5);
     Bvh bvh = buildBvh(soup.view());
     OwnedMesh moved = soup;
     double degradation = 0.0;
@@ -186,19 +196,7 @@ TEST(LazyRefit, ConcurrentQueriesGiveTheSameHitsAsSerialOnes) {
 TEST(DeformingBvh, RebuildsWhenTheCriterionFiresAndAnswersLikeBruteForceThroughout) {
     // An exploding soup under each update method: refit and lazy rebuild once the degradation
     // passes their threshold (and not before), every method answers every ray as brute force does.
-    const OwnedMesh rest = testing::uvSphere(16, 32);
-    OwnedMesh soup;
-    std::vector<glm::vec3> velocity;
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-    for (size_t t = 0; t < rest.indices.size() / 3; ++t) {
-        const glm::vec3 v(unit(rng), unit(rng), unit(rng));
-        for (int c = 0; c < 3; ++c) {
-            soup.positions.push_back(rest.positions[rest.indices[3 * t + c]]);
-            soup.indices.push_back(uint32_t(soup.positions.size() - 1));
-            velocity.push_back(v);
-        }
-    }
+    const auto [soup, velocity] = explodingSoup(testing::uvSphere(16, 32), 3);
     for (const BvhUpdateMethod method : {BvhUpdateMethod::Refit, BvhUpdateMethod::Lazy, BvhUpdateMethod::Rebuild}) {
         SCOPED_TRACE(int(method));
         OwnedMesh moved = soup;
