@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <span>
 #include <sys/wait.h>
 
 #include <nlohmann/json.hpp>
@@ -216,6 +217,16 @@ TEST_F(Cli, ShadowModesRenderAndReportWhatTheyTraced) {
     EXPECT_TRUE(fs::exists(dir_ / "pixels.png"));
 }
 
+// Each (arguments, message) pair: exit code 2, the message printed, nothing written to `out`.
+void expectRefusedWithoutOutput(std::span<const std::pair<std::string, std::string>> cases, const fs::path& out) {
+    for (const auto& [args, message] : cases) {
+        const CommandRun r = run(args + " --out " + out.string());
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
+        EXPECT_FALSE(fs::exists(out)) << args;
+    }
+}
+
 TEST_F(Cli, ShadowOptionsAreCheckedWithExitTwoAndNothingWritten) {
     const fs::path obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     const fs::path tri = write("flat.tri", "0 0 1 0 0 1 1\n");
@@ -228,12 +239,7 @@ TEST_F(Cli, ShadowOptionsAreCheckedWithExitTwoAndNothingWritten) {
         {"render " + obj.string() + " --view shadow-pixels", "--view shadow-pixels"},
         {"render " + tri.string() + " --shadows hybrid", "--shadows"},
     };
-    for (const auto& [args, message] : cases) {
-        const CommandRun r = run(args + " --out " + out.string());
-        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
-        EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
-        EXPECT_FALSE(fs::exists(out)) << args;
-    }
+    expectRefusedWithoutOutput(cases, out);
 }
 
 TEST_F(Cli, AccuracyKnobsAreCheckedWithExitTwoAndNothingWritten) {
@@ -247,12 +253,7 @@ TEST_F(Cli, AccuracyKnobsAreCheckedWithExitTwoAndNothingWritten) {
         {"render " + obj.string() + " --texture-filter anisotropic", "--texture-filter: 'anisotropic'"},
         {"render " + obj.string() + " --depth inverted", "--depth: 'inverted' is not standard or reversed"},
     };
-    for (const auto& [args, message] : cases) {
-        const CommandRun r = run(args + " --out " + out.string());
-        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
-        EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
-        EXPECT_FALSE(fs::exists(out)) << args;
-    }
+    expectRefusedWithoutOutput(cases, out);
 }
 
 // N x N supersampling is the box filter over N² grid samples: a pixel an edge halves at x = 10.5
