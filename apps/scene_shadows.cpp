@@ -42,9 +42,9 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     scene::Camera standard = s.camera;
     standard.reversedDepth = false;
     const rt::ScreenSurfaces surfaces =
-        rt::findScreenSurfaces(casters, ranges_, standard.clipFromWorld(float(width) / float(height)), width, height);
+        rt::findScreenSurfaces(casters, ranges_, standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
     stats.surfacesMs = raster::nowMs() - t0;
-    masks_ = rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &*bvh_ : nullptr, bounds_}, options_);
+    masks_ = rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &*bvh_ : nullptr, bounds_}, options_, gpu_);
     stats.shadows = masks_.stats;
     for (int l = 0; l < lighting.lightCount; ++l)
         if (!masks_.visibility[size_t(l)].empty()) lighting.lights[l].visibility = masks_.visibility[size_t(l)].data();

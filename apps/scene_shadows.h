@@ -53,6 +53,9 @@ private:
     double bvhBuildMs_ = 0.0;
     bool bvhReported_ = false;
     rt::ShadowMasks masks_;
+    // The software GPU the visibility buffer and the shadow maps are drawn with, one pass after
+    // another: its render targets are allocated once and reused by every later frame.
+    raster::Pipeline gpu_;
 };
 
 rt::ShadowMode parseShadowMode(const std::string& name);  // throws scene::InputError

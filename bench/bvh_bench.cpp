@@ -308,7 +308,7 @@ void addGround(scene::Scene& s) {
     s.meshes.push_back(std::move(ground));
 }
 
-void benchShadows(const std::string& name, int width, int height, const std::vector<int>& mapSizes) {
+void benchShadows(const std::string& name, int width, int height, const std::vector<int>& mapSizes, const std::string& penumbrae) {
     std::optional<scene::Scene> s = loadScene(name, name == "brainstem" ? 1.0f : 0.0f);
     if (!s) {
         std::printf("%s skipped: not found\n", name.c_str());
@@ -321,6 +321,7 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
     };
     std::vector<Run> runs;
     for (const bool soft : {false, true}) {
+        if (penumbrae.find(soft ? "soft" : "hard") == std::string::npos) continue;
         rt::ShadowOptions base;
         base.soft = soft;
         base.lightRadius = 0.02f;
@@ -338,24 +339,30 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
     std::printf("\n# shadows on %s (%zu triangles), %dx%d: stage ms (median of 3; BVH build once, not included), share "
                 "of receiver pixels differing from ray traced, share traced\n",
                 name.c_str(), s->triangleCount(), width, height);
-    std::printf("%-5s %-15s %9s %8s %10s %9s %9s\n", "soft", "mode", "ms", "x ref", "differ", "traced", "bvh ms");
+    std::printf("%-5s %-15s %9s %8s %10s %9s %9s %9s %9s %9s\n", "soft", "mode", "ms", "x ref", "differ", "traced", "bvh ms",
+                "surf ms", "map ms", "mask ms");
     std::vector<float> reference;
     double referenceMs = 0.0;
     for (const Run& run : runs) {
         apps::SceneShadows shadows(*s, run.options);
         std::vector<float> mask;
         apps::ShadowFrameStats stats;
+        std::vector<double> surfacesMs, mapMs, maskMs;  // the stage's parts, medians apart
         const double ms = medianMs(3, [&] {
             const raster::Lighting lit = shadows.run(*s, width, height, stats);
+            surfacesMs.push_back(stats.surfacesMs);
+            mapMs.push_back(stats.shadows.mapMs);
+            maskMs.push_back(stats.shadows.maskMs);
             mask.assign(lit.lights[0].visibility, lit.lights[0].visibility + size_t(width) * height);
         });
         if (run.options.mode == rt::ShadowMode::RayTraced) reference = mask, referenceMs = ms;
         size_t differ = 0;
         for (size_t i = 0; i < mask.size(); ++i) differ += mask[i] != reference[i];
         const double receivers = double(std::max<uint64_t>(1, stats.shadows.receiverPixels));
-        std::printf("%-5s %-15s %9.1f %8.2f %9.4f%% %8.2f%% %9.1f\n", run.options.soft ? "soft" : "hard", run.label.c_str(), ms,
-                    ms / referenceMs, 100.0 * double(differ) / receivers, 100.0 * double(stats.shadows.markedPixels) / receivers,
-                    stats.bvhBuildMs);
+        std::printf("%-5s %-15s %9.1f %8.2f %9.4f%% %8.2f%% %9.1f %9.1f %9.1f %9.1f\n", run.options.soft ? "soft" : "hard",
+                    run.label.c_str(), ms, ms / referenceMs, 100.0 * double(differ) / receivers,
+                    100.0 * double(stats.shadows.markedPixels) / receivers, stats.bvhBuildMs, bench::median(surfacesMs),
+                    bench::median(mapMs), bench::median(maskMs));
     }
 }
 
@@ -363,13 +370,14 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
 
 int main(int argc, char** argv) {
     CLI::App app{"BVH build, refit and rays against Embree; shadow modes against ray-traced shadows"};
-    std::string models = "bunny,horse,dragon,1m", animation = "brainstem", shadowScenes = "vc,dragon,brainstem", sizes = "1024,2048,4096";
+    std::string models = "bunny,horse,dragon,1m", animation = "brainstem", shadowScenes = "vc,dragon,brainstem", sizes = "1024,2048,4096", penumbrae = "hard,soft";
     int frames = 12, width = 1280, height = 720;
     app.add_option("--models", models, "bunny, horse, dragon, 1m, 10m (bumpy spheres)")->capture_default_str();
     app.add_option("--animation", animation, "A skinned glTF (brainstem, cesiumman)")->capture_default_str();
     app.add_option("--frames", frames, "Animation frames")->capture_default_str();
     app.add_option("--shadow-scenes", shadowScenes, "vc (Virtual City), a scan on a ground plane, brainstem")->capture_default_str();
     app.add_option("--map-sizes", sizes, "Shadow map sizes")->capture_default_str();
+    app.add_option("--shadows", penumbrae, "hard, soft or both")->capture_default_str();
     app.add_option("--width", width)->capture_default_str();
     app.add_option("--height", height)->capture_default_str();
     CLI11_PARSE(app, argc, argv);
@@ -386,7 +394,7 @@ int main(int argc, char** argv) {
     if (!animation.empty()) benchAnimation(device, animation, frames);
     std::vector<int> mapSizes;
     for (const std::string& s : bench::splitList(sizes)) mapSizes.push_back(std::stoi(s));
-    for (const std::string& s : bench::splitList(shadowScenes)) benchShadows(s, width, height, mapSizes);
+    for (const std::string& s : bench::splitList(shadowScenes)) benchShadows(s, width, height, mapSizes, penumbrae);
     rtcReleaseDevice(device);
     return 0;
 }

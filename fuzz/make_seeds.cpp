@@ -98,14 +98,18 @@ int main(int argc, char** argv) {
         voxel::writeGeometryStream(*tetrahedron(), out);
         put(dir, "fuzz_cgs", "tet.cgs", out.str());
     }
-    {
+    // The reader-only target also gets a small model (two levels, a few blocks), which mutations
+    // reach the end of far more often than the 128-cube one.
+    for (const int resolution : {128, 16}) {
         voxel::VoxelizeOptions o;
-        o.resolution = 128;
+        o.resolution = resolution;
         voxel::VoxelModel m = voxel::voxelizeMesh(*tetrahedron(), o);
         lod::buildLodPyramid(m, {});
         std::ostringstream out;
         voxel::writeCvox(m, out);
-        put(dir, "fuzz_cvox", "tet.cvox", out.str());
+        const std::string name = "tet" + std::to_string(resolution) + ".cvox";
+        if (resolution == 128) put(dir, "fuzz_cvox", name, out.str());
+        put(dir, "fuzz_cvox_blocks", name, out.str());
     }
     fs::remove(fs::temp_directory_path() / "cuberille-seed-tet.obj");
     return 0;

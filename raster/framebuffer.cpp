@@ -16,9 +16,12 @@ void Framebuffer::reset(const FramebufferDesc& desc) {
     // Storage is kept across frames that fit in it: no per-frame allocation or fill.
     const size_t samples = size_t(tileCount()) * samplesPerTile();
     if (samples > sampleCapacity_) {
-        color_ = std::make_unique_for_overwrite<glm::vec4[]>(samples);
         depth_ = std::make_unique_for_overwrite<float[]>(samples);
         sampleCapacity_ = samples;
+    }
+    if (desc.colorAttachment && samples > colorCapacity_) {
+        color_ = std::make_unique_for_overwrite<glm::vec4[]>(samples);
+        colorCapacity_ = samples;
     }
     if (size_t(tileCount()) * kBlocksPerTile > blockCapacity_) {
         blockCapacity_ = size_t(tileCount()) * kBlocksPerTile;
@@ -40,7 +43,7 @@ void Framebuffer::reset(const FramebufferDesc& desc) {
 void Framebuffer::touchTile(int tile) {
     if (tileTouched_[tile]) return;
     tileTouched_[tile] = 1;
-    std::fill_n(tileColor(tile), samplesPerTile(), desc_.clearColor);
+    if (hasColor()) std::fill_n(tileColor(tile), samplesPerTile(), desc_.clearColor);
     std::fill_n(tileDepth(tile), samplesPerTile(), clearDepthKey(desc_));
     std::fill_n(tileBlockMaxDepth(tile), kBlocksPerTile, clearDepthKey(desc_));
 }

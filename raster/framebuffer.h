@@ -37,6 +37,9 @@ struct FramebufferDesc {
     bool recordOverdraw = false;     // depth-passing samples per pixel
     bool recordBlockClasses = false; // coarse classifications per 8x8 block
     bool hierarchicalDepth = true;   // reject hidden 8x8 blocks before per-sample depth tests
+    /// False: a depth-only target (shadow maps), with no colour storage to allocate, clear or
+    /// resolve; it takes only draws whose colour write mask is 0.
+    bool colorAttachment = true;
 };
 
 /// The stored key of a window depth, and back (exact: a sign flip).
@@ -58,10 +61,14 @@ public:
     int tilesY() const { return tilesY_; }
     int tileCount() const { return tilesX_ * tilesY_; }
 
-    /// Sample storage of one tile, index (pixelY * 64 + pixelX) * samples + sample.
-    glm::vec4* tileColor(int tile) { return color_.get() + size_t(tile) * samplesPerTile(); }
+    /// Sample storage of one tile, index (pixelY * 64 + pixelX) * samples + sample. A depth-only
+    /// target has no colour: tileColor is null.
+    glm::vec4* tileColor(int tile) { return hasColor() ? color_.get() + size_t(tile) * samplesPerTile() : nullptr; }
     float* tileDepth(int tile) { return depth_.get() + size_t(tile) * samplesPerTile(); }
-    const glm::vec4* tileColor(int tile) const { return color_.get() + size_t(tile) * samplesPerTile(); }
+    const glm::vec4* tileColor(int tile) const {
+        return hasColor() ? color_.get() + size_t(tile) * samplesPerTile() : nullptr;
+    }
+    bool hasColor() const { return desc_.colorAttachment; }
     const float* tileDepth(int tile) const { return depth_.get() + size_t(tile) * samplesPerTile(); }
 
     /// Hierarchical Z: per 8x8 block of the tile (row-major, 64 entries), an upper bound on
@@ -91,7 +98,7 @@ private:
     // Not value-initialised: every tile is cleared by touchTile() before it is read.
     std::unique_ptr<glm::vec4[]> color_;
     std::unique_ptr<float[]> depth_;
-    size_t sampleCapacity_ = 0;
+    size_t sampleCapacity_ = 0, colorCapacity_ = 0;
     std::unique_ptr<float[]> blockMaxDepth_;
     size_t blockCapacity_ = 0;
     std::vector<uint8_t> tileTouched_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "raster/clock.h"
 #include "raster/clip.h"
@@ -98,6 +99,8 @@ void Pipeline::beginFrame(const FramebufferDesc& desc) {
 }
 
 void Pipeline::draw(const DrawCall& call) {
+    if (call.state.colorWriteMask != 0 && !framebuffer_.hasColor())
+        throw std::invalid_argument("a draw with colour writes into a depth-only framebuffer");
     const uint32_t drawIndex = uint32_t(draws_.size());
     draws_.push_back(call);
     const size_t triangles = call.triangleCount();

@@ -51,7 +51,7 @@ void resolveColor(const Framebuffer& fb, Image& out) {
     const double invN = 1.0 / n;
     const glm::vec4 clear = fb.desc().clearColor;
     forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
-        if (!fb.tileTouched(tile)) return store(out, x, y, clear);
+        if (!fb.tileTouched(tile) || !fb.hasColor()) return store(out, x, y, clear);
         const glm::vec4* s = fb.tileColor(tile) + first;
         if (n == 1) return store(out, x, y, s[0]);
         double sum[4] = {0, 0, 0, 0};
@@ -62,23 +62,37 @@ void resolveColor(const Framebuffer& fb, Image& out) {
     });
 }
 
-void resolveDepth(const Framebuffer& fb, Image& out) {
-    prepare(fb, out);
+void resolveDepthPlane(const Framebuffer& fb, std::vector<float>& out) {
+    out.resize(size_t(fb.width()) * fb.height());
     const int n = fb.samples();
+    const bool reversed = fb.desc().depthConvention == DepthConvention::Reversed;
     forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
         // Keys back to depth as the standard convention reads it (0 near, 1 far), so the view
         // looks the same either way.
         float d = fb.desc().clearDepth;
         if (fb.tileTouched(tile)) {
-            const bool reversed = fb.desc().depthConvention == DepthConvention::Reversed;
-            double sum = 0;
-            for (int i = 0; i < n; ++i) {
-                const float key = fb.tileDepth(tile)[first + i];
-                sum += reversed ? 1.0 + double(key) : double(key);
+            const float* keys = fb.tileDepth(tile) + first;
+            if (n == 1) {
+                d = reversed ? 1.0f + keys[0] : keys[0];
+            } else {
+                double sum = 0;
+                for (int i = 0; i < n; ++i) sum += reversed ? 1.0 + double(keys[i]) : double(keys[i]);
+                d = float(sum / n);
             }
-            d = float(sum / n);
         }
-        store(out, x, y, glm::vec4(d, d, d, 1.0f));
+        out[size_t(y) * fb.width() + x] = d;
+    });
+}
+
+void resolveDepth(const Framebuffer& fb, Image& out) {
+    std::vector<float> depth;
+    resolveDepthPlane(fb, depth);
+    prepare(fb, out);
+    parallelFor(size_t(out.height), [&](size_t y) {
+        for (int x = 0; x < out.width; ++x) {
+            const float d = depth[y * out.width + x];
+            store(out, x, int(y), glm::vec4(d, d, d, 1.0f));
+        }
     });
 }
 

@@ -21,9 +21,13 @@ struct Image {
     const float* pixel(int x, int y) const { return rgba.data() + (size_t(y) * width + x) * 4; }
 };
 
+/// A depth-only target resolves to its clear colour.
 void resolveColor(const Framebuffer& fb, Image& out);
 /// Grey level = average sample depth (clear depth where nothing was drawn).
 void resolveDepth(const Framebuffer& fb, Image& out);
+/// The same depths, one float per pixel, row-major: what a depth-only pass (a shadow map)
+/// reads back, without a four-channel image.
+void resolveDepthPlane(const Framebuffer& fb, std::vector<float>& out);
 /// Heat map of depth-passing samples per pixel, normalised by the sample count.
 void visualizeOverdraw(const Framebuffer& fb, Image& out);
 /// Each 8x8 block coloured by what the coarse stage decided for it: never touched, only

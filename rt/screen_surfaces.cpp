@@ -1,30 +1,82 @@
 #include "rt/screen_surfaces.h"
 
+#include <algorithm>
+
 #include "raster/parallel.h"
-#include "raster/pipeline.h"
-#include "raster/resolve.h"
 
 namespace cuberille::rt {
 namespace {
 
 // Triangle ids as flat colours: r = 1 marks a surface, g and b hold the id's low and high 16 bits,
-// each exactly representable in float and copied unchanged through ConstantColor and a
-// one-sample resolve.
+// each exactly representable in float and copied unchanged through ConstantColor.
 glm::vec4 idColor(uint32_t id) { return {1.0f, float(id & 0xFFFFu), float(id >> 16), 1.0f}; }
-uint32_t idFrom(const float* rgba) { return uint32_t(rgba[1]) | (uint32_t(rgba[2]) << 16); }
+uint32_t idFrom(const glm::vec4& c) { return c.r == 1.0f ? uint32_t(c.g) | (uint32_t(c.b) << 16) : ScreenSurfaces::kNone; }
+
+/// Each pixel's id read straight from the one-sample colour tiles (no resolved image); returns
+/// the farthest window depth of a pixel with an id (-1: none).
+float readIds(const raster::Framebuffer& fb, std::vector<uint32_t>& ids) {
+    ids.assign(size_t(fb.width()) * fb.height(), ScreenSurfaces::kNone);
+    std::vector<float> farthest(size_t(fb.tileCount()), -1.0f);  // per tile, taken in tile order: exact anyway
+    raster::parallelFor(size_t(fb.tileCount()), [&](size_t tile) {
+        if (!fb.tileTouched(int(tile))) return;
+        const glm::vec4* color = fb.tileColor(int(tile));
+        const float* depth = fb.tileDepth(int(tile));
+        const int x0 = int(tile) % fb.tilesX() * raster::kTileSizePixels, y0 = int(tile) / fb.tilesX() * raster::kTileSizePixels;
+        const int x1 = std::min(fb.width(), x0 + raster::kTileSizePixels), y1 = std::min(fb.height(), y0 + raster::kTileSizePixels);
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const int i = (y - y0) * raster::kTileSizePixels + (x - x0);
+                const uint32_t id = idFrom(color[i]);
+                ids[size_t(y) * fb.width() + x] = id;
+                if (id != ScreenSurfaces::kNone) farthest[tile] = std::max(farthest[tile], depth[i]);
+            }
+    });
+    return *std::max_element(farthest.begin(), farthest.end());
+}
+
+/// The frustum's corners from the near plane to window depth `farthest` (standard convention).
+std::vector<glm::vec3> frustumCorners(const glm::mat4& worldFromClip, float farthest) {
+    std::vector<glm::vec3> corners;
+    for (const float z : {0.0f, farthest})
+        for (const float y : {-1.0f, 1.0f})
+            for (const float x : {-1.0f, 1.0f}) {
+                const glm::vec4 p = worldFromClip * glm::vec4(x, y, z, 1.0f);
+                corners.push_back(glm::vec3(p) / p.w);
+            }
+    return corners;
+}
 
 }  // namespace
 
+bool ScreenSurfaces::surfaceAt(size_t pixel, Surface& out) const {
+    const uint32_t t = triangle[pixel];
+    const int x = int(pixel % size_t(width)), y = int(pixel / size_t(width));
+    // The camera ray through the pixel centre, from the near to the far plane.
+    const float nx = (float(x) + 0.5f) / float(width) * 2.0f - 1.0f;
+    const float ny = 1.0f - (float(y) + 0.5f) / float(height) * 2.0f;
+    const glm::vec4 n4 = worldFromClip * glm::vec4(nx, ny, 0.0f, 1.0f);
+    const glm::vec4 f4 = worldFromClip * glm::vec4(nx, ny, 1.0f, 1.0f);
+    const glm::vec3 origin = glm::vec3(n4) / n4.w, direction = glm::vec3(f4) / f4.w - origin;
+    const glm::vec3 a = casters.vertex(t, 0), b = casters.vertex(t, 1), c = casters.vertex(t, 2);
+    glm::vec3 normal = glm::cross(b - a, c - a);
+    const float length = glm::length(normal);
+    const float denominator = glm::dot(normal, direction);
+    if (!(length > 0.0f) || denominator == 0.0f) return false;
+    normal /= length;
+    out.position = origin + direction * (glm::dot(normal * length, a - origin) / denominator);
+    out.normal = denominator > 0.0f ? -normal : normal;
+    return true;
+}
+
 ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,
-                                  const glm::mat4& clipFromWorld, int width, int height) {
+                                  const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu) {
     std::vector<glm::vec4> colors(casters.triangleCount());
     for (uint32_t t = 0; t < colors.size(); ++t) colors[t] = idColor(t);
-    raster::Pipeline pipeline;
     raster::FramebufferDesc desc;
     desc.widthPixels = width;
     desc.heightPixels = height;
     desc.samples = 1;
-    pipeline.beginFrame(desc);
+    gpu.beginFrame(desc);
     // Each range is drawn over its own vertices (as the scene draws its mesh), so the vertex
     // stage shades each vertex once: indices are rebased to the range's first vertex.
     std::vector<uint32_t> local(casters.indices.begin(), casters.indices.end());
@@ -40,43 +92,17 @@ ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<con
         d.triangleColors = std::span<const glm::vec4>(colors).subspan(r.firstTriangle, r.triangleCount);
         d.state.shading = raster::ShadingModel::ConstantColor;
         d.state.cull = r.cull;
-        pipeline.draw(d);
+        gpu.draw(d);
     }
-    pipeline.endFrame();
-    raster::Image ids;
-    raster::resolveColor(pipeline.framebuffer(), ids);
+    gpu.endFrame();
 
     ScreenSurfaces s;
     s.width = width;
     s.height = height;
-    const size_t pixels = size_t(width) * height;
-    s.triangle.assign(pixels, ScreenSurfaces::kNone);
-    s.position.assign(pixels, glm::vec3(0.0f));
-    s.normal.assign(pixels, glm::vec3(0.0f));
-    const glm::mat4 worldFromClip = glm::inverse(clipFromWorld);
-    raster::parallelFor(size_t(height), [&](size_t y) {
-        for (int x = 0; x < width; ++x) {
-            const size_t i = y * width + x;
-            const float* rgba = ids.pixel(x, int(y));
-            if (rgba[0] != 1.0f) continue;
-            const uint32_t t = idFrom(rgba);
-            // The camera ray through the pixel centre, from the near to the far plane.
-            const float nx = (float(x) + 0.5f) / float(width) * 2.0f - 1.0f;
-            const float ny = 1.0f - (float(y) + 0.5f) / float(height) * 2.0f;
-            const glm::vec4 n4 = worldFromClip * glm::vec4(nx, ny, 0.0f, 1.0f);
-            const glm::vec4 f4 = worldFromClip * glm::vec4(nx, ny, 1.0f, 1.0f);
-            const glm::vec3 origin = glm::vec3(n4) / n4.w, direction = glm::vec3(f4) / f4.w - origin;
-            const glm::vec3 a = casters.vertex(t, 0), b = casters.vertex(t, 1), c = casters.vertex(t, 2);
-            glm::vec3 normal = glm::cross(b - a, c - a);
-            const float length = glm::length(normal);
-            const float denominator = glm::dot(normal, direction);
-            if (!(length > 0.0f) || denominator == 0.0f) continue;  // degenerate or edge-on: no surface
-            normal /= length;
-            s.triangle[i] = t;
-            s.position[i] = origin + direction * (glm::dot(normal * length, a - origin) / denominator);
-            s.normal[i] = denominator > 0.0f ? -normal : normal;
-        }
-    });
+    s.casters = casters;
+    s.worldFromClip = glm::inverse(clipFromWorld);
+    const float farthest = readIds(gpu.framebuffer(), s.triangle);
+    if (farthest >= 0.0f) s.seenHull = frustumCorners(s.worldFromClip, farthest);
     return s;
 }
 

@@ -2,9 +2,12 @@
 // What the camera sees at each pixel centre, for the shadow stage: a visibility buffer (Burns
 // and Hunt, 2013). The casters are drawn once through the software GPU with one sample per pixel
 // at its centre (the position the shade stage evaluates), each triangle writing its own id as a
-// flat colour; then each pixel's position is the camera ray through its centre met with that
-// triangle's plane, and its normal the triangle's, turned toward the camera. Drawn with the
-// scene's own order, culling and depth test, so the surface found is the one the frame shades.
+// flat colour. A pixel's surface is then recovered on demand: the camera ray through its centre
+// met with that triangle's plane, and the triangle's normal turned toward the camera. Drawn with
+// the scene's own order, culling and depth test, so the surface found is the one the frame shades.
+//
+// Only the ids are stored (4 bytes a pixel): positions and normals computed where they are read
+// cost a few dozen flops, while storing them would move 24 bytes a pixel through memory twice.
 
 #include <cstdint>
 #include <span>
@@ -13,6 +16,7 @@
 #include <glm/glm.hpp>
 
 #include "raster/draw.h"
+#include "raster/pipeline.h"
 #include "rt/triangle_mesh.h"
 
 namespace cuberille::rt {
@@ -24,16 +28,31 @@ struct CasterRange {
     raster::CullMode cull = raster::CullMode::None;
 };
 
+/// A surface point seen at a pixel, in world space.
+struct Surface {
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};  // unit, facing the camera
+};
+
 struct ScreenSurfaces {
     int width = 0, height = 0;
     std::vector<uint32_t> triangle;  // per pixel; kNone where no caster is seen
-    std::vector<glm::vec3> position, normal;  // world space; normal unit, facing the camera
+    TriangleMeshView casters;        // the triangles the ids name
+    glm::mat4 worldFromClip{1.0f};
+    /// Every surface seen lies in the hull of these points: the view frustum cut at the farthest
+    /// depth drawn (none when nothing is seen). What a shadow map has to cover.
+    std::vector<glm::vec3> seenHull;
 
     static constexpr uint32_t kNone = ~0u;
     bool covered(size_t pixel) const { return triangle[pixel] != kNone; }
+    /// The surface at a covered pixel; false where its triangle is degenerate or seen exactly
+    /// edge-on (no point to shade: the pixel is left unshadowed).
+    bool surfaceAt(size_t pixel, Surface& out) const;
 };
 
+/// Draws the visibility buffer with `gpu`, whose render targets are reused from frame to frame.
+/// The result refers to `casters`, which must outlive it.
 ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,
-                                  const glm::mat4& clipFromWorld, int width, int height);
+                                  const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu);
 
 }  // namespace cuberille::rt

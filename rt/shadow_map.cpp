@@ -5,7 +5,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "raster/pipeline.h"
+#include "raster/parallel.h"
 #include "raster/resolve.h"
 
 namespace cuberille::rt {
@@ -16,7 +16,13 @@ glm::vec3 upFor(const glm::vec3& forward) {
     return std::abs(forward.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
 }
 
-ShadowMapFace orthographicFace(const glm::vec3& direction, const Aabb& bounds) {
+/// A directional light's view: looking along the light over the casters' bounds. With a focus,
+/// the square it covers is narrowed to the part of the casters' extent the focus points span
+/// across the light (plus `marginWorld` and two texels on every side): a receiver is shadowed
+/// only by casters on its way to the light, which in this view lie over it. The depth range
+/// stays the casters' whole one, so every caster between light and receiver is drawn.
+ShadowMapFace orthographicFace(const glm::vec3& direction, const Aabb& bounds, std::span<const glm::vec3> focus,
+                               float marginWorld, int size) {
     const glm::vec3 centre = bounds.centre();
     const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
     ShadowMapFace f;
@@ -24,8 +30,24 @@ ShadowMapFace orthographicFace(const glm::vec3& direction, const Aabb& bounds) {
     f.viewFromWorld = glm::lookAtRH(eye, centre, upFor(direction));
     f.nearPlane = 0.5f * radius;
     f.farPlane = 3.5f * radius;
-    f.halfExtent = radius;
-    f.clipFromWorld = glm::orthoRH_ZO(-radius, radius, -radius, radius, f.nearPlane, f.farPlane) * f.viewFromWorld;
+    glm::vec2 lo(-radius), hi(radius);  // the casters' square in view x and y
+    if (!focus.empty()) {
+        glm::vec2 seenLo(std::numeric_limits<float>::max()), seenHi(std::numeric_limits<float>::lowest());
+        for (const glm::vec3& p : focus) {
+            const glm::vec2 v(f.viewFromWorld * glm::vec4(p, 1.0f));
+            seenLo = glm::min(seenLo, v), seenHi = glm::max(seenHi, v);
+        }
+        seenLo -= marginWorld, seenHi += marginWorld;
+        const glm::vec2 cutLo = glm::max(lo, seenLo), cutHi = glm::min(hi, seenHi);
+        if (cutLo.x < cutHi.x && cutLo.y < cutHi.y) lo = cutLo, hi = cutHi;
+    }
+    const glm::vec2 middle = 0.5f * (lo + hi);
+    float half = 0.5f * std::max(hi.x - lo.x, hi.y - lo.y);
+    half = std::max(half * (1.0f + 4.0f / float(size)), 1e-6f);  // two texels more on each side
+    f.halfExtent = half;
+    f.clipFromWorld =
+        glm::orthoRH_ZO(middle.x - half, middle.x + half, middle.y - half, middle.y + half, f.nearPlane, f.farPlane) *
+        f.viewFromWorld;
     return f;
 }
 
@@ -53,12 +75,12 @@ float linearDepth(const ShadowMapFace& f, float d) {
     return f.nearPlane * f.farPlane / (f.farPlane - d * (f.farPlane - f.nearPlane));
 }
 
-void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size) {
-    raster::Pipeline pipeline;
+void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size, raster::Pipeline& gpu) {
     raster::FramebufferDesc desc;
     desc.widthPixels = desc.heightPixels = size;
     desc.samples = 1;
-    pipeline.beginFrame(desc);
+    desc.colorAttachment = false;  // depth only: nothing to allocate, clear or resolve for colour
+    gpu.beginFrame(desc);
     raster::DrawCall d;
     d.space = raster::PositionSpace::Clip;
     d.clipFromObject = f.clipFromWorld;
@@ -66,24 +88,26 @@ void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size) {
     d.indices = casters.indices;
     d.state.shading = raster::ShadingModel::ConstantColor;
     d.state.cull = raster::CullMode::None;  // both faces cast
-    d.state.colorWriteMask = 0;             // depth only
-    pipeline.draw(d);
-    pipeline.endFrame();
-    raster::Image depth;
-    raster::resolveDepth(pipeline.framebuffer(), depth);
-    f.depth.resize(size_t(size) * size);
-    for (size_t i = 0; i < f.depth.size(); ++i) f.depth[i] = linearDepth(f, depth.rgba[i * 4]);
+    d.state.colorWriteMask = 0;
+    gpu.draw(d);
+    gpu.endFrame();
+    raster::resolveDepthPlane(gpu.framebuffer(), f.depth);
+    raster::parallelFor(size_t(size), [&](size_t y) {
+        float* row = f.depth.data() + y * size_t(size);
+        for (int x = 0; x < size; ++x) row[x] = linearDepth(f, row[x]);
+    });
 }
 
 }  // namespace
 
-ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size) {
+ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size,
+                            raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld) {
     ShadowMap map;
     map.size_ = size;
     map.lightPosition_ = light.position;
     switch (light.type) {
         case raster::LightType::Directional:
-            map.faces_.push_back(orthographicFace(glm::normalize(light.direction), bounds));
+            map.faces_.push_back(orthographicFace(glm::normalize(light.direction), bounds, focus, focusMarginWorld, size));
             break;
         case raster::LightType::Spot: {
             const float halfAngle = std::min(std::acos(std::clamp(light.cosOuterCone, -1.0f, 1.0f)), glm::radians(85.0f));
@@ -96,7 +120,7 @@ ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& 
                 map.faces_.push_back(perspectiveFace(light.position, axis, glm::radians(45.0f), bounds));
             break;
     }
-    for (ShadowMapFace& f : map.faces_) drawDepth(f, casters, size);
+    for (ShadowMapFace& f : map.faces_) drawDepth(f, casters, size, gpu);
     return map;
 }
 
@@ -123,6 +147,7 @@ ShadowMapTexel ShadowMap::locate(const glm::vec3& p) const {
     t.face = face;
     t.x = int(q.x);
     t.y = int(q.y);
+    t.position = glm::vec2(q);
     t.receiverDepth = q.z;
     t.texelWorld = 2.0f * f.halfExtent * (f.perspective ? q.z : 1.0f) / float(size_);
     return t;

@@ -1,19 +1,23 @@
 #pragma once
-// Shadow maps drawn by the software GPU itself: the casters rendered from the light with depth
-// only (colour writes off, both faces, one sample at each texel centre), a pass raster/ needs
-// no change for. Depths are kept as linear distances along the light's view axis, so bias and
+// Shadow maps drawn by the software GPU itself: the casters rendered from the light into a
+// depth-only target (no colour storage, colour writes off, both faces, one sample at each texel
+// centre). Depths are kept as linear distances along the light's view axis, so bias and
 // the hybrid method's tests work in world units for every light type.
 //
-// Directional lights get one orthographic view fitted to the casters' bounds; spot lights one
-// perspective view spanning the outer cone; point lights six 90-degree views (a cube map).
+// Directional lights get one orthographic view fitted to the casters' bounds, narrowed across
+// the light to the receivers in view (a focused shadow map: texels spent where the camera looks,
+// not over a whole ground plane); spot lights one perspective view spanning the outer cone;
+// point lights six 90-degree views (a cube map).
 
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "raster/draw.h"
+#include "raster/pipeline.h"
 #include "rt/aabb.h"
 #include "rt/triangle_mesh.h"
 
@@ -32,15 +36,20 @@ struct ShadowMapFace {
 struct ShadowMapTexel {
     int face = -1;  // -1: outside every face
     int x = 0, y = 0;
+    glm::vec2 position{0.0f};    // continuous, in texels (x, y are its floor)
     float receiverDepth = 0.0f;  // the point's linear depth in that face
     float texelWorld = 0.0f;     // a texel's side in world units at the point's depth
 };
 
 class ShadowMap {
 public:
-    /// Renders the casters' depth from the light. `sizeTexels` per side (per face for cube maps).
+    /// Renders the casters' depth from the light with `gpu` (a depth-only target, reused from
+    /// frame to frame). `sizeTexels` per side (per face for cube maps). A directional light's map
+    /// covers only what `focus` spans across the light, widened by `focusMarginWorld` (the
+    /// receivers in view, and how far sideways a soft shadow's rays reach); empty: every caster.
     static ShadowMap render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& casterBounds,
-                            int sizeTexels);
+                            int sizeTexels, raster::Pipeline& gpu, std::span<const glm::vec3> focus = {},
+                            float focusMarginWorld = 0.0f);
 
     ShadowMapTexel locate(const glm::vec3& p) const;
     /// Linear depth at a texel; +inf outside the face or where no caster was drawn.

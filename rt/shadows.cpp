@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "raster/clock.h"
@@ -38,21 +40,31 @@ Incidence incidence(const raster::Light& light, const glm::vec3& p, const glm::v
     return in;
 }
 
-float distanceToSegment(const glm::vec2& p, const glm::vec2& a, const glm::vec2& b) {
+float squaredDistanceToSegment(const glm::vec2& p, const glm::vec2& a, const glm::vec2& b) {
     const glm::vec2 ab = b - a;
     const float length2 = glm::dot(ab, ab);
     const float t = length2 > 0.0f ? std::clamp(glm::dot(p - a, ab) / length2, 0.0f, 1.0f) : 0.0f;
-    return glm::length(p - (a + t * ab));
+    const glm::vec2 d = p - (a + t * ab);
+    return glm::dot(d, d);
 }
 
-/// Distance from p to a 2D triangle (0 inside), either winding.
-float distanceToTriangle(const glm::vec2& p, const glm::vec2& a, const glm::vec2& b, const glm::vec2& c) {
+/// Whether p lies inside a 2D triangle (either winding) or within sqrt(reach2) of its edges.
+bool withinReachOfTriangle(const glm::vec2& p, const glm::vec2& a, const glm::vec2& b, const glm::vec2& c, float reach2) {
     auto side = [](const glm::vec2& u, const glm::vec2& v, const glm::vec2& w) {
         return (v.x - u.x) * (w.y - u.y) - (v.y - u.y) * (w.x - u.x);
     };
     const float d0 = side(a, b, p), d1 = side(b, c, p), d2 = side(c, a, p);
-    if ((d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0)) return 0.0f;
-    return std::min({distanceToSegment(p, a, b), distanceToSegment(p, b, c), distanceToSegment(p, c, a)});
+    if ((d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0)) return true;
+    return squaredDistanceToSegment(p, a, b) <= reach2 || squaredDistanceToSegment(p, b, c) <= reach2 ||
+           squaredDistanceToSegment(p, c, a) <= reach2;
+}
+
+/// target = min(target, value), atomically: the result is the same whichever thread is first.
+void keepMinimum(float& target, float value) {
+    std::atomic_ref<float> slot(target);
+    float current = slot.load(std::memory_order_relaxed);
+    while (value < current && !slot.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
+    }
 }
 
 /// Stratified points on the unit disk (Shirley and Chiu's concentric map of an N x N grid of
@@ -88,15 +100,19 @@ void perpendicularBasis(const glm::vec3& w, glm::vec3& u, glm::vec3& v) {
 
 class LightShadows {
 public:
-    LightShadows(const raster::Light& light, const ShadowCasters& casters, const ShadowOptions& options)
-        : light_(light), casters_(casters), options_(options) {
+    LightShadows(const raster::Light& light, const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu)
+        : light_(light), casters_(casters), options_(options), gpu_(gpu) {
         const float radius = 0.5f * glm::length(casters.bounds.extent());
         rayOffset_ = 1e-4f * std::max(radius, 1e-3f);
         if (options.soft) disk_ = diskSamples(std::max(1, options.softSamplesPerSide));
     }
 
-    void prepareMap() {
-        map_ = std::make_unique<ShadowMap>(ShadowMap::render(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels));
+    /// The map, focused on the receivers in view; soft shadows widen it by how far sideways a
+    /// ray to the light's disk can stray over the casters' depth (their bounding sphere's diameter).
+    void prepareMap(const ScreenSurfaces& surfaces) {
+        const float margin = options_.soft ? options_.lightRadius * glm::length(casters_.bounds.extent()) : 0.0f;
+        map_ = std::make_unique<ShadowMap>(ShadowMap::render(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels,
+                                                             gpu_, surfaces.seenHull, margin));
         if (options_.mode != ShadowMode::Hybrid && !options_.soft) return;
         faces_.resize(size_t(map_->faceCount()));
         for (int f = 0; f < map_->faceCount(); ++f) prepareFace(f);
@@ -115,7 +131,7 @@ public:
             *marked = true;
             return trace(p, n, in, rays);
         }
-        const Receiver r = receiver(p, n, t);
+        const Receiver r = receiver(n, t);
         if (options_.mode == ShadowMode::Map) return options_.soft ? percentageCloser(r, t) : (litAt(r, t, 0, 0) ? 1.0f : 0.0f);
         int decision = 0;  // hybrid: what the 3x3 texels agree on, or -1
         if (potentiallyIncorrect(r, t, &decision)) {
@@ -135,9 +151,9 @@ private:
         float bias;
     };
 
-    Receiver receiver(const glm::vec3& p, const glm::vec3& n, const ShadowMapTexel& t) const {
+    Receiver receiver(const glm::vec3& n, const ShadowMapTexel& t) const {
         const ShadowMapFace& face = map_->face(t.face);
-        const glm::vec3 q = map_->project(t.face, p);
+        const glm::vec3 q(t.position, t.receiverDepth);  // where locate found the point
         const glm::vec3 nv = glm::mat3(face.viewFromWorld) * n;
         // The receiver's plane, carried one texel over: view x is texel x, view y is texel -y.
         const float nz = std::max(nv.z, 0.05f);  // steeper than 20 texels of depth per texel: clamp
@@ -166,11 +182,15 @@ private:
         const bool centre = litAt(r, t, 0, 0);
         const FaceMarks& marks = faces_[size_t(t.face)];
         for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
+            for (int dx = -1; dx <= 1; ++dx)
                 if (litAt(r, t, dx, dy) != centre) return true;  // a shadow edge passes near
-                // A thin caster the map may have missed, nearer the light than the receiver.
-                if (marks.thinDepth[size_t(t.y + dy) * size + t.x + dx] < r.depth + r.bias) return true;
-            }
+        // A thin caster the map may have missed, tested as the map's own texel would be (litAt):
+        // its depth at the texel centre against the receiver's plane carried there. Only the
+        // receiver's own texel matters: the ray to the light leaves from its point there, and a
+        // caster crossing that ray marked the texel. A finely tessellated surface is thus not
+        // its own thin caster, as the nearest vertex of each of its triangles would make it.
+        const float planeDepth = r.depth + r.slopeX * (float(t.x) + 0.5f - r.qx) + r.slopeY * (float(t.y) + 0.5f - r.qy);
+        if (marks.thinDepth[size_t(t.y) * size + t.x] < planeDepth - r.bias) return true;
         if (options_.soft && nearDiscontinuity(r, t)) return true;
         *decision = centre ? 1 : 0;
         return false;
@@ -267,7 +287,9 @@ private:
     // ---- per-face marks for the hybrid method -------------------------------------------------
 
     struct FaceMarks {
-        std::vector<float> thinDepth;  // nearest thin caster over each texel; +inf: none
+        // Per texel, the nearest thin caster's depth at its centre, as the map would have stored
+        // it; +inf: none.
+        std::vector<float> thinDepth;
         // A min pyramid of discontinuity depths: level 0 holds, per texel, the near side's depth
         // of a discontinuity there (+inf: none); each level above the minimum of 2x2 below.
         std::vector<std::vector<float>> discontinuityDepth;
@@ -295,10 +317,10 @@ private:
         FaceMarks& marks = faces_[size_t(f)];
         marks.thinDepth.assign(size_t(size) * size, ShadowMap::kEmpty);
         markThinTriangles(f, marks);
+        if (!options_.soft) return;  // the rest serves the penumbra search alone
         marks.nearestDepth = ShadowMap::kEmpty;
         for (int y = 0; y < size; ++y)
             for (int x = 0; x < size; ++x) marks.nearestDepth = std::min(marks.nearestDepth, map_->depthAt(f, x, y));
-        if (!options_.soft) return;
         // A discontinuity: a texel whose 3x3 neighbourhood spans more depth than a surface four
         // texels steep would (or meets an empty texel: a silhouette against nothing), at the depth
         // of its near side, the one that casts. A thin caster counts as one: its penumbra is as
@@ -342,8 +364,7 @@ private:
     /// it touches (conservative rasterization: the texel's centre within half a diagonal of the
     /// triangle), with its nearest depth.
     void markThinTriangles(int f, FaceMarks& marks) const {
-        // Finding the thin triangles is a pass over every caster, in parallel over fixed chunks;
-        // marking them (few, and writing shared texels) runs after, in triangle order.
+        // Finding the thin triangles is a pass over every caster, in parallel over fixed chunks.
         const size_t count = casters_.mesh.triangleCount();
         constexpr size_t kChunk = 16384;
         std::vector<std::vector<uint32_t>> thin((count + kChunk - 1) / kChunk);
@@ -351,8 +372,13 @@ private:
             for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t)
                 if (isThin(f, t)) thin[chunk].push_back(uint32_t(t));
         });
-        for (const auto& chunk : thin)
-            for (const uint32_t t : chunk) markTexelsOf(f, t, marks);
+        // Marking is a minimum, the same in any order: thin triangles mark in parallel, each
+        // texel's nearest depth kept with a compare-and-swap.
+        std::vector<uint32_t> all;
+        for (const auto& chunk : thin) all.insert(all.end(), chunk.begin(), chunk.end());
+        raster::parallelFor((all.size() + 255) / 256, [&](size_t chunk) {
+            for (size_t i = chunk * 256; i < std::min(all.size(), (chunk + 1) * 256); ++i) markTexelsOf(f, all[i], marks);
+        });
     }
 
     bool isThin(int f, size_t t) const {
@@ -378,27 +404,83 @@ private:
         return altitudeWorld < texelWorld;
     }
 
+    /// Conservative rasterization of one thin triangle: every texel whose centre lies within half
+    /// a diagonal of it. A long diagonal sliver has a bounding box of texels quadratic in its
+    /// length, so each row only visits the x span the triangle can reach there: the triangle
+    /// clipped to the row's slab (centre y +- that distance), widened by the same distance.
     void markTexelsOf(int f, size_t t, FaceMarks& marks) const {
+        constexpr float kReach = 0.7072f;  // half a texel's diagonal, rounded up
         const int size = map_->size();
         glm::vec3 q[3];
         for (int c = 0; c < 3; ++c) q[c] = map_->project(f, casters_.mesh.vertex(t, c));
-        const float loX = std::min({q[0].x, q[1].x, q[2].x}), hiX = std::max({q[0].x, q[1].x, q[2].x});
         const float loY = std::min({q[0].y, q[1].y, q[2].y}), hiY = std::max({q[0].y, q[1].y, q[2].y});
-        const int x0 = std::max(0, int(std::floor(loX)) - 1), x1 = std::min(size - 1, int(std::floor(hiX)) + 1);
         const int y0 = std::max(0, int(std::floor(loY)) - 1), y1 = std::min(size - 1, int(std::floor(hiY)) + 1);
-        const float nearest = std::min({q[0].z, q[1].z, q[2].z});
+        const ThinTriangleDepth depth(q, map_->face(f).perspective);
         const glm::vec2 a(q[0]), b(q[1]), c(q[2]);
-        for (int y = y0; y <= y1; ++y)
+        for (int y = y0; y <= y1; ++y) {
+            const float centreY = float(y) + 0.5f;
+            float spanLo, spanHi;
+            if (!xSpanInSlab(a, b, c, centreY - kReach, centreY + kReach, spanLo, spanHi)) continue;
+            const int x0 = std::max(0, int(std::floor(spanLo - kReach - 0.5f)));
+            const int x1 = std::min(size - 1, int(std::ceil(spanHi + kReach - 0.5f)));
             for (int x = x0; x <= x1; ++x) {
-                if (distanceToTriangle(glm::vec2(float(x) + 0.5f, float(y) + 0.5f), a, b, c) > 0.7072f) continue;
-                float& d = marks.thinDepth[size_t(y) * size + x];
-                d = std::min(d, nearest);
+                if (!withinReachOfTriangle(glm::vec2(float(x) + 0.5f, centreY), a, b, c, kReach * kReach)) continue;
+                keepMinimum(marks.thinDepth[size_t(y) * size + x], depth.at(glm::vec2(float(x) + 0.5f, centreY)));
             }
+        }
+    }
+
+    /// What the map would have stored at a texel had it seen the thin triangle: the depth of the
+    /// triangle's plane at the texel's centre, kept within the depths of its vertices (a sliver's
+    /// plane, extrapolated half a texel sideways, can swing far). The plane is taken in depth for
+    /// orthographic faces and in 1 / depth for perspective ones, the quantity each projection
+    /// keeps affine across the map.
+    struct ThinTriangleDepth {
+        ThinTriangleDepth(const glm::vec3 q[3], bool perspective) : perspective(perspective) {
+            nearest = std::min({q[0].z, q[1].z, q[2].z});
+            farthest = std::max({q[0].z, q[1].z, q[2].z});
+            float w[3];
+            for (int i = 0; i < 3; ++i) w[i] = perspective ? 1.0f / q[i].z : q[i].z;
+            const glm::vec2 e1(q[1] - q[0]), e2(q[2] - q[0]);
+            const float det = e1.x * e2.y - e1.y * e2.x;
+            if (!(std::abs(det) > 0.0f)) return;  // no plane: the nearest vertex stands for it
+            gradient = glm::vec2((w[1] - w[0]) * e2.y - (w[2] - w[0]) * e1.y, (w[2] - w[0]) * e1.x - (w[1] - w[0]) * e2.x) / det;
+            origin = glm::vec2(q[0]);
+            w0 = w[0];
+            usable = std::isfinite(gradient.x) && std::isfinite(gradient.y);
+        }
+        float at(const glm::vec2& centre) const {
+            if (!usable) return nearest;
+            const float w = w0 + glm::dot(gradient, centre - origin);
+            const float depth = perspective ? 1.0f / w : w;
+            return depth >= nearest && depth <= farthest ? depth : (depth > farthest ? farthest : nearest);  // NaN: nearest
+        }
+        bool perspective, usable = false;
+        float nearest, farthest, w0 = 0.0f;
+        glm::vec2 gradient{0.0f}, origin{0.0f};
+    };
+
+    /// The x extent of a triangle's part inside the slab lo <= y <= hi: its vertices in the slab
+    /// and its edges' crossings of the slab's two lines. False where it misses the slab.
+    static bool xSpanInSlab(const glm::vec2& a, const glm::vec2& b, const glm::vec2& c, float lo, float hi,
+                            float& spanLo, float& spanHi) {
+        spanLo = std::numeric_limits<float>::infinity();
+        spanHi = -spanLo;
+        auto take = [&](float x) { spanLo = std::min(spanLo, x), spanHi = std::max(spanHi, x); };
+        const glm::vec2* v[3] = {&a, &b, &c};
+        for (int i = 0; i < 3; ++i) {
+            const glm::vec2 &p = *v[i], &r = *v[(i + 1) % 3];
+            if (p.y >= lo && p.y <= hi) take(p.x);
+            for (const float line : {lo, hi})
+                if ((p.y < line) != (r.y < line)) take(p.x + (r.x - p.x) * ((line - p.y) / (r.y - p.y)));
+        }
+        return spanLo <= spanHi;
     }
 
     const raster::Light& light_;
     const ShadowCasters& casters_;
     const ShadowOptions& options_;
+    raster::Pipeline& gpu_;
     float rayOffset_ = 0.0f;
     std::vector<glm::vec2> disk_;
     std::unique_ptr<ShadowMap> map_;
@@ -412,7 +494,7 @@ bool castsShadows(const raster::Light& light) {
 }
 
 ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting,
-                           const ShadowCasters& casters, const ShadowOptions& options) {
+                           const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu) {
     ShadowMasks out;
     out.width = surfaces.width;
     out.height = surfaces.height;
@@ -424,9 +506,9 @@ ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lightin
         const raster::Light& light = lighting.lights[l];
         if (!castsShadows(light)) continue;
         ++out.stats.lightsShadowed;
-        LightShadows shadows(light, casters, options);
+        LightShadows shadows(light, casters, options, gpu);
         double t0 = raster::nowMs();
-        if (options.mode != ShadowMode::RayTraced) shadows.prepareMap();
+        if (options.mode != ShadowMode::RayTraced) shadows.prepareMap(surfaces);
         out.stats.mapMs += raster::nowMs() - t0;
         t0 = raster::nowMs();
         std::vector<float>& mask = out.visibility[size_t(l)];
@@ -437,15 +519,16 @@ ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lightin
             std::array<uint64_t, 3>& c = rowCounts[y];
             for (int x = 0; x < surfaces.width; ++x) {
                 const size_t i = y * surfaces.width + x;
-                if (!surfaces.covered(i)) continue;
-                const Incidence in = incidence(light, surfaces.position[i], surfaces.normal[i]);
+                Surface surface;
+                if (!surfaces.covered(i) || !surfaces.surfaceAt(i, surface)) continue;
+                const Incidence in = incidence(light, surface.position, surface.normal);
                 if (!in.reaches) {
                     mask[i] = 0.0f;  // the shading gives this light nothing here anyway
                     continue;
                 }
                 ++c[0];
                 bool marked = false;
-                mask[i] = shadows.visibility(surfaces.position[i], surfaces.normal[i], in, &marked, &c[2]);
+                mask[i] = shadows.visibility(surface.position, surface.normal, in, &marked, &c[2]);
                 if (marked) {
                     ++c[1];
                     out.marked[i] = 1;

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "raster/draw.h"
+#include "raster/pipeline.h"
 #include "rt/aabb.h"
 #include "rt/bvh.h"
 #include "rt/screen_surfaces.h"
@@ -65,8 +66,9 @@ struct ShadowCasters {
     Aabb bounds;
 };
 
+/// `gpu` draws the shadow maps; its render targets are reused from frame to frame.
 ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting,
-                           const ShadowCasters& casters, const ShadowOptions& options);
+                           const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu);
 
 /// Whether a light casts shadows at all in this stage (a light of zero intensity does not).
 bool castsShadows(const raster::Light& light);

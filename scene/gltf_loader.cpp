@@ -693,6 +693,20 @@ private:
 
 }  // namespace
 
+namespace {
+
+/// tinygltf's refusal with its place: JSON errors carry nlohmann's line and column, which in a
+/// GLB count from the start of the JSON chunk (byte 20, after the 12-byte header and the chunk's
+/// own 8); any other GLB refusal is about the header or the chunk table.
+std::string placeOfLoadError(bool binary, const std::string& error) {
+    if (error.empty()) return "not a valid glTF file";
+    if (!binary) return error;
+    if (error.find("parse error at line") != std::string::npos) return "JSON chunk (from byte 20): " + error;
+    return "GLB header or chunk table: " + error;
+}
+
+}  // namespace
+
 GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds) {
     const std::string file = path.string();
     if (!std::filesystem::exists(path)) throw InputError(file + ": cannot open file");
@@ -703,7 +717,7 @@ GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, f
     const bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, file)
                            : loader.LoadASCIIFromFile(&model, &error, &warning, file);
     if (!warning.empty()) warn(file + ": " + warning);
-    if (!ok) throw InputError(file + ": " + (error.empty() ? "not a valid glTF file" : error));
+    if (!ok) throw InputError(file + ": " + placeOfLoadError(binary, error));
     return GltfReader(model, file, warn, timeSeconds).read();
 }
 

@@ -114,18 +114,23 @@ TEST_F(Cli, RendersMeshFilesAndRejectsBrokenOnes) {
     EXPECT_EQ(run("render " + write("x.stl", "solid").string() + " --out " + (dir_ / "x.png").string()).exitCode, 2);
 }
 
-// A one-triangle .glb: 12-byte header, a JSON chunk (space-padded) and a BIN chunk.
-std::string triangleGlb() {
-    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
-    const std::string bin(reinterpret_cast<const char*>(p), sizeof p);
-    std::string json = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)"
-                       R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
-                       R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
-                       R"("bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36}]})";
+// A .glb: 12-byte header, a JSON chunk (space-padded) and, when given, a BIN chunk.
+std::string glbWithJson(std::string json, const std::string& bin = "") {
     while (json.size() % 4) json += ' ';
     auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
-    return "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size() + 8 + bin.size())) + u32(uint32_t(json.size())) + "JSON" +
-           json + u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+    const std::string binChunk = bin.empty() ? "" : u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+    return "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size() + binChunk.size())) + u32(uint32_t(json.size())) + "JSON" +
+           json + binChunk;
+}
+
+// A one-triangle .glb.
+std::string triangleGlb() {
+    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    return glbWithJson(R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)"
+                       R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+                       R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
+                       R"("bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36}]})",
+                       std::string(reinterpret_cast<const char*>(p), sizeof p));
 }
 
 TEST_F(Cli, TruncatedAndCorruptedModelsGiveExitTwoNamingTheFileAndWriteNothing) {
@@ -597,6 +602,11 @@ TEST_F(Cli, EveryReaderNamesTheFileThePlaceAndTheProblem) {
         {"render " + write("f.gltf", R"({"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":)"
                                      R"({"POSITION":5}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})").string(),
          "f.gltf", "mesh 0 primitive 0, accessor 5", "does not exist"},
+        {"render " + write("f2.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"scenes\": [{\"nodes\": [0}]}").string(),
+         "f2.gltf", "line 2, column", "unexpected '}'"},
+        {"render " + write("f3.glb", glbWithJson("{\"asset\": {\"version\": \"2.0\"},\n \"scenes\": [{\"nodes\": [0}]}")).string(),
+         "f3.glb", "JSON chunk (from byte 20): [json.exception.parse_error.101] parse error at line 2, column", "unexpected '}'"},
+        {"render " + write("f4.glb", glbWithJson("{}").substr(0, 10)).string(), "f4.glb", "GLB header", "Too short"},
         {"render " + write("g.cvox", head).string(), "g.cvox", "byte 96", "truncated"},
         {"info " + write("h.cvox", head).string(), "h.cvox", "byte 96", "truncated"},
         {"fly " + model.string() + " --path " + write("i.path", "0 0 5 0 0 0\n").string() + " --frames 2",

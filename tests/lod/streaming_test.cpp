@@ -21,6 +21,16 @@ namespace {
 
 constexpr int kWidth = 200, kHeight = 150;
 
+// The sphere the flights that settle below stream. ThreadSanitizer runs a flight tens of times
+// slower, so there the model has half the side: the same loader threads, uploads, evictions and
+// defragmentations racing the frames, on a quarter of the surface voxels, so CI can afford them
+// under it (docs/robustness.md).
+#if defined(__SANITIZE_THREAD__)
+constexpr uint32_t kFlightResolution = 256;
+#else
+constexpr uint32_t kFlightResolution = 512;
+#endif
+
 voxel::VoxelModel spherePyramid(uint32_t resolution) { return testing::spherePyramid(resolution, 5); }
 
 using testing::writeTemp;
@@ -102,7 +112,7 @@ TEST(Streaming, ResidentMemoryNeverExceedsTheBudget) {
 }
 
 TEST(Streaming, DefragmentationKeepsEveryResidentBlockIntact) {
-    const voxel::VoxelModel model = spherePyramid(512);
+    const voxel::VoxelModel model = spherePyramid(kFlightResolution);
     const auto path = writeTemp("defrag.cvox", testing::cvoxBytes(model));
     lod::StreamingOptions so;
     so.budgetBytes = voxelBytes(model) / 2;
@@ -117,7 +127,7 @@ TEST(Streaming, DefragmentationKeepsEveryResidentBlockIntact) {
     for (int k = 0; k < lod::kPoolCount; ++k) defragmentations += s.blocks.pool(lod::PoolKind(k)).stats().defragmentations;
     ASSERT_GT(defragmentations, 0u);
     const std::vector<uint32_t> resident = s.blocks.pool(lod::kVoxelPool).residentBlocks();
-    ASSERT_GT(resident.size(), 10u);
+    ASSERT_GE(resident.size(), 5u);
     for (uint32_t b : resident) {
         const voxel::VoxelBlock file = s.reader.load(b);
         const voxel::BlockVoxels held = s.blocks.voxels(b);
@@ -129,11 +139,12 @@ TEST(Streaming, DefragmentationKeepsEveryResidentBlockIntact) {
 }
 
 TEST(Streaming, SettledImageEqualsTheImageWithEverythingResident) {
-    const voxel::VoxelModel model = spherePyramid(512);
+    const voxel::VoxelModel model = spherePyramid(kFlightResolution);
     const auto path = writeTemp("settle.cvox", testing::cvoxBytes(model));
     for (lod::Refinement refine : {lod::Refinement::Full, lod::Refinement::Partial}) {
         lod::StreamingOptions so;
-        so.uploadLimitBytes = 1 << 20;  // a few blocks a frame: loading spans many frames
+        // A few blocks a frame, so loading spans many frames; a sphere's voxels grow with its area.
+        so.uploadLimitBytes = (uint64_t(1) << 20) * kFlightResolution / 512 * kFlightResolution / 512;
         lod::VoxelRenderOptions ro;
         ro.refine = refine;
         Streamed s(path, so, ro);
@@ -152,7 +163,7 @@ TEST(Streaming, SettledImageEqualsTheImageWithEverythingResident) {
 }
 
 TEST(Streaming, FullRefinementNeverShowsAHoleAndPartialDoesWhileLoading) {
-    const voxel::VoxelModel model = spherePyramid(512);
+    const voxel::VoxelModel model = spherePyramid(kFlightResolution);
     const auto path = writeTemp("holes.cvox", testing::cvoxBytes(model));
     for (lod::Refinement refine : {lod::Refinement::Full, lod::Refinement::Partial}) {
         lod::StreamingOptions so;

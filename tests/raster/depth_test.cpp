@@ -166,5 +166,63 @@ TEST(ReversedDepth, KeepsApartSurfacesStandardDepthMerges) {
     EXPECT_NE(centre(raster::DepthConvention::Standard, false), red);
 }
 
+// ---- depth-only targets (shadow maps) ----------------------------------------------------------
+
+/// The random scene's depths, per pixel, drawn with colour writes off into a target with or
+/// without colour storage.
+std::vector<float> depthsOf(const RandomDepthScene& s, int samples, bool colorAttachment, raster::Pipeline& p) {
+    raster::DrawCall d;
+    d.clipFromObject = clipFromView(1.0f, 1.5f, 0.5f, 8.0f, raster::DepthConvention::Standard);
+    d.positions = s.positions;
+    d.triangleColors = s.colors;
+    d.state.colorWriteMask = 0;
+    raster::FramebufferDesc desc = frame(150, 100, samples);
+    desc.colorAttachment = colorAttachment;
+    p.beginFrame(desc);
+    p.draw(d);
+    p.endFrame();
+    std::vector<float> depth;
+    raster::resolveDepthPlane(p.framebuffer(), depth);
+    return depth;
+}
+
+TEST(DepthOnlyTarget, StoresTheDepthsAColourTargetStores) {
+    for (uint32_t seed = 1; seed <= 20; ++seed)
+        for (const int samples : {1, 4}) {
+            const RandomDepthScene s(seed);
+            raster::Pipeline withColor, depthOnly;
+            const std::vector<float> want = depthsOf(s, samples, true, withColor);
+            ASSERT_EQ(depthsOf(s, samples, false, depthOnly), want) << "seed " << seed << ", " << samples << " samples";
+            EXPECT_EQ(depthOnly.framebuffer().tileColor(0), nullptr) << "no colour storage";
+            size_t drawn = 0;
+            for (const float d : want) drawn += d < 1.0f;
+            EXPECT_GT(drawn, 0u);
+        }
+}
+
+TEST(DepthOnlyTarget, RefusesColourWritesAndResolvesToTheClearColour) {
+    const RandomDepthScene s(3);
+    raster::Pipeline p;
+    (void)depthsOf(s, 1, false, p);
+    raster::Image image;
+    raster::resolveColor(p.framebuffer(), image);
+    EXPECT_EQ(image.pixel(75, 50)[0], p.framebuffer().desc().clearColor.r);
+    raster::DrawCall d;
+    d.positions = s.positions;
+    d.triangleColors = s.colors;  // colour writes on (the default)
+    p.beginFrame(p.framebuffer().desc());
+    EXPECT_THROW(p.draw(d), std::invalid_argument);
+}
+
+TEST(DepthOnlyTarget, ThePlaneOfDepthsIsTheDepthViewsGrey) {
+    const RandomDepthScene s(7);
+    raster::Pipeline p;
+    const std::vector<float> plane = depthsOf(s, 4, true, p);
+    raster::Image grey;
+    raster::resolveDepth(p.framebuffer(), grey);
+    for (int y = 0; y < grey.height; ++y)
+        for (int x = 0; x < grey.width; ++x) ASSERT_EQ(grey.pixel(x, y)[0], plane[size_t(y) * grey.width + x]);
+}
+
 }  // namespace
 }  // namespace cuberille::testing

@@ -10,6 +10,7 @@
 #include "raster/parallel.h"
 #include "rt/bvh_build.h"
 #include "rt/screen_surfaces.h"
+#include "rt/shadow_map.h"
 #include "rt/shadows.h"
 #include "tests/rt/rt_test_support.h"
 
@@ -55,8 +56,9 @@ Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, con
                                     glm::lookAtRH(glm::vec3(3.0f, 4.0f, 6.0f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
     const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
     Rendered r;
-    r.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, width, height);
-    r.masks = computeShadows(r.surfaces, lighting, {mesh, &bvh, meshBounds(mesh)}, options);
+    raster::Pipeline gpu;
+    r.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, width, height, gpu);
+    r.masks = computeShadows(r.surfaces, lighting, {mesh, &bvh, meshBounds(mesh)}, options, gpu);
     return r;
 }
 
@@ -189,6 +191,89 @@ TEST(Shadows, SameMasksForAnyThreadCount) {
         const Rendered r = shadowsOf(scene, sun(), options);
         if (threads == 1) reference = r.masks.visibility[0];
         else EXPECT_EQ(r.masks.visibility[0], reference) << threads << " threads";
+    }
+}
+
+/// A ground of long slivers, each far narrower than a 256-texel map's texel: every triangle is
+/// thin in light space and in the world, as on a finely tessellated scan.
+OwnedMesh sliverGround() {
+    OwnedMesh m;
+    constexpr int kStrips = 800;
+    for (int i = 0; i < kStrips; ++i) {
+        const float x0 = -4.0f + 8.0f * float(i) / kStrips, x1 = -4.0f + 8.0f * float(i + 1) / kStrips;
+        const uint32_t b = uint32_t(m.positions.size());
+        m.positions.insert(m.positions.end(), {{x0, 0.0f, -4.0f}, {x1, 0.0f, -4.0f}, {x1, 0.0f, 4.0f}, {x0, 0.0f, 4.0f}});
+        m.indices.insert(m.indices.end(), {b, b + 2, b + 1, b, b + 3, b + 2});
+    }
+    return m;
+}
+
+TEST(Shadows, AFinelyTessellatedSurfaceIsNotItsOwnThinCaster) {
+    // Marking a thin triangle's texels with its nearest vertex made every receiver on such a
+    // surface its own potential occluder, so hybrid traced all of it. Tested as the map tests a
+    // texel (depth at its centre against the receiver's plane), the slivers mark nothing under
+    // themselves; a real thin caster over them (the pole) still marks its shadow.
+    OwnedMesh scene = sliverGround();
+    ShadowOptions options;
+    options.mapSizeTexels = 256;
+    options.mode = ShadowMode::RayTraced;
+    const Rendered groundOnly = shadowsOf(scene, sun(), options);
+    options.mode = ShadowMode::Hybrid;
+    const Rendered hybridGround = shadowsOf(scene, sun(), options);
+    EXPECT_EQ(countDifferent(groundOnly.masks.visibility[0], hybridGround.masks.visibility[0]), 0u);
+    EXPECT_GT(hybridGround.masks.stats.receiverPixels, 20000u);
+    EXPECT_LT(hybridGround.masks.stats.markedPixels, hybridGround.masks.stats.receiverPixels / 100);
+
+    OwnedMesh withPole;
+    addBox(withPole, {1.0f, 0.0f, -1.0f}, {1.03f, 2.0f, -0.97f});
+    append(withPole, scene);
+    options.mode = ShadowMode::RayTraced;
+    const Rendered reference = shadowsOf(withPole, sun(), options);
+    options.mode = ShadowMode::Hybrid;
+    const Rendered hybrid = shadowsOf(withPole, sun(), options);
+    EXPECT_EQ(countDifferent(reference.masks.visibility[0], hybrid.masks.visibility[0]), 0u);
+    size_t poleShadow = 0;
+    for (const float v : reference.masks.visibility[0]) poleShadow += v == 0.0f;
+    EXPECT_GT(poleShadow, 10u) << "the pole casts a shadow the hybrid method had to find";
+    EXPECT_GT(hybrid.masks.stats.markedPixels, hybridGround.masks.stats.markedPixels);
+}
+
+TEST(Shadows, EverySurfaceSeenLiesInTheHullTheMapIsFocusedOn) {
+    const OwnedMesh scene = testScene();
+    ShadowOptions options;
+    options.mode = ShadowMode::Map;
+    const Rendered r = shadowsOf(scene, sun(), options);
+    ASSERT_EQ(r.surfaces.seenHull.size(), 8u);
+    Aabb hull;
+    for (const glm::vec3& p : r.surfaces.seenHull) hull.grow(p);
+    size_t seen = 0;
+    for (size_t i = 0; i < r.surfaces.triangle.size(); ++i) {
+        Surface s;
+        if (!r.surfaces.covered(i) || !r.surfaces.surfaceAt(i, s)) continue;
+        ++seen;
+        const glm::vec3 slack = 1e-4f * (glm::abs(s.position) + 1.0f);
+        ASSERT_TRUE(glm::all(glm::greaterThanEqual(s.position + slack, hull.lo)) &&
+                    glm::all(glm::lessThanEqual(s.position - slack, hull.hi)))
+            << "pixel " << i;
+    }
+    EXPECT_GT(seen, 10000u);
+}
+
+TEST(Shadows, AFocusedDirectionalMapSpendsItsTexelsOnTheFocus) {
+    // A 100-unit ground and a focus of two units across: the focused map's texels are about 50
+    // times finer, and a point in the focus lands inside it.
+    OwnedMesh ground;
+    addBox(ground, {-50.0f, -0.1f, -50.0f}, {50.0f, 0.0f, 50.0f});
+    const raster::Lighting light = sun();
+    raster::Pipeline gpu;
+    const ShadowMap wide = ShadowMap::render(light.lights[0], ground.view(), meshBounds(ground.view()), 512, gpu);
+    const std::vector<glm::vec3> focus = {{-1.0f, 0.0f, -1.0f}, {1.0f, 0.0f, 1.0f}, {-1.0f, 0.5f, 1.0f}, {1.0f, 0.5f, -1.0f}};
+    const ShadowMap focused = ShadowMap::render(light.lights[0], ground.view(), meshBounds(ground.view()), 512, gpu, focus);
+    EXPECT_LT(focused.face(0).halfExtent * 30.0f, wide.face(0).halfExtent);
+    for (const glm::vec3& p : focus) {
+        const ShadowMapTexel t = focused.locate(p + glm::vec3(0.0f, 1e-3f, 0.0f));
+        EXPECT_EQ(t.face, 0);
+        EXPECT_LT(focused.depthAt(0, t.x, t.y), ShadowMap::kEmpty) << "the ground is drawn under the focus";
     }
 }
 
