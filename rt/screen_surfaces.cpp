@@ -1,6 +1,7 @@
 #include "rt/screen_surfaces.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "raster/parallel.h"
 
@@ -49,22 +50,20 @@ std::vector<glm::vec3> frustumCorners(const glm::mat4& worldFromClip, float fart
 }  // namespace
 
 bool ScreenSurfaces::surfaceAt(size_t pixel, Surface& out) const {
-    const uint32_t t = triangle[pixel];
+    const TrianglePlane& plane = planes[triangle[pixel]];
     const int x = int(pixel % size_t(width)), y = int(pixel / size_t(width));
-    // The camera ray through the pixel centre, from the near to the far plane.
+    // The camera ray through the pixel centre, from the near to the far plane: the clip-space
+    // points (nx, ny, 0, 1) and (nx, ny, 1, 1) taken back to the world, without the products
+    // by zero and one a full matrix product would spend.
     const float nx = (float(x) + 0.5f) / float(width) * 2.0f - 1.0f;
     const float ny = 1.0f - (float(y) + 0.5f) / float(height) * 2.0f;
-    const glm::vec4 n4 = worldFromClip * glm::vec4(nx, ny, 0.0f, 1.0f);
-    const glm::vec4 f4 = worldFromClip * glm::vec4(nx, ny, 1.0f, 1.0f);
+    const glm::vec4 n4 = worldFromClip[0] * nx + worldFromClip[1] * ny + worldFromClip[3];
+    const glm::vec4 f4 = n4 + worldFromClip[2];
     const glm::vec3 origin = glm::vec3(n4) / n4.w, direction = glm::vec3(f4) / f4.w - origin;
-    const glm::vec3 a = casters.vertex(t, 0), b = casters.vertex(t, 1), c = casters.vertex(t, 2);
-    glm::vec3 normal = glm::cross(b - a, c - a);
-    const float length = glm::length(normal);
-    const float denominator = glm::dot(normal, direction);
-    if (!(length > 0.0f) || denominator == 0.0f) return false;
-    normal /= length;
-    out.position = origin + direction * (glm::dot(normal * length, a - origin) / denominator);
-    out.normal = denominator > 0.0f ? -normal : normal;
+    const float denominator = glm::dot(plane.normal, direction);
+    if (denominator == 0.0f) return false;  // degenerate (zero normal) or seen exactly edge-on
+    out.position = origin + direction * ((plane.offset - glm::dot(plane.normal, origin)) / denominator);
+    out.normal = denominator > 0.0f ? -plane.normal : plane.normal;
     return true;
 }
 
@@ -99,8 +98,18 @@ ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<con
     ScreenSurfaces s;
     s.width = width;
     s.height = height;
-    s.casters = casters;
     s.worldFromClip = glm::inverse(clipFromWorld);
+    s.planes.resize(casters.triangleCount());
+    raster::parallelFor((s.planes.size() + 4095) / 4096, [&](size_t chunk) {
+        for (size_t t = chunk * 4096; t < std::min(s.planes.size(), (chunk + 1) * 4096); ++t) {
+            const glm::vec3 a = casters.vertex(t, 0), b = casters.vertex(t, 1), c = casters.vertex(t, 2);
+            const glm::vec3 normal = glm::cross(b - a, c - a);
+            const float length = glm::length(normal);
+            if (!(length > 0.0f) || !std::isfinite(length)) continue;  // degenerate: no surface
+            s.planes[t].normal = normal / length;
+            s.planes[t].offset = glm::dot(s.planes[t].normal, a);
+        }
+    });
     const float farthest = readIds(gpu.framebuffer(), s.triangle);
     if (farthest >= 0.0f) s.seenHull = frustumCorners(s.worldFromClip, farthest);
     return s;

@@ -6,8 +6,9 @@
 // met with that triangle's plane, and the triangle's normal turned toward the camera. Drawn with
 // the scene's own order, culling and depth test, so the surface found is the one the frame shades.
 //
-// Only the ids are stored (4 bytes a pixel): positions and normals computed where they are read
-// cost a few dozen flops, while storing them would move 24 bytes a pixel through memory twice.
+// Only the ids are stored (4 bytes a pixel), with each triangle's plane: positions and normals
+// computed where they are read cost a few dozen flops, while storing them would move 24 bytes a
+// pixel through memory twice.
 
 #include <cstdint>
 #include <span>
@@ -34,10 +35,16 @@ struct Surface {
     glm::vec3 normal{0.0f};  // unit, facing the camera
 };
 
+/// A caster triangle's plane: unit normal (zero for a degenerate triangle) and n . p on it.
+struct TrianglePlane {
+    glm::vec3 normal{0.0f};
+    float offset = 0.0f;
+};
+
 struct ScreenSurfaces {
     int width = 0, height = 0;
-    std::vector<uint32_t> triangle;  // per pixel; kNone where no caster is seen
-    TriangleMeshView casters;        // the triangles the ids name
+    std::vector<uint32_t> triangle;      // per pixel; kNone where no caster is seen
+    std::vector<TrianglePlane> planes;   // per caster triangle, computed once a frame
     glm::mat4 worldFromClip{1.0f};
     /// Every surface seen lies in the hull of these points: the view frustum cut at the farthest
     /// depth drawn (none when nothing is seen). What a shadow map has to cover.
@@ -51,7 +58,6 @@ struct ScreenSurfaces {
 };
 
 /// Draws the visibility buffer with `gpu`, whose render targets are reused from frame to frame.
-/// The result refers to `casters`, which must outlive it.
 ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,
                                   const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu);
 
