@@ -362,7 +362,7 @@ private:
     /// world (slivers, wires, poles narrower than a texel) can fall between texel centres and
     /// vanish from the map. Each marks every texel
     /// it touches (conservative rasterization: the texel's centre within half a diagonal of the
-    /// triangle), with its nearest depth.
+    /// triangle), with its depth there (ThinTriangleDepth).
     void markThinTriangles(int f, FaceMarks& marks) const {
         // Finding the thin triangles is a pass over every caster, in parallel over fixed chunks.
         const size_t count = casters_.mesh.triangleCount();
