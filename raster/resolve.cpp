@@ -66,6 +66,21 @@ void resolveDepthPlane(const Framebuffer& fb, std::vector<float>& out) {
     out.resize(size_t(fb.width()) * fb.height());
     const int n = fb.samples();
     const bool reversed = fb.desc().depthConvention == DepthConvention::Reversed;
+    if (n == 1 && !reversed) {  // a shadow map's case: each tile row is a run of depths already
+        parallelFor(size_t(fb.tilesY()), [&](size_t ty) {
+            for (int tx = 0; tx < fb.tilesX(); ++tx) {
+                const int tile = int(ty) * fb.tilesX() + tx;
+                const int x0 = tx * kTileSizePixels, y0 = int(ty) * kTileSizePixels;
+                const int w = std::min(fb.width() - x0, kTileSizePixels), h = std::min(fb.height() - y0, kTileSizePixels);
+                for (int y = 0; y < h; ++y) {
+                    float* row = out.data() + size_t(y0 + y) * fb.width() + x0;
+                    if (fb.tileTouched(tile)) std::copy_n(fb.tileDepth(tile) + size_t(y) * kTileSizePixels, w, row);
+                    else std::fill_n(row, w, fb.desc().clearDepth);
+                }
+            }
+        });
+        return;
+    }
     forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
         // Keys back to depth as the standard convention reads it (0 near, 1 far), so the view
         // looks the same either way.

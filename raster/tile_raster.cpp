@@ -117,6 +117,8 @@ private:
 
     // Full block: every sample is covered, no edge test at all.
     FullBlockResult rasterizeFull(const PixelRect& r) {
+        if constexpr (S == 1)
+            if (isPlainDepthPass()) return rasterizeFullDepthOnly(r);
         const uint32_t all = S == 32 ? ~0u : (1u << S) - 1u;
         FullBlockResult result;
         for (int y = r.minY; y <= r.maxY; ++y) {
@@ -132,6 +134,52 @@ private:
         }
         shadeAndMerge();
         return result;
+    }
+
+    /// A depth pass with nothing else to do per pixel: one sample, depth tested and written, no
+    /// colour, no alpha test, no overdraw or occlusion counts (shadow maps).
+    bool isPlainDepthPass() const {
+        const DrawState& state = *target_.state;
+        return state.colorWriteMask == 0 && state.alphaMode == AlphaMode::Opaque && state.depthTest &&
+               state.depthWrite && !target_.overdraw && !target_.occlusion;
+    }
+
+    // The full-block loop of such a pass: each block row is a straight run over contiguous
+    // depths with no branch, which the compiler turns into SIMD. Each depth is the expression
+    // sampleDepths() evaluates, in the same order (floating-point contraction is off), so the
+    // depths stored are those of the general path bit for bit (DepthOnlyTarget tests).
+    FullBlockResult rasterizeFullDepthOnly(const PixelRect& r) {
+        constexpr float kNone = -std::numeric_limits<float>::infinity();
+        const float sign = t_.depthKeySign, z0 = t_.depthAtOrigin, dzdx = t_.depthPerSubpixelX, dzdy = t_.depthPerSubpixelY;
+        const int32_t ox = sampleOffsets_.x[0], oy = sampleOffsets_.y[0];
+        const int width = r.maxX - r.minX + 1;
+        int passed = 0;
+        for (int y = r.minY; y <= r.maxY; ++y) {
+            float* stored = target_.depth + size_t(y - target_.originY) * kTileSizePixels + size_t(r.minX - target_.originX);
+            const int32_t cy = y * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originYSubpixels;
+            const int32_t cx0 = r.minX * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originXSubpixels;
+            const float rowTerm = dzdy * float(cy + oy);
+            for (int i = 0; i < width; ++i) {
+                const float z = z0 + dzdx * float(cx0 + i * kSubpixelsPerPixel + ox) + rowTerm;
+                const float clamped = z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z);  // std::clamp, branch-free
+                const float key = sign * clamped;
+                const bool pass = key < stored[i];
+                stored[i] = pass ? key : stored[i];
+                passed += pass;
+            }
+        }
+        const int pixels = width * (r.maxY - r.minY + 1);
+        target_.counters->samplesTested += uint64_t(pixels);
+        target_.counters->samplesPassed += uint64_t(passed);
+        // Hierarchical Z is tightened only when every sample passed: then every depth in the
+        // block is this triangle's, and the largest written is the largest stored.
+        float maxWritten = kNone;
+        if (passed == pixels)
+            for (int y = r.minY; y <= r.maxY; ++y) {
+                const float* stored = target_.depth + size_t(y - target_.originY) * kTileSizePixels + size_t(r.minX - target_.originX);
+                for (int i = 0; i < width; ++i) maxWritten = std::max(maxWritten, stored[i]);
+            }
+        return {passed == pixels, maxWritten};
     }
 
     // Fine stage: per-sample masks, stepping the edge values along each row. At most one block

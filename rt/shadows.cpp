@@ -365,29 +365,41 @@ private:
     /// triangle), with its depth there (ThinTriangleDepth).
     void markThinTriangles(int f, FaceMarks& marks) const {
         // Finding the thin triangles is a pass over every caster, in parallel over fixed chunks.
+        // Each vertex is carried into the map once (about six triangles share one), for both passes.
         const size_t count = casters_.mesh.triangleCount();
         constexpr size_t kChunk = 16384;
+        const std::span<const glm::vec3> positions = casters_.mesh.positions;
+        std::vector<glm::vec3> projected(positions.size());
+        raster::parallelFor((positions.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
+            for (size_t v = chunk * kChunk; v < std::min(positions.size(), (chunk + 1) * kChunk); ++v)
+                projected[v] = map_->project(f, positions[v]);
+        });
         std::vector<std::vector<uint32_t>> thin((count + kChunk - 1) / kChunk);
         raster::parallelFor(thin.size(), [&](size_t chunk) {
             for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t)
-                if (isThin(f, t)) thin[chunk].push_back(uint32_t(t));
+                if (isThin(f, t, projected)) thin[chunk].push_back(uint32_t(t));
         });
         // Marking is a minimum, the same in any order: thin triangles mark in parallel, each
         // texel's nearest depth kept with a compare-and-swap.
         std::vector<uint32_t> all;
         for (const auto& chunk : thin) all.insert(all.end(), chunk.begin(), chunk.end());
         raster::parallelFor((all.size() + 255) / 256, [&](size_t chunk) {
-            for (size_t i = chunk * 256; i < std::min(all.size(), (chunk + 1) * 256); ++i) markTexelsOf(f, all[i], marks);
+            for (size_t i = chunk * 256; i < std::min(all.size(), (chunk + 1) * 256); ++i) markTexelsOf(f, all[i], projected, marks);
         });
     }
 
-    bool isThin(int f, size_t t) const {
+    /// The three corners of triangle t as carried into the map (texel x, texel y, linear depth).
+    void cornersInMap(size_t t, const std::vector<glm::vec3>& projected, glm::vec3 q[3]) const {
+        for (int c = 0; c < 3; ++c) q[c] = projected[casters_.mesh.indices[3 * t + c]];
+    }
+
+    bool isThin(int f, size_t t, const std::vector<glm::vec3>& projected) const {
         const int size = map_->size();
         const ShadowMapFace& face = map_->face(f);
         const TriangleMeshView& mesh = casters_.mesh;
         glm::vec3 q[3];
+        cornersInMap(t, projected, q);
         for (int c = 0; c < 3; ++c) {
-            q[c] = map_->project(f, mesh.vertex(t, c));
             if (!(q[c].z > face.nearPlane)) return false;  // reaches behind the light's view: not this face's
         }
         const glm::vec2 e0(q[1] - q[0]), e1(q[2] - q[1]), e2(q[0] - q[2]);
@@ -408,11 +420,11 @@ private:
     /// a diagonal of it. A long diagonal sliver has a bounding box of texels quadratic in its
     /// length, so each row only visits the x span the triangle can reach there: the triangle
     /// clipped to the row's slab (centre y +- that distance), widened by the same distance.
-    void markTexelsOf(int f, size_t t, FaceMarks& marks) const {
+    void markTexelsOf(int f, size_t t, const std::vector<glm::vec3>& projected, FaceMarks& marks) const {
         constexpr float kReach = 0.7072f;  // half a texel's diagonal, rounded up
         const int size = map_->size();
         glm::vec3 q[3];
-        for (int c = 0; c < 3; ++c) q[c] = map_->project(f, casters_.mesh.vertex(t, c));
+        cornersInMap(t, projected, q);
         const float loY = std::min({q[0].y, q[1].y, q[2].y}), hiY = std::max({q[0].y, q[1].y, q[2].y});
         const int y0 = std::max(0, int(std::floor(loY)) - 1), y1 = std::min(size - 1, int(std::floor(hiY)) + 1);
         const ThinTriangleDepth depth(q, map_->face(f).perspective);

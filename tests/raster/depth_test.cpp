@@ -168,14 +168,16 @@ TEST(ReversedDepth, KeepsApartSurfacesStandardDepthMerges) {
 
 // ---- depth-only targets (shadow maps) ----------------------------------------------------------
 
-/// The random scene's depths, per pixel, drawn with colour writes off into a target with or
-/// without colour storage.
-std::vector<float> depthsOf(const RandomDepthScene& s, int samples, bool colorAttachment, raster::Pipeline& p) {
+/// The random scene's depths, per pixel, drawn into a target with or without colour storage,
+/// with colour writes off (a depth pass, with its own full-block loop at one sample) or on (the
+/// general path).
+std::vector<float> depthsOf(const RandomDepthScene& s, int samples, bool colorAttachment, raster::Pipeline& p,
+                            bool colorWrites = false) {
     raster::DrawCall d;
     d.clipFromObject = clipFromView(1.0f, 1.5f, 0.5f, 8.0f, raster::DepthConvention::Standard);
     d.positions = s.positions;
     d.triangleColors = s.colors;
-    d.state.colorWriteMask = 0;
+    d.state.colorWriteMask = colorWrites ? raster::kWriteAll : 0;
     raster::FramebufferDesc desc = frame(150, 100, samples);
     desc.colorAttachment = colorAttachment;
     p.beginFrame(desc);
@@ -191,8 +193,10 @@ TEST(DepthOnlyTarget, StoresTheDepthsAColourTargetStores) {
         for (const int samples : {1, 4}) {
             const RandomDepthScene s(seed);
             raster::Pipeline withColor, depthOnly;
-            const std::vector<float> want = depthsOf(s, samples, true, withColor);
+            const std::vector<float> want = depthsOf(s, samples, true, withColor, true);
             ASSERT_EQ(depthsOf(s, samples, false, depthOnly), want) << "seed " << seed << ", " << samples << " samples";
+            EXPECT_EQ(depthOnly.stats().counters.samplesTested, withColor.stats().counters.samplesTested);
+            EXPECT_EQ(depthOnly.stats().counters.samplesPassed, withColor.stats().counters.samplesPassed);
             EXPECT_EQ(depthOnly.framebuffer().tileColor(0), nullptr) << "no colour storage";
             size_t drawn = 0;
             for (const float d : want) drawn += d < 1.0f;
