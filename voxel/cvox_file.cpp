@@ -87,6 +87,13 @@ CvoxReader::CvoxReader(const std::filesystem::path& path)
     m.blockSize = h.get<uint32_t>("block size");
     if (m.blockSize != std::min(kBlockSize, m.grid.resolution)) h.fail("block size", "unsupported block size");
     const uint32_t levels = h.get<uint32_t>("level count");
+    // A pyramid halves the grid per level until one block covers it (lod/lod_pyramid.h), so a
+    // count past that is corrupt, and would shift the resolution out of range below.
+    uint32_t levelLimit = 1;
+    for (uint32_t r = m.grid.resolution; r > m.blockSize; r /= 2) ++levelLimit;
+    if (levels > levelLimit)
+        h.fail("level count", std::to_string(levels) + " levels, more than the " + std::to_string(levelLimit) +
+                                  " a " + std::to_string(m.grid.resolution) + "-voxel grid can have");
     const uint32_t sep = h.get<uint32_t>("separability");
     if (sep != 0 && sep != 6 && sep != 26) h.fail("separability", "unknown value " + std::to_string(sep));
     m.separability = Separability(sep);

@@ -163,6 +163,27 @@ TEST(VoxelFile, EveryTruncationIsRejected) {
     std::filesystem::remove(path);
 }
 
+TEST(VoxelFile, ALevelCountTheGridCannotHaveIsRejected) {
+    // A 128-voxel grid of 64-voxel blocks has two levels at most; a block claiming level 40
+    // under a header claiming 41 once shifted the resolution by 40 bits (found by fuzz_cvox_blocks).
+    std::ostringstream out;
+    voxel::writeCvox(sphereModel(), out);
+    std::string bytes = out.str();
+    const std::filesystem::path path = tempPath("levels.cvox");
+    for (const uint32_t levels : {3u, 41u, 0xFFFFFFFFu}) {
+        std::memcpy(bytes.data() + 16, &levels, 4);  // the header's level count
+        std::memcpy(bytes.data() + 96, &levels, 4);  // block 0's level (checked against it)
+        writeBytes(path, bytes);
+        try {
+            voxel::readCvox(path);
+            ADD_FAILURE() << levels << " levels accepted";
+        } catch (const scene::InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("level count"), std::string::npos) << e.what();
+        }
+    }
+    std::filesystem::remove(path);
+}
+
 TEST(VoxelExport, RoundTrips) {
     const voxel::VoxelModel m = sphereModel();
     const std::filesystem::path path = tempPath("voxels.txt");
