@@ -27,13 +27,18 @@ SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& optio
         bvh_ = rt::buildBvh({positions_, indices_});
         bvhBuildMs_ = raster::nowMs() - t0;
     }
+    if (options.mode == rt::ShadowMode::Hybrid) {
+        const double t0 = raster::nowMs();
+        adjacency_ = rt::buildMeshAdjacency({positions_, indices_});
+        adjacencyMs_ = raster::nowMs() - t0;
+    }
 }
 
 raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height, ShadowFrameStats& stats) {
     stats.mode = options_.mode;
     stats.soft = options_.soft;
     stats.casterTriangles = indices_.size() / 3;
-    if (!bvhReported_) stats.bvhBuildMs = bvhBuildMs_, bvhReported_ = true;
+    if (!bvhReported_) stats.bvhBuildMs = bvhBuildMs_, stats.adjacencyMs = adjacencyMs_, bvhReported_ = true;
     raster::Lighting lighting = s.lighting;
     if (!active_) return lighting;
     const rt::TriangleMeshView casters{positions_, indices_};
@@ -44,7 +49,7 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     const rt::ScreenSurfaces surfaces =
         rt::findScreenSurfaces(casters, ranges_, standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
     stats.surfacesMs = raster::nowMs() - t0;
-    masks_ = rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &*bvh_ : nullptr, bounds_}, options_, gpu_);
+    masks_ = rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &*bvh_ : nullptr, bounds_, adjacency_.empty() ? nullptr : &adjacency_}, options_, gpu_);
     stats.shadows = masks_.stats;
     for (int l = 0; l < lighting.lightCount; ++l)
         if (!masks_.visibility[size_t(l)].empty()) lighting.lights[l].visibility = masks_.visibility[size_t(l)].data();

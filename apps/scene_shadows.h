@@ -23,7 +23,8 @@ struct ShadowFrameStats {
     bool soft = false;
     rt::ShadowStats shadows;
     size_t casterTriangles = 0;
-    double bvhBuildMs = 0.0;  // once per scene, reported with the first frame
+    double bvhBuildMs = 0.0;   // once per scene, reported with the first frame
+    double adjacencyMs = 0.0;  // hybrid: the casters' edge adjacency, likewise
     double surfacesMs = 0.0;  // the visibility buffer and surface reconstruction
     double totalMs = 0.0;     // the whole stage this frame; the BVH build (at construction) is not in it
 };
@@ -51,6 +52,8 @@ private:
     rt::Aabb bounds_;
     std::optional<rt::Bvh> bvh_;
     double bvhBuildMs_ = 0.0;
+    rt::MeshAdjacency adjacency_;  // hybrid only: thin casters are looked for at silhouettes
+    double adjacencyMs_ = 0.0;
     bool bvhReported_ = false;
     rt::ShadowMasks masks_;
     // The software GPU the visibility buffer and the shadow maps are drawn with, one pass after

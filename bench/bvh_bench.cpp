@@ -336,11 +336,11 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
                 runs.push_back({std::string(apps::shadowModeName(mode)) + " " + std::to_string(size), o});
             }
     }
-    std::printf("\n# shadows on %s (%zu triangles), %dx%d: stage ms (median of 3; BVH build once, not included), share "
+    std::printf("\n# shadows on %s (%zu triangles), %dx%d: stage ms (median of 3; BVH build and edge adjacency once, not included), share "
                 "of receiver pixels differing from ray traced, share traced\n",
                 name.c_str(), s->triangleCount(), width, height);
-    std::printf("%-5s %-15s %9s %8s %10s %9s %9s %9s %9s %9s\n", "soft", "mode", "ms", "x ref", "differ", "traced", "bvh ms",
-                "surf ms", "map ms", "mask ms");
+    std::printf("%-5s %-15s %9s %8s %10s %9s %9s %9s %9s %9s %9s\n", "soft", "mode", "ms", "x ref", "differ", "traced", "bvh ms",
+                "adj ms", "surf ms", "map ms", "mask ms");
     std::vector<float> reference;
     double referenceMs = 0.0;
     for (const Run& run : runs) {
@@ -359,9 +359,9 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
         size_t differ = 0;
         for (size_t i = 0; i < mask.size(); ++i) differ += mask[i] != reference[i];
         const double receivers = double(std::max<uint64_t>(1, stats.shadows.receiverPixels));
-        std::printf("%-5s %-15s %9.1f %8.2f %9.4f%% %8.2f%% %9.1f %9.1f %9.1f %9.1f\n", run.options.soft ? "soft" : "hard",
+        std::printf("%-5s %-15s %9.1f %8.2f %9.4f%% %8.2f%% %9.1f %9.1f %9.1f %9.1f %9.1f\n", run.options.soft ? "soft" : "hard",
                     run.label.c_str(), ms, ms / referenceMs, 100.0 * double(differ) / receivers,
-                    100.0 * double(stats.shadows.markedPixels) / receivers, stats.bvhBuildMs, bench::median(surfacesMs),
+                    100.0 * double(stats.shadows.markedPixels) / receivers, stats.bvhBuildMs, stats.adjacencyMs, bench::median(surfacesMs),
                     bench::median(mapMs), bench::median(maskMs));
     }
 }

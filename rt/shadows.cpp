@@ -315,12 +315,14 @@ private:
     void prepareFace(int f) {
         const int size = map_->size();
         FaceMarks& marks = faces_[size_t(f)];
-        marks.thinDepth.assign(size_t(size) * size, ShadowMap::kEmpty);
-        markThinTriangles(f, marks);
+        const bool hybrid = options_.mode == ShadowMode::Hybrid;
+        marks.thinDepth.assign(hybrid ? size_t(size) * size : 0, ShadowMap::kEmpty);
+        if (hybrid) thinTriangles_ += markThinTriangles(f, marks);
         if (!options_.soft) return;  // the rest serves the penumbra search alone
         marks.nearestDepth = ShadowMap::kEmpty;
         for (int y = 0; y < size; ++y)
             for (int x = 0; x < size; ++x) marks.nearestDepth = std::min(marks.nearestDepth, map_->depthAt(f, x, y));
+        if (!hybrid) return;  // the map's own penumbra width (PCF) needs the nearest depth alone
         // A discontinuity: a texel whose 3x3 neighbourhood spans more depth than a surface four
         // texels steep would (or meets an empty texel: a silhouette against nothing), at the depth
         // of its near side, the one that casts. A thin caster counts as one: its penumbra is as
@@ -363,7 +365,8 @@ private:
     /// vanish from the map. Each marks every texel
     /// it touches (conservative rasterization: the texel's centre within half a diagonal of the
     /// triangle), with its depth there (ThinTriangleDepth).
-    void markThinTriangles(int f, FaceMarks& marks) const {
+    /// Returns how many triangles it marked.
+    size_t markThinTriangles(int f, FaceMarks& marks) const {
         // Finding the thin triangles is a pass over every caster, in parallel over fixed chunks.
         // Each vertex is carried into the map once (about six triangles share one), for both passes.
         const size_t count = casters_.mesh.triangleCount();
@@ -374,10 +377,18 @@ private:
             for (size_t v = chunk * kChunk; v < std::min(positions.size(), (chunk + 1) * kChunk); ++v)
                 projected[v] = map_->project(f, positions[v]);
         });
+        const std::vector<uint8_t> nearSilhouette = positionsNearSilhouette(f, projected);
+        const std::vector<uint32_t>* positionId = nearSilhouette.empty() ? nullptr : &casters_.adjacency->positionId;
+        auto atSilhouette = [&](size_t t) {
+            if (!positionId) return true;  // no adjacency: any thin triangle may be missed
+            for (int c = 0; c < 3; ++c)
+                if (nearSilhouette[(*positionId)[casters_.mesh.indices[3 * t + c]]]) return true;
+            return false;
+        };
         std::vector<std::vector<uint32_t>> thin((count + kChunk - 1) / kChunk);
         raster::parallelFor(thin.size(), [&](size_t chunk) {
             for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t)
-                if (isThin(f, t, projected)) thin[chunk].push_back(uint32_t(t));
+                if (atSilhouette(t) && isThin(f, t, projected)) thin[chunk].push_back(uint32_t(t));
         });
         // Marking is a minimum, the same in any order: thin triangles mark in parallel, each
         // texel's nearest depth kept with a compare-and-swap.
@@ -386,6 +397,46 @@ private:
         raster::parallelFor((all.size() + 255) / 256, [&](size_t chunk) {
             for (size_t i = chunk * 256; i < std::min(all.size(), (chunk + 1) * 256); ++i) markTexelsOf(f, all[i], projected, marks);
         });
+        return all.size();
+    }
+
+    /// Per position id, whether the position touches a silhouette of this face (an edge between a
+    /// triangle facing the light and one facing away, or edge-on) or an open edge of the mesh.
+    /// A thin triangle none of whose corners does lies inside a sheet the light sees whole: the
+    /// sheet around it covers every direction from each corner, so the texels about it sample
+    /// the sheet, and where those samples disagree the 3x3 test marks the receiver anyway.
+    /// Empty without adjacency.
+    std::vector<uint8_t> positionsNearSilhouette(int f, const std::vector<glm::vec3>& projected) const {
+        const MeshAdjacency* adjacency = casters_.adjacency;
+        if (!adjacency || adjacency->positionId.size() != casters_.mesh.positions.size()) return {};
+        const float nearPlane = map_->face(f).nearPlane;
+        const size_t count = casters_.mesh.triangleCount();
+        // Facing in the map's own texel space: the sign of the projected area (0: edge-on, or
+        // reaching behind the light's view, both treated as a silhouette).
+        std::vector<int8_t> facing(count);
+        constexpr size_t kChunk = 16384;
+        raster::parallelFor((count + kChunk - 1) / kChunk, [&](size_t chunk) {
+            for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t) {
+                glm::vec3 q[3];
+                cornersInMap(t, projected, q);
+                const float twiceArea = (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[1].y - q[0].y) * (q[2].x - q[0].x);
+                const bool inView = q[0].z > nearPlane && q[1].z > nearPlane && q[2].z > nearPlane;
+                facing[t] = !inView ? 0 : twiceArea > 0.0f ? 1 : twiceArea < 0.0f ? -1 : 0;
+            }
+        });
+        std::vector<uint8_t> near(adjacency->positionCount, 0);
+        for (const uint32_t p : adjacency->openPositions) near[p] = 1;
+        const std::vector<MeshAdjacency::SharedEdge>& edges = adjacency->shared;
+        raster::parallelFor((edges.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
+            for (size_t e = chunk * kChunk; e < std::min(edges.size(), (chunk + 1) * kChunk); ++e) {
+                const MeshAdjacency::SharedEdge& edge = edges[e];
+                if (facing[edge.first] == facing[edge.second] && facing[edge.first] != 0) continue;
+                // Every writer stores the same 1: the result does not depend on their order.
+                std::atomic_ref<uint8_t>(near[edge.from]).store(1, std::memory_order_relaxed);
+                std::atomic_ref<uint8_t>(near[edge.to]).store(1, std::memory_order_relaxed);
+            }
+        });
+        return near;
     }
 
     /// The three corners of triangle t as carried into the map (texel x, texel y, linear depth).
@@ -497,6 +548,10 @@ private:
     std::vector<glm::vec2> disk_;
     std::unique_ptr<ShadowMap> map_;
     std::vector<FaceMarks> faces_;
+    uint64_t thinTriangles_ = 0;
+
+public:
+    uint64_t thinTriangles() const { return thinTriangles_; }
 };
 
 }  // namespace
@@ -522,6 +577,7 @@ ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lightin
         double t0 = raster::nowMs();
         if (options.mode != ShadowMode::RayTraced) shadows.prepareMap(surfaces);
         out.stats.mapMs += raster::nowMs() - t0;
+        out.stats.thinTriangles += shadows.thinTriangles();
         t0 = raster::nowMs();
         std::vector<float>& mask = out.visibility[size_t(l)];
         mask.assign(pixels, 1.0f);

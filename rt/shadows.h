@@ -25,6 +25,7 @@
 #include "raster/pipeline.h"
 #include "rt/aabb.h"
 #include "rt/bvh.h"
+#include "rt/mesh_adjacency.h"
 #include "rt/screen_surfaces.h"
 #include "rt/triangle_mesh.h"
 
@@ -47,6 +48,7 @@ struct ShadowStats {
     uint64_t receiverPixels = 0;  // pixel-light pairs whose surface faces the light
     uint64_t markedPixels = 0;    // of those, the pairs given rays
     uint64_t raysTraced = 0;
+    uint64_t thinTriangles = 0;  // hybrid: caster triangles marked conservatively, over lights and faces
     double mapMs = 0.0;   // shadow maps drawn and their hybrid marks (thin casters, discontinuities)
     double maskMs = 0.0;  // every receiver decided: map lookups, marking, rays
 };
@@ -64,6 +66,9 @@ struct ShadowCasters {
     TriangleMeshView mesh;
     const Bvh* bvh = nullptr;
     Aabb bounds;
+    /// The mesh's edge adjacency (Hybrid): thin-caster marking keeps to the triangles at a
+    /// silhouette from the light. Null: every thin triangle is marked.
+    const MeshAdjacency* adjacency = nullptr;
 };
 
 /// `gpu` draws the shadow maps; its render targets are reused from frame to frame.

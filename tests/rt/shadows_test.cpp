@@ -48,17 +48,20 @@ struct Rendered {
     ScreenSurfaces surfaces;
 };
 
+/// The stage as the renderer runs it (hybrid with the casters' edge adjacency), or with every
+/// thin triangle marked (`silhouettesOnly` false).
 Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, const ShadowOptions& options, int width = 320,
-                   int height = 240) {
+                   int height = 240, bool silhouettesOnly = true) {
     const TriangleMeshView mesh = scene.view();
     const Bvh bvh = buildBvh(mesh);
+    const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
     const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), float(width) / float(height), 0.1f, 50.0f) *
                                     glm::lookAtRH(glm::vec3(3.0f, 4.0f, 6.0f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
     const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
     Rendered r;
     raster::Pipeline gpu;
     r.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, width, height, gpu);
-    r.masks = computeShadows(r.surfaces, lighting, {mesh, &bvh, meshBounds(mesh)}, options, gpu);
+    r.masks = computeShadows(r.surfaces, lighting, {mesh, &bvh, meshBounds(mesh), silhouettesOnly ? &adjacency : nullptr}, options, gpu);
     return r;
 }
 
@@ -194,6 +197,16 @@ TEST(Shadows, SameMasksForAnyThreadCount) {
     }
 }
 
+/// Hard shadows from the sun with a map of `mapSize` texels: the ray-traced reference, then hybrid.
+std::pair<Rendered, Rendered> referenceAndHybrid(const OwnedMesh& scene, int mapSize) {
+    ShadowOptions options;
+    options.mapSizeTexels = mapSize;
+    options.mode = ShadowMode::RayTraced;
+    Rendered reference = shadowsOf(scene, sun(), options);
+    options.mode = ShadowMode::Hybrid;
+    return {std::move(reference), shadowsOf(scene, sun(), options)};
+}
+
 /// A ground of long slivers, each far narrower than a 256-texel map's texel: every triangle is
 /// thin in light space and in the world, as on a finely tessellated scan.
 OwnedMesh sliverGround() {
@@ -214,12 +227,7 @@ TEST(Shadows, AFinelyTessellatedSurfaceIsNotItsOwnThinCaster) {
     // texel (depth at its centre against the receiver's plane), the slivers mark nothing under
     // themselves; a real thin caster over them (the pole) still marks its shadow.
     OwnedMesh scene = sliverGround();
-    ShadowOptions options;
-    options.mapSizeTexels = 256;
-    options.mode = ShadowMode::RayTraced;
-    const Rendered groundOnly = shadowsOf(scene, sun(), options);
-    options.mode = ShadowMode::Hybrid;
-    const Rendered hybridGround = shadowsOf(scene, sun(), options);
+    const auto [groundOnly, hybridGround] = referenceAndHybrid(scene, 256);
     EXPECT_EQ(countDifferent(groundOnly.masks.visibility[0], hybridGround.masks.visibility[0]), 0u);
     EXPECT_GT(hybridGround.masks.stats.receiverPixels, 20000u);
     EXPECT_LT(hybridGround.masks.stats.markedPixels, hybridGround.masks.stats.receiverPixels / 100);
@@ -227,15 +235,49 @@ TEST(Shadows, AFinelyTessellatedSurfaceIsNotItsOwnThinCaster) {
     OwnedMesh withPole;
     addBox(withPole, {1.0f, 0.0f, -1.0f}, {1.03f, 2.0f, -0.97f});
     append(withPole, scene);
-    options.mode = ShadowMode::RayTraced;
-    const Rendered reference = shadowsOf(withPole, sun(), options);
-    options.mode = ShadowMode::Hybrid;
-    const Rendered hybrid = shadowsOf(withPole, sun(), options);
+    const auto [reference, hybrid] = referenceAndHybrid(withPole, 256);
     EXPECT_EQ(countDifferent(reference.masks.visibility[0], hybrid.masks.visibility[0]), 0u);
     size_t poleShadow = 0;
     for (const float v : reference.masks.visibility[0]) poleShadow += v == 0.0f;
     EXPECT_GT(poleShadow, 10u) << "the pole casts a shadow the hybrid method had to find";
     EXPECT_GT(hybrid.masks.stats.markedPixels, hybridGround.masks.stats.markedPixels);
+}
+
+/// The sliver ground as one sheet: 800 strips cut into 8 rows, every vertex shared, so only
+/// the triangles of the outer rows and strips touch its border.
+OwnedMesh sliverSheet() {
+    OwnedMesh m;
+    constexpr int kStrips = 800, kRows = 8;
+    for (int r = 0; r <= kRows; ++r)
+        for (int i = 0; i <= kStrips; ++i)
+            m.positions.push_back({-4.0f + 8.0f * float(i) / kStrips, 0.0f, -4.0f + 8.0f * float(r) / kRows});
+    for (int r = 0; r < kRows; ++r)
+        for (int i = 0; i < kStrips; ++i) {
+            const uint32_t a = uint32_t(r * (kStrips + 1) + i), b = a + 1, c = a + kStrips + 1, d = c + 1;
+            m.indices.insert(m.indices.end(), {a, d, b, a, c, d});
+        }
+    return m;
+}
+
+TEST(Shadows, ThinCastersAreLookedForAtSilhouettesOnly) {
+    // A sheet of slivers, each thin in light space and in the world: with the casters'
+    // adjacency only those touching its border (an open edge, as a silhouette is) and the
+    // pole are candidates (Lauterbach section 6.3's silhouette test); without it, all of them.
+    // The masks stay equal to the reference either way.
+    OwnedMesh scene;
+    addBox(scene, {1.0f, 0.0f, -1.0f}, {1.03f, 2.0f, -0.97f});
+    append(scene, sliverSheet());
+    const auto [reference, atSilhouettes] = referenceAndHybrid(scene, 256);
+    ShadowOptions options;
+    options.mapSizeTexels = 256;
+    options.mode = ShadowMode::Hybrid;
+    const Rendered everywhere = shadowsOf(scene, sun(), options, 320, 240, false);
+    EXPECT_GE(everywhere.masks.stats.thinTriangles, 12800u);
+    EXPECT_LT(atSilhouettes.masks.stats.thinTriangles, 3300u);
+    EXPECT_GT(atSilhouettes.masks.stats.thinTriangles, 0u) << "the pole is thin and all silhouette";
+    EXPECT_EQ(countDifferent(reference.masks.visibility[0], atSilhouettes.masks.visibility[0]), 0u);
+    EXPECT_EQ(countDifferent(reference.masks.visibility[0], everywhere.masks.visibility[0]), 0u);
+    EXPECT_LE(atSilhouettes.masks.stats.markedPixels, everywhere.masks.stats.markedPixels);
 }
 
 TEST(Shadows, EverySurfaceSeenLiesInTheHullTheMapIsFocusedOn) {
