@@ -4,8 +4,6 @@
 #include <bit>
 #include <tuple>
 
-#include <tbb/parallel_sort.h>
-
 namespace cuberille::rt {
 namespace {
 
@@ -17,7 +15,7 @@ uint32_t assignPositionIds(std::span<const glm::vec3> positions, std::vector<uin
     std::vector<Key> keys(positions.size());
     for (size_t i = 0; i < positions.size(); ++i)
         keys[i] = {bits(positions[i].x), bits(positions[i].y), bits(positions[i].z), uint32_t(i)};
-    tbb::parallel_sort(keys.begin(), keys.end());  // keys are unique: the order is the same on any run
+    std::sort(keys.begin(), keys.end());  // keys are unique: the order is the same on any run
     id.assign(positions.size(), 0);
     uint32_t next = 0;
     for (size_t k = 0; k < keys.size(); ++k) {

@@ -49,9 +49,8 @@ std::vector<glm::vec3> frustumCorners(const glm::mat4& worldFromClip, float fart
 
 }  // namespace
 
-bool ScreenSurfaces::surfaceAt(size_t pixel, Surface& out) const {
-    const TrianglePlane& plane = planes[triangle[pixel]];
-    const int x = int(pixel % size_t(width)), y = int(pixel / size_t(width));
+bool ScreenSurfaces::surfaceAt(int x, int y, Surface& out) const {
+    const TrianglePlane& plane = planes[triangle[size_t(y) * size_t(width) + size_t(x)]];
     // The camera ray through the pixel centre, from the near to the far plane: the clip-space
     // points (nx, ny, 0, 1) and (nx, ny, 1, 1) taken back to the world, without the products
     // by zero and one a full matrix product would spend.
@@ -59,7 +58,7 @@ bool ScreenSurfaces::surfaceAt(size_t pixel, Surface& out) const {
     const float ny = 1.0f - (float(y) + 0.5f) / float(height) * 2.0f;
     const glm::vec4 n4 = worldFromClip[0] * nx + worldFromClip[1] * ny + worldFromClip[3];
     const glm::vec4 f4 = n4 + worldFromClip[2];
-    const glm::vec3 origin = glm::vec3(n4) / n4.w, direction = glm::vec3(f4) / f4.w - origin;
+    const glm::vec3 origin = glm::vec3(n4) * (1.0f / n4.w), direction = glm::vec3(f4) * (1.0f / f4.w) - origin;
     const float denominator = glm::dot(plane.normal, direction);
     if (denominator == 0.0f) return false;  // degenerate (zero normal) or seen exactly edge-on
     out.position = origin + direction * ((plane.offset - glm::dot(plane.normal, origin)) / denominator);

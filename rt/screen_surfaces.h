@@ -54,7 +54,7 @@ struct ScreenSurfaces {
     bool covered(size_t pixel) const { return triangle[pixel] != kNone; }
     /// The surface at a covered pixel; false where its triangle is degenerate or seen exactly
     /// edge-on (no point to shade: the pixel is left unshadowed).
-    bool surfaceAt(size_t pixel, Surface& out) const;
+    bool surfaceAt(int x, int y, Surface& out) const;
 };
 
 /// Draws the visibility buffer with `gpu`, whose render targets are reused from frame to frame.

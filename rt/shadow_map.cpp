@@ -68,6 +68,20 @@ ShadowMapFace perspectiveFace(const glm::vec3& position, const glm::vec3& forwar
     return f;
 }
 
+/// The viewport (x right, y down: DESIGN.md) folded into the face's projection, with the view's
+/// depth axis as the third row: x = (clip.x / w + 1) size / 2 = (clip.x + w) size / 2 / w.
+glm::mat4 texelTransform(const ShadowMapFace& f, int size) {
+    auto row = [](const glm::mat4& m, int r) { return glm::vec4(m[0][r], m[1][r], m[2][r], m[3][r]); };
+    const float half = 0.5f * float(size);
+    const glm::vec4 clipX = row(f.clipFromWorld, 0), clipY = row(f.clipFromWorld, 1), clipW = row(f.clipFromWorld, 3);
+    const glm::vec4 rows[4] = {half * (clipX + clipW), half * (clipW - clipY), -row(f.viewFromWorld, 2),
+                               f.perspective ? clipW : glm::vec4(0.0f, 0.0f, 0.0f, 1.0f)};
+    glm::mat4 t;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) t[c][r] = rows[r][c];
+    return t;
+}
+
 /// Linear depth from the rasterizer's [0, 1] depth (Direct3D convention: z_ndc = depth).
 float linearDepth(const ShadowMapFace& f, float d) {
     if (d >= 1.0f) return ShadowMap::kEmpty;
@@ -120,17 +134,18 @@ ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& 
                 map.faces_.push_back(perspectiveFace(light.position, axis, glm::radians(45.0f), bounds));
             break;
     }
-    for (ShadowMapFace& f : map.faces_) drawDepth(f, casters, size, gpu);
+    for (ShadowMapFace& f : map.faces_) {
+        f.texelFromWorld = texelTransform(f, size);
+        drawDepth(f, casters, size, gpu);
+    }
     return map;
 }
 
 glm::vec3 ShadowMap::project(int face, const glm::vec3& p) const {
     const ShadowMapFace& f = faces_[size_t(face)];
-    const glm::vec4 clip = f.clipFromWorld * glm::vec4(p, 1.0f);
-    const glm::vec3 view = glm::vec3(f.viewFromWorld * glm::vec4(p, 1.0f));
-    const float w = f.perspective ? clip.w : 1.0f;
-    // The rasterizer's viewport: x right, y down (DESIGN.md).
-    return {(clip.x / w * 0.5f + 0.5f) * float(size_), (0.5f - clip.y / w * 0.5f) * float(size_), -view.z};
+    const glm::vec4 q = f.texelFromWorld * glm::vec4(p, 1.0f);
+    if (!f.perspective) return glm::vec3(q);
+    return {q.x / q.w, q.y / q.w, q.z};
 }
 
 ShadowMapTexel ShadowMap::locate(const glm::vec3& p) const {

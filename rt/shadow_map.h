@@ -26,6 +26,9 @@ namespace cuberille::rt {
 struct ShadowMapFace {
     glm::mat4 viewFromWorld{1.0f};
     glm::mat4 clipFromWorld{1.0f};
+    /// Rows give texel x and y times w, linear depth and w (1 for orthographic faces): project()
+    /// in one product, where every receiver pixel looks its texel up.
+    glm::mat4 texelFromWorld{1.0f};
     bool perspective = false;
     float nearPlane = 0.0f, farPlane = 1.0f;
     float halfExtent = 1.0f;  // orthographic: half the side in world units; perspective: tan(half fov)

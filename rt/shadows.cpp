@@ -181,9 +181,18 @@ private:
         if (t.x < 1 || t.y < 1 || t.x >= size - 1 || t.y >= size - 1) return true;  // a neighbour is off the face
         const bool centre = litAt(r, t, 0, 0);
         const FaceMarks& marks = faces_[size_t(t.face)];
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx)
-                if (litAt(r, t, dx, dy) != centre) return true;  // a shadow edge passes near
+        // litAt over the 3x3 texels, all inside the face: the same comparison, read straight
+        // from the depth rows.
+        const float* depth = map_->face(t.face).depth.data();
+        for (int dy = -1; dy <= 1; ++dy) {
+            const float* row = depth + size_t(t.y + dy) * size_t(size);
+            const float cy = float(t.y + dy) + 0.5f - r.qy;
+            for (int dx = -1; dx <= 1; ++dx) {
+                const float cx = float(t.x + dx) + 0.5f - r.qx;
+                const float planeDepth = r.depth + r.slopeX * cx + r.slopeY * cy;
+                if ((planeDepth - r.bias <= row[t.x + dx]) != centre) return true;  // a shadow edge passes near
+            }
+        }
         // A thin caster the map may have missed, tested as the map's own texel would be (litAt):
         // its depth at the texel centre against the receiver's plane carried there. Only the
         // receiver's own texel matters: the ray to the light leaves from its point there, and a
@@ -588,7 +597,7 @@ ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lightin
             for (int x = 0; x < surfaces.width; ++x) {
                 const size_t i = y * surfaces.width + x;
                 Surface surface;
-                if (!surfaces.covered(i) || !surfaces.surfaceAt(i, surface)) continue;
+                if (!surfaces.covered(i) || !surfaces.surfaceAt(x, int(y), surface)) continue;
                 const Incidence in = incidence(light, surface.position, surface.normal);
                 if (!in.reaches) {
                     mask[i] = 0.0f;  // the shading gives this light nothing here anyway

@@ -291,7 +291,7 @@ TEST(Shadows, EverySurfaceSeenLiesInTheHullTheMapIsFocusedOn) {
     size_t seen = 0;
     for (size_t i = 0; i < r.surfaces.triangle.size(); ++i) {
         Surface s;
-        if (!r.surfaces.covered(i) || !r.surfaces.surfaceAt(i, s)) continue;
+        if (!r.surfaces.covered(i) || !r.surfaces.surfaceAt(int(i % size_t(r.surfaces.width)), int(i / size_t(r.surfaces.width)), s)) continue;
         ++seen;
         const glm::vec3 slack = 1e-4f * (glm::abs(s.position) + 1.0f);
         ASSERT_TRUE(glm::all(glm::greaterThanEqual(s.position + slack, hull.lo)) &&
