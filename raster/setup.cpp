@@ -43,6 +43,24 @@ void setDepthPlane(TriangleSetup& t, const WindowVertex& v0, const WindowVertex&
     t.depthPerSubpixelY = static_cast<float>((dz2 * dx1 - dz1 * dx2) * invDoubleArea);
 }
 
+/// Whether a triangle whose pixel bounds hold at most kSetupCoverageTestPixels pixels covers
+/// any of their samples: the fine stage's test (fine.h), evaluated here once so that a triangle
+/// falling between sample positions, the common case in dense meshes, is never stored or binned.
+bool coversAnySample(const TriangleSetup& t, const SamplePattern& sp) {
+    for (int32_t y = t.pixelMinY; y <= t.pixelMaxY; ++y)
+        for (int32_t x = t.pixelMinX; x <= t.pixelMaxX; ++x) {
+            const int64_t cx = int64_t{x} * kSubpixelsPerPixel + kPixelCentreSubpixels;
+            const int64_t cy = int64_t{y} * kSubpixelsPerPixel + kPixelCentreSubpixels;
+            for (int s = 0; s < sp.count; ++s) {
+                const int64_t sx = cx + sp.dx[s] * kSampleOffsetUnitSubpixels, sy = cy + sp.dy[s] * kSampleOffsetUnitSubpixels;
+                int64_t any = 0;
+                for (int k = 0; k < 3; ++k) any |= t.edgeA[k] * sx + t.edgeB[k] * sy + t.edgeC[k];
+                if (any >= 0) return true;
+            }
+        }
+    return false;
+}
+
 }  // namespace
 
 SetupContext SetupContext::forDraw(PositionSpace space, int widthPixels, int heightPixels,
@@ -115,6 +133,8 @@ SetupResult setupTriangle(const WindowVertex& w0, const WindowVertex& w1, const 
     setEdge(t, 0, v[1], v[2]);
     setEdge(t, 1, v[2], v[0]);
     setEdge(t, 2, v[0], v[1]);
+    const int64_t boundsPixels = int64_t{t.pixelMaxX - t.pixelMinX + 1} * (t.pixelMaxY - t.pixelMinY + 1);
+    if (boundsPixels <= kSetupCoverageTestPixels && !coversAnySample(t, sp)) return SetupResult::NoSamples;
     t.invDoubleArea = 1.0 / static_cast<double>(doubleArea);
     setDepthPlane(t, v[0], v[1], v[2], t.invDoubleArea);
     t.depthKeySign = context.depthKeySign;

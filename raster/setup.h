@@ -10,6 +10,8 @@
 // 4. Three edge functions E_k = A_k X + B_k Y + C_k over sample positions in subpixels, edge k
 //    opposite vertex k, with the top-left fill rule folded into C_k as a bias of 0 or -1: a
 //    sample is covered iff all three biased values are >= 0 (DESIGN.md, fill rule).
+//    A triangle whose bounds hold only a few pixels is tested against their samples here and
+//    dropped when it covers none (SetupResult::NoSamples).
 // 5. The depth plane over the snapped vertices, and 1/w per vertex for perspective-correct
 //    interpolation at shading time.
 //
@@ -50,8 +52,14 @@ enum class SetupResult : uint8_t {
     Accepted,
     Degenerate,  // zero area after snapping
     Culled,      // facing culled
-    NoSamples,   // bounds contain no sample position inside the scissor
+    NoSamples,   // covers no sample position inside the scissor: none in its bounds, or, for
+                 // bounds of at most kSetupCoverageTestPixels pixels, none inside its edges
 };
+
+/// Triangles whose pixel bounds hold at most this many pixels have their samples tested at
+/// set-up: in a dense mesh most triangles fall between sample positions, and one rejected here
+/// costs nothing more (no stored set-up, no bin entry, no back-end visit).
+constexpr int kSetupCoverageTestPixels = 2;
 
 struct SetupContext {
     // Window = ndc * scale + offset (x), with the y flip folded into scale.y.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <bit>
+#include <type_traits>
 
 #include "raster/coarse.h"
 #include "raster/depth.h"
@@ -118,7 +119,7 @@ private:
     // Full block: every sample is covered, no edge test at all.
     FullBlockResult rasterizeFull(const PixelRect& r) {
         if constexpr (S == 1)
-            if (isPlainDepthPass()) return rasterizeFullDepthOnly(r);
+            if (isPlainPass()) return rasterizeFullPlain(r);
         const uint32_t all = S == 32 ? ~0u : (1u << S) - 1u;
         FullBlockResult result;
         for (int y = r.minY; y <= r.maxY; ++y) {
@@ -136,41 +137,59 @@ private:
         return result;
     }
 
-    /// A depth pass with nothing else to do per pixel: one sample, depth tested and written, no
-    /// colour, no alpha test, no overdraw or occlusion counts (shadow maps).
-    bool isPlainDepthPass() const {
+    /// A pass with nothing to do per pixel but depth and, at most, one flat colour: one sample,
+    /// depth tested and written, no colour or all of it written with the triangle's flat colour
+    /// (ConstantColor: visibility buffers), no alpha test, no overdraw or occlusion counts.
+    /// Shadow maps and visibility buffers are such passes.
+    bool isPlainPass() const {
         const DrawState& state = *target_.state;
-        return state.colorWriteMask == 0 && state.alphaMode == AlphaMode::Opaque && state.depthTest &&
-               state.depthWrite && !target_.overdraw && !target_.occlusion;
+        const bool flatColour = std::is_same_v<Shader, ConstantColorShader> && state.colorWriteMask == kWriteAll;
+        return (state.colorWriteMask == 0 || flatColour) && state.alphaMode == AlphaMode::Opaque &&
+               state.depthTest && state.depthWrite && !target_.overdraw && !target_.occlusion;
     }
 
     // The full-block loop of such a pass: each block row is a straight run over contiguous
     // depths with no branch, which the compiler turns into SIMD. Each depth is the expression
     // sampleDepths() evaluates, in the same order (floating-point contraction is off), so the
     // depths stored are those of the general path bit for bit (DepthOnlyTarget tests).
-    FullBlockResult rasterizeFullDepthOnly(const PixelRect& r) {
+    FullBlockResult rasterizeFullPlain(const PixelRect& r) {
         constexpr float kNone = -std::numeric_limits<float>::infinity();
         const float sign = t_.depthKeySign, z0 = t_.depthAtOrigin, dzdx = t_.depthPerSubpixelX, dzdy = t_.depthPerSubpixelY;
         const int32_t ox = sampleOffsets_.x[0], oy = sampleOffsets_.y[0];
         const int width = r.maxX - r.minX + 1;
+        const bool writeColour = target_.state->colorWriteMask != 0;
         int passed = 0;
         for (int y = r.minY; y <= r.maxY; ++y) {
-            float* stored = target_.depth + size_t(y - target_.originY) * kTileSizePixels + size_t(r.minX - target_.originX);
+            const size_t rowStart = size_t(y - target_.originY) * kTileSizePixels + size_t(r.minX - target_.originX);
+            float* stored = target_.depth + rowStart;
             const int32_t cy = y * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originYSubpixels;
             const int32_t cx0 = r.minX * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originXSubpixels;
             const float rowTerm = dzdy * float(cy + oy);
+            if (!writeColour) {
+                for (int i = 0; i < width; ++i) {
+                    const float z = z0 + dzdx * float(cx0 + i * kSubpixelsPerPixel + ox) + rowTerm;
+                    const float clamped = z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z);  // std::clamp, branch-free
+                    const float key = sign * clamped;
+                    const bool pass = key < stored[i];
+                    stored[i] = pass ? key : stored[i];
+                    passed += pass;
+                }
+                continue;
+            }
+            glm::vec4* colour = target_.color + rowStart;
             for (int i = 0; i < width; ++i) {
                 const float z = z0 + dzdx * float(cx0 + i * kSubpixelsPerPixel + ox) + rowTerm;
-                const float clamped = z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z);  // std::clamp, branch-free
-                const float key = sign * clamped;
+                const float key = sign * (z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z));
                 const bool pass = key < stored[i];
                 stored[i] = pass ? key : stored[i];
+                colour[i] = pass ? t_.flatColor : colour[i];
                 passed += pass;
             }
         }
         const int pixels = width * (r.maxY - r.minY + 1);
         target_.counters->samplesTested += uint64_t(pixels);
         target_.counters->samplesPassed += uint64_t(passed);
+        if (writeColour) target_.counters->pixelsShaded += uint64_t(passed);
         // Hierarchical Z is tightened only when every sample passed: then every depth in the
         // block is this triangle's, and the largest written is the largest stored.
         float maxWritten = kNone;
@@ -185,6 +204,8 @@ private:
     // Fine stage: per-sample masks, stepping the edge values along each row. At most one block
     // (or a small triangle's two pixels) at a time, so the shade queue never overflows.
     void rasterizePartial(const PixelRect& r) {
+        if constexpr (S == 1)
+            if (isPlainPass()) return rasterizePartialPlain(r);
         for (int y = r.minY; y <= r.maxY; ++y) {
             int64_t e[3];
             edgesAtPixelCentre(t_, r.minX, y, e);
@@ -195,6 +216,45 @@ private:
             }
         }
         shadeAndMerge();
+    }
+
+    // The fine stage of a plain pass: coverage at the one sample, the depth test and the writes
+    // as selects in a row loop, with no shade queue. The edge values are those the general path
+    // steps to (the same integers), the depths those of sampleDepths(): the same image, depths
+    // and counters bit for bit (PlainPass tests).
+    void rasterizePartialPlain(const PixelRect& r) {
+        const float sign = t_.depthKeySign, z0 = t_.depthAtOrigin, dzdx = t_.depthPerSubpixelX, dzdy = t_.depthPerSubpixelY;
+        const int32_t ox = sampleOffsets_.x[0], oy = sampleOffsets_.y[0];
+        const int64_t step0 = int64_t{t_.edgeA[0]} * kSubpixelsPerPixel, step1 = int64_t{t_.edgeA[1]} * kSubpixelsPerPixel,
+                      step2 = int64_t{t_.edgeA[2]} * kSubpixelsPerPixel;
+        const int64_t offset0 = edgeOffsets_.edge[0][0], offset1 = edgeOffsets_.edge[1][0], offset2 = edgeOffsets_.edge[2][0];
+        const int width = r.maxX - r.minX + 1;
+        const bool writeColour = target_.state->colorWriteMask != 0;
+        int tested = 0, passed = 0;
+        for (int y = r.minY; y <= r.maxY; ++y) {
+            int64_t e[3];
+            edgesAtPixelCentre(t_, r.minX, y, e);
+            const size_t rowStart = size_t(y - target_.originY) * kTileSizePixels + size_t(r.minX - target_.originX);
+            float* stored = target_.depth + rowStart;
+            glm::vec4* colour = writeColour ? target_.color + rowStart : nullptr;
+            const int32_t cy = y * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originYSubpixels;
+            const int32_t cx0 = r.minX * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originXSubpixels;
+            const float rowTerm = dzdy * float(cy + oy);
+            for (int i = 0; i < width; ++i) {
+                const int64_t any = (e[0] + i * step0 + offset0) | (e[1] + i * step1 + offset1) | (e[2] + i * step2 + offset2);
+                const bool covered = any >= 0;
+                const float z = z0 + dzdx * float(cx0 + i * kSubpixelsPerPixel + ox) + rowTerm;
+                const float key = sign * (z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z));
+                const bool pass = covered && key < stored[i];
+                stored[i] = pass ? key : stored[i];
+                if (writeColour) colour[i] = pass ? t_.flatColor : colour[i];
+                tested += covered;
+                passed += pass;
+            }
+        }
+        target_.counters->samplesTested += uint64_t(tested);
+        target_.counters->samplesPassed += uint64_t(passed);
+        if (writeColour) target_.counters->pixelsShaded += uint64_t(passed);
     }
 
     // Depth stage (early, before shading): test and write the samples' depths, count, and queue

@@ -228,5 +228,104 @@ TEST(DepthOnlyTarget, ThePlaneOfDepthsIsTheDepthViewsGrey) {
         for (int x = 0; x < grey.width; ++x) ASSERT_EQ(grey.pixel(x, y)[0], plane[size_t(y) * grey.width + x]);
 }
 
+
+// ---- plain passes: depth and a flat colour at one sample (visibility buffers, shadow maps) -------
+
+/// A dense patch of small triangles over a few larger ones, as a scan looks from afar: most
+/// triangles fall between pixel centres or cover one or two, some cover whole blocks.
+RandomDepthScene denseScene(uint32_t seed) {
+    RandomDepthScene s(seed);
+    std::mt19937 rng(seed * 7919u);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (int i = 0; i < 4000; ++i) {
+        const glm::vec3 c(u(rng) * 2.5f, u(rng) * 1.6f, -4.5f + u(rng));
+        const float size = 0.004f + 0.03f * (u(rng) + 1.0f);
+        for (int k = 0; k < 3; ++k) s.positions.push_back(c + size * glm::vec3(u(rng), u(rng), u(rng)));
+        s.colors.emplace_back(float(i % 251) / 251.0f, float(i / 251) / 16.0f, 0.25f, 1.0f);
+    }
+    return s;
+}
+
+struct PassResult {
+    std::vector<float> depth;
+    std::vector<glm::vec4> colour;  // per pixel, read from the tiles (empty for depth-only targets)
+    raster::StageCounters counters;
+};
+
+/// The scene drawn at one sample with depth test and write; `general` records overdraw, which
+/// keeps the back end on its general path (queue, shader, output merge) for the same result.
+PassResult drawPlain(const RandomDepthScene& s, bool colour, bool general) {
+    raster::DrawCall d;
+    d.clipFromObject = clipFromView(1.0f, 1.5f, 0.5f, 8.0f, raster::DepthConvention::Standard);
+    d.positions = s.positions;
+    d.triangleColors = s.colors;
+    d.state.shading = raster::ShadingModel::ConstantColor;
+    d.state.colorWriteMask = colour ? raster::kWriteAll : 0;
+    raster::FramebufferDesc desc = frame(150, 100, 1);
+    desc.colorAttachment = colour;
+    desc.recordOverdraw = general;
+    raster::Pipeline p;
+    p.beginFrame(desc);
+    p.draw(d);
+    p.endFrame();
+    PassResult r;
+    raster::resolveDepthPlane(p.framebuffer(), r.depth);
+    r.counters = p.stats().counters;
+    if (!colour) return r;
+    const raster::Framebuffer& fb = p.framebuffer();
+    r.colour.assign(size_t(fb.width()) * fb.height(), glm::vec4(-1.0f));
+    for (int tile = 0; tile < fb.tileCount(); ++tile) {
+        if (!fb.tileTouched(tile)) continue;
+        const int x0 = tile % fb.tilesX() * raster::kTileSizePixels, y0 = tile / fb.tilesX() * raster::kTileSizePixels;
+        for (int y = y0; y < std::min(fb.height(), y0 + raster::kTileSizePixels); ++y)
+            for (int x = x0; x < std::min(fb.width(), x0 + raster::kTileSizePixels); ++x)
+                r.colour[size_t(y) * fb.width() + x] = fb.tileColor(tile)[(y - y0) * raster::kTileSizePixels + (x - x0)];
+    }
+    return r;
+}
+
+TEST(PlainPass, StoresWhatTheGeneralPathStoresBitForBit) {
+    raster::StageCounters paths;
+    for (uint32_t seed = 1; seed <= 12; ++seed) {
+        const RandomDepthScene s = denseScene(seed);
+        for (const bool colour : {true, false}) {
+            const PassResult plain = drawPlain(s, colour, false), general = drawPlain(s, colour, true);
+            ASSERT_EQ(plain.depth, general.depth) << "seed " << seed << (colour ? ", flat colour" : ", depth only");
+            ASSERT_EQ(plain.colour, general.colour) << "seed " << seed;
+            EXPECT_EQ(plain.counters.samplesTested, general.counters.samplesTested);
+            EXPECT_EQ(plain.counters.samplesPassed, general.counters.samplesPassed);
+            EXPECT_EQ(plain.counters.pixelsShaded, general.counters.pixelsShaded);
+            paths += plain.counters;
+        }
+    }
+    // Both fine-stage entries (small triangles, partial blocks) and full blocks were drawn.
+    EXPECT_GT(paths.smallTriangleEntries, 0u);
+    EXPECT_GT(paths.blocksPartial, 0u);
+    EXPECT_GT(paths.blocksFull, 0u);
+}
+
+TEST(Setup, TrianglesBetweenSampleCentresAreDroppedBeforeBinning) {
+    // Window-space triangles inside pixel (3, 3) whose bounds hold its centre (3.5, 3.5): one
+    // passes below it (hypotenuse x + y = 6.9), one covers it (x + y = 7.05).
+    auto drawOne = [](std::vector<glm::vec3> positions) {
+        raster::DrawCall d;
+        d.space = raster::PositionSpace::Window;
+        d.positions = positions;
+        d.state.depthTest = false;
+        raster::Pipeline p;
+        p.beginFrame(frame(8, 8, 1));
+        p.draw(d);
+        p.endFrame();
+        return p.stats().counters;
+    };
+    const raster::StageCounters missing = drawOne({{3.1f, 3.1f, 0.5f}, {3.8f, 3.1f, 0.5f}, {3.1f, 3.8f, 0.5f}});
+    EXPECT_EQ(missing.trianglesNoSamples, 1u);
+    EXPECT_EQ(missing.trianglesSetUp, 0u);
+    EXPECT_EQ(missing.binEntries, 0u);
+    const raster::StageCounters covering = drawOne({{3.1f, 3.1f, 0.5f}, {3.95f, 3.1f, 0.5f}, {3.1f, 3.95f, 0.5f}});
+    EXPECT_EQ(covering.trianglesSetUp, 1u);
+    EXPECT_EQ(covering.samplesPassed, 1u);
+}
+
 }  // namespace
 }  // namespace cuberille::testing
