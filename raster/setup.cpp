@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "raster/fine.h"
+
 namespace cuberille::raster {
 namespace {
 
@@ -49,12 +51,13 @@ void setDepthPlane(TriangleSetup& t, const WindowVertex& v0, const WindowVertex&
 bool coversAnySample(const TriangleSetup& t, const SamplePattern& sp) {
     for (int32_t y = t.pixelMinY; y <= t.pixelMaxY; ++y)
         for (int32_t x = t.pixelMinX; x <= t.pixelMaxX; ++x) {
-            const int64_t cx = int64_t{x} * kSubpixelsPerPixel + kPixelCentreSubpixels;
-            const int64_t cy = int64_t{y} * kSubpixelsPerPixel + kPixelCentreSubpixels;
+            int64_t centre[3];
+            edgesAtPixelCentre(t, x, y, centre);
             for (int s = 0; s < sp.count; ++s) {
-                const int64_t sx = cx + sp.dx[s] * kSampleOffsetUnitSubpixels, sy = cy + sp.dy[s] * kSampleOffsetUnitSubpixels;
                 int64_t any = 0;
-                for (int k = 0; k < 3; ++k) any |= t.edgeA[k] * sx + t.edgeB[k] * sy + t.edgeC[k];
+                for (int k = 0; k < 3; ++k)
+                    any |= centre[k] + int64_t{t.edgeA[k]} * (sp.dx[s] * kSampleOffsetUnitSubpixels) +
+                           int64_t{t.edgeB[k]} * (sp.dy[s] * kSampleOffsetUnitSubpixels);
                 if (any >= 0) return true;
             }
         }

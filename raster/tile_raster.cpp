@@ -148,41 +148,47 @@ private:
                state.depthTest && state.depthWrite && !target_.overdraw && !target_.occlusion;
     }
 
+    /// One row of a plain pass from pixel (x0, y): where it starts in the tile, and the terms of
+    /// sampleDepths() that stay the same along it, copied out of the set-up so that the stores to
+    /// the tile's floats (which may alias it, as far as the compiler knows) do not reload them.
+    struct PlainRow {
+        size_t start;
+        float z0, dzdx, rowTerm, sign;
+        int32_t cx0;  // subpixels from the depth plane's origin to the row's first sample, in x
+        /// The depth key sampleDepths() computes at the row's i-th pixel, in its order of operations.
+        float keyAt(int i) const {
+            const float z = z0 + dzdx * float(cx0 + i * kSubpixelsPerPixel) + rowTerm;
+            return sign * (z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z));  // std::clamp, branch-free
+        }
+    };
+    PlainRow plainRow(int x0, int y) const {
+        const int32_t cy = y * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originYSubpixels + sampleOffsets_.y[0];
+        return {size_t(y - target_.originY) * kTileSizePixels + size_t(x0 - target_.originX),
+                t_.depthAtOrigin,
+                t_.depthPerSubpixelX,
+                t_.depthPerSubpixelY * float(cy),
+                t_.depthKeySign,
+                x0 * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originXSubpixels + sampleOffsets_.x[0]};
+    }
+
     // The full-block loop of such a pass: each block row is a straight run over contiguous
     // depths with no branch, which the compiler turns into SIMD. Each depth is the expression
     // sampleDepths() evaluates, in the same order (floating-point contraction is off), so the
     // depths stored are those of the general path bit for bit (DepthOnlyTarget tests).
     FullBlockResult rasterizeFullPlain(const PixelRect& r) {
         constexpr float kNone = -std::numeric_limits<float>::infinity();
-        const float sign = t_.depthKeySign, z0 = t_.depthAtOrigin, dzdx = t_.depthPerSubpixelX, dzdy = t_.depthPerSubpixelY;
-        const int32_t ox = sampleOffsets_.x[0], oy = sampleOffsets_.y[0];
         const int width = r.maxX - r.minX + 1;
         const bool writeColour = target_.state->colorWriteMask != 0;
         int passed = 0;
         for (int y = r.minY; y <= r.maxY; ++y) {
-            const size_t rowStart = size_t(y - target_.originY) * kTileSizePixels + size_t(r.minX - target_.originX);
-            float* stored = target_.depth + rowStart;
-            const int32_t cy = y * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originYSubpixels;
-            const int32_t cx0 = r.minX * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originXSubpixels;
-            const float rowTerm = dzdy * float(cy + oy);
-            if (!writeColour) {
-                for (int i = 0; i < width; ++i) {
-                    const float z = z0 + dzdx * float(cx0 + i * kSubpixelsPerPixel + ox) + rowTerm;
-                    const float clamped = z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z);  // std::clamp, branch-free
-                    const float key = sign * clamped;
-                    const bool pass = key < stored[i];
-                    stored[i] = pass ? key : stored[i];
-                    passed += pass;
-                }
-                continue;
-            }
-            glm::vec4* colour = target_.color + rowStart;
+            const PlainRow row = plainRow(r.minX, y);
+            float* stored = target_.depth + row.start;
+            glm::vec4* colour = writeColour ? target_.color + row.start : nullptr;
             for (int i = 0; i < width; ++i) {
-                const float z = z0 + dzdx * float(cx0 + i * kSubpixelsPerPixel + ox) + rowTerm;
-                const float key = sign * (z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z));
+                const float key = row.keyAt(i);
                 const bool pass = key < stored[i];
                 stored[i] = pass ? key : stored[i];
-                colour[i] = pass ? t_.flatColor : colour[i];
+                if (writeColour) colour[i] = pass ? t_.flatColor : colour[i];
                 passed += pass;
             }
         }
@@ -223,8 +229,6 @@ private:
     // steps to (the same integers), the depths those of sampleDepths(): the same image, depths
     // and counters bit for bit (PlainPass tests).
     void rasterizePartialPlain(const PixelRect& r) {
-        const float sign = t_.depthKeySign, z0 = t_.depthAtOrigin, dzdx = t_.depthPerSubpixelX, dzdy = t_.depthPerSubpixelY;
-        const int32_t ox = sampleOffsets_.x[0], oy = sampleOffsets_.y[0];
         const int64_t step0 = int64_t{t_.edgeA[0]} * kSubpixelsPerPixel, step1 = int64_t{t_.edgeA[1]} * kSubpixelsPerPixel,
                       step2 = int64_t{t_.edgeA[2]} * kSubpixelsPerPixel;
         const int64_t offset0 = edgeOffsets_.edge[0][0], offset1 = edgeOffsets_.edge[1][0], offset2 = edgeOffsets_.edge[2][0];
@@ -234,17 +238,13 @@ private:
         for (int y = r.minY; y <= r.maxY; ++y) {
             int64_t e[3];
             edgesAtPixelCentre(t_, r.minX, y, e);
-            const size_t rowStart = size_t(y - target_.originY) * kTileSizePixels + size_t(r.minX - target_.originX);
-            float* stored = target_.depth + rowStart;
-            glm::vec4* colour = writeColour ? target_.color + rowStart : nullptr;
-            const int32_t cy = y * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originYSubpixels;
-            const int32_t cx0 = r.minX * kSubpixelsPerPixel + kPixelCentreSubpixels - t_.originXSubpixels;
-            const float rowTerm = dzdy * float(cy + oy);
+            const PlainRow row = plainRow(r.minX, y);
+            float* stored = target_.depth + row.start;
+            glm::vec4* colour = writeColour ? target_.color + row.start : nullptr;
             for (int i = 0; i < width; ++i) {
                 const int64_t any = (e[0] + i * step0 + offset0) | (e[1] + i * step1 + offset1) | (e[2] + i * step2 + offset2);
                 const bool covered = any >= 0;
-                const float z = z0 + dzdx * float(cx0 + i * kSubpixelsPerPixel + ox) + rowTerm;
-                const float key = sign * (z < 0.0f ? 0.0f : (z > 1.0f ? 1.0f : z));
+                const float key = row.keyAt(i);
                 const bool pass = covered && key < stored[i];
                 stored[i] = pass ? key : stored[i];
                 if (writeColour) colour[i] = pass ? t_.flatColor : colour[i];

@@ -228,7 +228,6 @@ TEST(DepthOnlyTarget, ThePlaneOfDepthsIsTheDepthViewsGrey) {
         for (int x = 0; x < grey.width; ++x) ASSERT_EQ(grey.pixel(x, y)[0], plane[size_t(y) * grey.width + x]);
 }
 
-
 // ---- plain passes: depth and a flat colour at one sample (visibility buffers, shadow maps) -------
 
 /// A dense patch of small triangles over a few larger ones, as a scan looks from afar: most
@@ -248,7 +247,7 @@ RandomDepthScene denseScene(uint32_t seed) {
 
 struct PassResult {
     std::vector<float> depth;
-    std::vector<glm::vec4> colour;  // per pixel, read from the tiles (empty for depth-only targets)
+    std::vector<glm::vec4> colour;  // per pixel, row-major (empty for depth-only targets)
     raster::StageCounters counters;
 };
 
@@ -273,14 +272,8 @@ PassResult drawPlain(const RandomDepthScene& s, bool colour, bool general) {
     r.counters = p.stats().counters;
     if (!colour) return r;
     const raster::Framebuffer& fb = p.framebuffer();
-    r.colour.assign(size_t(fb.width()) * fb.height(), glm::vec4(-1.0f));
-    for (int tile = 0; tile < fb.tileCount(); ++tile) {
-        if (!fb.tileTouched(tile)) continue;
-        const int x0 = tile % fb.tilesX() * raster::kTileSizePixels, y0 = tile / fb.tilesX() * raster::kTileSizePixels;
-        for (int y = y0; y < std::min(fb.height(), y0 + raster::kTileSizePixels); ++y)
-            for (int x = x0; x < std::min(fb.width(), x0 + raster::kTileSizePixels); ++x)
-                r.colour[size_t(y) * fb.width() + x] = fb.tileColor(tile)[(y - y0) * raster::kTileSizePixels + (x - x0)];
-    }
+    for (int y = 0; y < fb.height(); ++y)
+        for (int x = 0; x < fb.width(); ++x) r.colour.push_back(sampleColor(fb, x, y, 0));
     return r;
 }
 
