@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -705,6 +708,34 @@ std::string placeOfLoadError(bool binary, const std::string& error) {
     return "GLB header or chunk table: " + error;
 }
 
+/// The GLB container checked before tinygltf reads it (glTF 2.0, "GLB File Format
+/// Specification"): the header's length within the file, and every chunk within that length.
+/// tinygltf trusts a chunk's own length and copies buffers out of it, so a BIN chunk claiming
+/// bytes past the end of the file would have it read past its allocation.
+/// Returns "" when the container holds, else the place and the problem.
+std::string glbContainerProblem(const std::vector<unsigned char>& bytes) {
+    auto u32 = [&](size_t at) {
+        uint32_t v;
+        std::memcpy(&v, bytes.data() + at, 4);
+        return v;
+    };
+    if (bytes.size() < 12) return "";  // tinygltf names a short header itself
+    const uint64_t length = u32(8);
+    if (length > bytes.size())
+        return "GLB header: a length of " + std::to_string(length) + " bytes, but the file has " + std::to_string(bytes.size());
+    int index = 0;
+    for (uint64_t at = 12; at < length; ++index) {
+        if (length - at < 8) return "GLB chunk " + std::to_string(index) + " at byte " + std::to_string(at) + ": its 8-byte header runs past the end";
+        const uint64_t chunkLength = u32(size_t(at));
+        const uint64_t remaining = length - at - 8;
+        if (chunkLength > remaining)
+            return "GLB chunk " + std::to_string(index) + " at byte " + std::to_string(at) + ": claims " + std::to_string(chunkLength) +
+                   " bytes, but " + std::to_string(remaining) + " remain";
+        at += 8 + chunkLength;
+    }
+    return "";
+}
+
 }  // namespace
 
 GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds) {
@@ -714,8 +745,20 @@ GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, f
     tinygltf::Model model;
     std::string error, warning;
     const bool binary = path.extension() == ".glb" || path.extension() == ".GLB";
-    const bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, file)
-                           : loader.LoadASCIIFromFile(&model, &error, &warning, file);
+    bool ok = false;
+    if (binary) {
+        // Read here (as LoadBinaryFromFile would) so the container is checked before tinygltf parses it.
+        std::ifstream in(path, std::ios::binary);
+        const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        if (!in.good() && !in.eof()) throw InputError(file + ": cannot read file");
+        if (bytes.size() > std::numeric_limits<uint32_t>::max())
+            throw InputError(file + ": " + std::to_string(bytes.size()) + " bytes, more than a GLB can hold (its length is 32 bits)");
+        if (const std::string problem = glbContainerProblem(bytes); !problem.empty()) throw InputError(file + ": " + problem);
+        ok = loader.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(), unsigned(bytes.size()),
+                                         path.parent_path().string());
+    } else {
+        ok = loader.LoadASCIIFromFile(&model, &error, &warning, file);
+    }
     if (!warning.empty()) warn(file + ": " + warning);
     if (!ok) throw InputError(file + ": " + placeOfLoadError(binary, error));
     return GltfReader(model, file, warn, timeSeconds).read();

@@ -141,9 +141,16 @@ TEST_F(Cli, TruncatedAndCorruptedModelsGiveExitTwoNamingTheFileAndWriteNothing) 
                              R"("buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]})";
     ASSERT_EQ(run("render " + write("good.glb", glb).string() + " --width 16 --height 16 --out " + (dir_ / "good.png").string()).exitCode, 0);
     ASSERT_EQ(run("render " + write("good.gltf", gltf).string() + " --width 16 --height 16 --out " + (dir_ / "good.png").string()).exitCode, 0);
-    std::string badMagic = glb, longChunk = glb, shortBuffer = gltf;
+    std::string badMagic = glb, longChunk = glb, longBin = glb, shortBuffer = gltf;
     badMagic[0] = 'X';
     longChunk[12] = '\x7f';  // the JSON chunk claims more bytes than the file has
+    // The BIN chunk claims 4 bytes past the end while the header's length is the file's, and the
+    // buffer one byte more than the file holds (what fuzz_gltf found tinygltf reading past its copy).
+    uint32_t jsonLength;
+    std::memcpy(&jsonLength, glb.data() + 12, 4);
+    longBin[20 + jsonLength] += 4;
+    const std::string buffer36 = "\"buffers\":[{\"byteLength\":36}";
+    longBin.replace(longBin.find(buffer36), buffer36.size(), "\"buffers\":[{\"byteLength\":37}");
     shortBuffer.replace(shortBuffer.find("\"count\":3"), 9, "\"count\":30");
     const std::vector<std::pair<std::string, std::string>> broken = {
         {"cut-header.glb", glb.substr(0, 10)},
@@ -151,6 +158,7 @@ TEST_F(Cli, TruncatedAndCorruptedModelsGiveExitTwoNamingTheFileAndWriteNothing) 
         {"cut-bin.glb", glb.substr(0, glb.size() - 7)},
         {"bad-magic.glb", badMagic},
         {"long-chunk.glb", longChunk},
+        {"long-bin.glb", longBin},
         {"cut.gltf", gltf.substr(0, gltf.size() / 2)},
         {"accessor-past-buffer.gltf", shortBuffer},
         {"not-json.gltf", "\x89PNG\r\n"},
@@ -168,6 +176,10 @@ TEST_F(Cli, TruncatedAndCorruptedModelsGiveExitTwoNamingTheFileAndWriteNothing) 
         EXPECT_NE(r.output.find(file.string() + ":"), std::string::npos) << name << ": " << r.output;
         EXPECT_FALSE(fs::exists(out)) << name;
     }
+    const CommandRun r = run("render " + (dir_ / "long-bin.glb").string() + " --out " + (dir_ / "long-bin.png").string());
+    EXPECT_NE(r.output.find("GLB chunk 1 at byte " + std::to_string(20 + jsonLength) + ": claims 40 bytes, but 36 remain"),
+              std::string::npos)
+        << r.output;
 }
 
 TEST_F(Cli, TurntableWritesNumberedFramesThatDiffer) {
