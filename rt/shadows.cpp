@@ -15,6 +15,10 @@
 namespace cuberille::rt {
 namespace {
 
+// A soft shadow's silhouette lies within a texel of the discontinuity texels either side of it (it
+// passes between two adjacent texel centres that disagree); a sixteenth more covers rounding.
+constexpr float kPenumbraEdgeSlackTexels = 1.0f + 1.0f / 16.0f;
+
 // ---- the light as seen from a surface point ------------------------------------------------
 
 struct Incidence {
@@ -207,45 +211,83 @@ private:
 
     // ---- soft shadows: where the penumbra can be -----------------------------------------------
 
-    /// The widest penumbra a receiver at this depth can see from blockers no nearer the light
-    /// than `nearest`, in texels: the light's radius carried over the gap between them.
-    int penumbraTexels(const Receiver& r, const ShadowMapTexel& t, float nearest) const {
+    /// How far sideways, in texels at the blocker, the rays from a receiver to the light's disk
+    /// reach at a blocker's depth: the light's radius carried over the gap between them.
+    float penumbraReachTexels(const Receiver& r, const ShadowMapTexel& t, float blockerDepth) const {
         const ShadowMapFace& face = map_->face(t.face);
-        const float gap = std::max(0.0f, r.depth - nearest);
-        float world;  // lateral reach of the penumbra at the blocker's depth, in texels there
+        const float gap = std::max(0.0f, r.depth - blockerDepth);
         if (face.perspective) {
-            const float texelAtBlocker = 2.0f * face.halfExtent * std::max(nearest, face.nearPlane) / float(map_->size());
-            world = options_.lightRadius * gap / std::max(r.depth, 1e-6f) / texelAtBlocker;
-        } else {
-            world = options_.lightRadius * gap / r.texelWorld;
+            const float texelAtBlocker = 2.0f * face.halfExtent * std::max(blockerDepth, face.nearPlane) / float(map_->size());
+            return options_.lightRadius * gap / std::max(r.depth, 1e-6f) / texelAtBlocker;
         }
-        return int(std::min(std::ceil(world) + 1.0f, 1e6f));
-    }
-    int penumbraTexels(const Receiver& r, const ShadowMapTexel& t) const {
-        return penumbraTexels(r, t, faces_[size_t(t.face)].nearestDepth);
+        return options_.lightRadius * gap / r.texelWorld;
     }
 
-    /// Whether a depth discontinuity nearer the light than this receiver lies within the widest
-    /// penumbra it could see: only such an edge can cast a partial shadow on it.
+    /// The widest penumbra a receiver can see (map mode's filter width), in whole texels, from
+    /// blockers no nearer the light than the face's nearest caster.
+    int penumbraTexels(const Receiver& r, const ShadowMapTexel& t) const {
+        const float reach = penumbraReachTexels(r, t, faces_[size_t(t.face)].nearestDepth);
+        return int(std::min(std::ceil(reach) + 1.0f, 1e6f));
+    }
+
+    /// Whether a depth discontinuity nearer the light than this receiver lies within reach of its
+    /// rays to the light's disk at that discontinuity's own depth: only such an edge can cast a
+    /// partial shadow on it (a receiver no silhouette reaches sees the whole disk or none of it).
     ///
-    /// The reach shrinks in a few rounds, each conservative: every discontinuity that can reach
-    /// the receiver lies within the current reach, so none is nearer the light than the nearest
-    /// discontinuity found there, so none reaches farther than that one would.
+    /// The search descends the min pyramid of discontinuity depths from the top. A block can
+    /// hold a discontinuity that reaches the receiver only if its nearest depth is nearer than
+    /// the receiver and the block's texel centres lie within the reach of that nearest depth (the
+    /// widest any of its discontinuities can have), widened by kPenumbraEdgeSlackTexels: the
+    /// silhouette itself lies within a texel of the discontinuity texels beside it.
     bool nearDiscontinuity(const Receiver& r, const ShadowMapTexel& t) const {
         const FaceMarks& marks = faces_[size_t(t.face)];
-        const int size = map_->size();
-        int reach = penumbraTexels(r, t);
-        float nearest = ShadowMap::kEmpty;
-        for (int round = 0; round < 3; ++round) {
-            const int x0 = std::max(0, t.x - reach), y0 = std::max(0, t.y - reach);
-            const int x1 = std::min(size - 1, t.x + reach), y1 = std::min(size - 1, t.y + reach);
-            nearest = marks.nearestDiscontinuityOver(x0, y0, x1, y1);
-            if (!(nearest < r.depth - r.bias)) return false;  // nothing within reach can shadow it
-            const int tighter = penumbraTexels(r, t, nearest);
-            if (tighter >= reach) break;
-            reach = tighter;
+        const float receiverDepth = r.depth - r.bias;
+        struct Block {
+            int level, x, y;
+        };
+        // Start at the level whose blocks are as wide as the widest reach any discontinuity in the
+        // face can have (that of the nearest), with the few blocks that reach covers.
+        const int levels = int(marks.discontinuityDepth.size());
+        const float widest = penumbraReachTexels(r, t, marks.discontinuityDepth.back()[0]) + kPenumbraEdgeSlackTexels;
+        const int size = map_->size(), last = size - 1;
+        const bool wholeFace = !(widest < float(size));  // NaN too: search from the top
+        int start = wholeFace ? levels - 1 : 0;
+        while (start + 1 < levels && float(1 << start) < widest) ++start;
+        auto texelSpan = [&](float q, int& lo, int& hi) {  // texels whose centres lie within `widest` of q
+            lo = wholeFace ? 0 : std::clamp(int(std::ceil(q - widest - 0.5f)), 0, last);
+            hi = wholeFace ? last : std::clamp(int(std::floor(q + widest - 0.5f)), 0, last);
+        };
+        int tx0, tx1, ty0, ty1;
+        texelSpan(r.qx, tx0, tx1);
+        texelSpan(r.qy, ty0, ty1);
+        Block stack[16 + 3 * 32];
+        int top = 0;
+        for (int by = ty0 >> start; by <= (ty1 >> start); ++by)
+            for (int bx = tx0 >> start; bx <= (tx1 >> start); ++bx) stack[top++] = {start, bx, by};
+        while (top > 0) {
+            const Block b = stack[--top];
+            const float nearest = marks.discontinuityDepth[size_t(b.level)][size_t(b.y) * marks.levelSize[size_t(b.level)] + b.x];
+            if (!(nearest < receiverDepth)) continue;
+            // The block's texel centres, and the receiver's distance to the nearest of them.
+            const float lo = 0.5f, side = float(1 << b.level);
+            const float x0 = float(b.x) * side + lo, x1 = std::min(float(b.x + 1) * side, float(size)) - lo;
+            const float y0 = float(b.y) * side + lo, y1 = std::min(float(b.y + 1) * side, float(size)) - lo;
+            const float dx = std::max({x0 - r.qx, r.qx - x1, 0.0f}), dy = std::max({y0 - r.qy, r.qy - y1, 0.0f});
+            const float reach = penumbraReachTexels(r, t, nearest) + kPenumbraEdgeSlackTexels;
+            if (dx * dx + dy * dy > reach * reach) continue;  // (a NaN reach is opened)
+            if (b.level == 0) {
+                // The receiver's own 3x3 texels agreed (potentiallyIncorrect): rays that stay
+                // among their centres meet what the map shows there. An edge beyond them that rays
+                // reach has a discontinuity texel beyond them too, within a texel of it.
+                if (std::abs(b.x - t.x) > 1 || std::abs(b.y - t.y) > 1) return true;
+                continue;
+            }
+            const int below = b.level - 1, n = marks.levelSize[size_t(below)];
+            for (int j = 0; j < 2; ++j)
+                for (int i = 0; i < 2; ++i)
+                    if (2 * b.x + i < n && 2 * b.y + j < n) stack[top++] = {below, 2 * b.x + i, 2 * b.y + j};
         }
-        return true;
+        return false;
     }
 
     /// Map mode, soft: the fraction of lit texels over the penumbra's width (PCF).
@@ -304,21 +346,6 @@ private:
         std::vector<std::vector<float>> discontinuityDepth;
         std::vector<int> levelSize;
         float nearestDepth = 0.0f;  // the nearest caster depth in the face
-
-        /// The nearest discontinuity over texels [x0, x1] x [y0, y1], read conservatively: from
-        /// the finest level where the box spans at most four texels a side, so from up to 16
-        /// texels that cover it (and a little more, which only marks more).
-        float nearestDiscontinuityOver(int x0, int y0, int x1, int y1) const {
-            size_t level = 0;
-            while (level + 1 < discontinuityDepth.size() && ((x1 >> level) - (x0 >> level) > 3 || (y1 >> level) - (y0 >> level) > 3))
-                ++level;
-            const std::vector<float>& d = discontinuityDepth[level];
-            const int n = levelSize[level];
-            float nearest = ShadowMap::kEmpty;
-            for (int y = y0 >> level; y <= (y1 >> level); ++y)
-                for (int x = x0 >> level; x <= (x1 >> level); ++x) nearest = std::min(nearest, d[size_t(y) * n + x]);
-            return nearest;
-        }
     };
 
     void prepareFace(int f) {

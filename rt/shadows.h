@@ -11,8 +11,9 @@
 //              map's 3x3 texels around it disagree about it (each compared with the receiver's
 //              plane carried to that texel: the receiver-angle test) or when a caster thin in
 //              light space lies there (found by marking each thin triangle's texels
-//              conservatively). Soft shadows also mark every pixel within the light's projected
-//              penumbra width of a depth discontinuity, and trace N x N rays there.
+//              conservatively). Soft shadows also mark every pixel whose rays to the light's
+//              disk reach a depth discontinuity nearer the light (asked of each edge at its own
+//              depth), and trace N x N rays there.
 //   RayTraced  a shadow ray per pixel (N x N for soft): the reference.
 //
 // Determinism: every pixel's value is a pure function of its surface, the map and the BVH;

@@ -157,28 +157,75 @@ TEST(Shadows, PointAndSpotLightsHybridEqualsRayTraced) {
     EXPECT_LT(hybrid.masks.stats.markedPixels, hybrid.masks.stats.receiverPixels / 4);
 }
 
-TEST(Shadows, SoftHybridEqualsSoftRayTracedExceptAtCountedLimits) {
-    // Outside the splatted penumbra the hybrid takes the map's hard answer; where the true
-    // penumbra is wider than the estimate (it never should be: the estimate takes the nearest
-    // caster) pixels would differ. Counted, and bounded at 0.1% of the receivers.
-    const OwnedMesh scene = testScene();
+/// Soft shadows from the sun (3 x 3 rays, a 1024-texel map): the ray-traced reference, then hybrid.
+std::pair<Rendered, Rendered> softReferenceAndHybrid(const OwnedMesh& scene, float lightRadius) {
     ShadowOptions options;
     options.soft = true;
-    options.lightRadius = 0.05f;
+    options.lightRadius = lightRadius;
     options.softSamplesPerSide = 3;
     options.mapSizeTexels = 1024;
     options.mode = ShadowMode::RayTraced;
-    const Rendered reference = shadowsOf(scene, sun(), options);
+    Rendered reference = shadowsOf(scene, sun(), options);
     options.mode = ShadowMode::Hybrid;
-    const Rendered hybrid = shadowsOf(scene, sun(), options);
+    return {std::move(reference), shadowsOf(scene, sun(), options)};
+}
+
+/// Pixels in partial shadow: visibility strictly between 0 and 1.
+size_t partialShadowCount(const Rendered& r) {
+    size_t n = 0;
+    for (const float v : r.masks.visibility[0]) n += v > 0.0f && v < 1.0f;
+    return n;
+}
+
+TEST(Shadows, SoftHybridEqualsSoftRayTracedExceptAtCountedLimits) {
+    // Outside the penumbra the search finds the hybrid takes the map's hard answer; where the
+    // true penumbra reached farther (it should not: each edge is asked at its own depth) pixels
+    // would differ. Counted, and bounded at 0.1% of the receivers.
+    const auto [reference, hybrid] = softReferenceAndHybrid(testScene(), 0.05f);
     const size_t differ = countDifferent(reference.masks.visibility[0], hybrid.masks.visibility[0]);
     std::printf("soft: %zu differ, %llu of %llu marked\n", differ, (unsigned long long)hybrid.masks.stats.markedPixels,
                 (unsigned long long)hybrid.masks.stats.receiverPixels);
     EXPECT_LE(double(differ), 0.001 * double(hybrid.masks.stats.receiverPixels));
     EXPECT_LT(hybrid.masks.stats.markedPixels, hybrid.masks.stats.receiverPixels / 2);
-    size_t partial = 0;  // the penumbra exists: values strictly between 0 and 1
-    for (const float v : reference.masks.visibility[0]) partial += v > 0.0f && v < 1.0f;
-    EXPECT_GT(partial, 200u);
+    EXPECT_GT(partialShadowCount(reference), 200u) << "the penumbra exists";
+}
+
+TEST(Shadows, APointLikeSoftLightMarksWhatHardShadowsMark) {
+    // A light too small for its rays to stray a texel from the shadow ray: every ray stays among
+    // the receiver's own 3x3 texels, which the hard test has already found in agreement, so
+    // the penumbra search adds nothing (a search widened by whole texels marked every receiver
+    // near any edge nearer the light, penumbra or not).
+    const OwnedMesh scene = testScene();
+    ShadowOptions options;
+    options.mapSizeTexels = 512;
+    options.mode = ShadowMode::Hybrid;
+    const Rendered hard = shadowsOf(scene, sun(), options);
+    options.soft = true;
+    options.lightRadius = 1e-5f;
+    options.softSamplesPerSide = 2;
+    const Rendered soft = shadowsOf(scene, sun(), options);
+    EXPECT_EQ(soft.masks.marked, hard.masks.marked);
+    options.mode = ShadowMode::RayTraced;
+    const Rendered reference = shadowsOf(scene, sun(), options);
+    EXPECT_EQ(countDifferent(reference.masks.visibility[0], soft.masks.visibility[0]), 0u);
+}
+
+TEST(Shadows, SoftMarksFollowThePenumbraNotEveryEdge) {
+    // The penumbra search asks of each discontinuity whether the receiver's rays reach it at its
+    // own depth; a wide light marks a wide band, a narrow one a narrow band, and either way
+    // the masks equal the reference.
+    const OwnedMesh scene = testScene();
+    uint64_t marked[2] = {0, 0};
+    for (const int i : {0, 1}) {
+        const float radius = i == 0 ? 0.01f : 0.08f;
+        const auto [reference, hybrid] = softReferenceAndHybrid(scene, radius);
+        EXPECT_EQ(countDifferent(reference.masks.visibility[0], hybrid.masks.visibility[0]), 0u) << radius;
+        const size_t partial = partialShadowCount(reference);
+        marked[i] = hybrid.masks.stats.markedPixels;
+        std::printf("radius %g: %zu receivers in partial shadow, %llu marked\n", radius, partial, (unsigned long long)marked[i]);
+        EXPECT_LE(marked[i], 3 * partial + hybrid.masks.stats.receiverPixels / 100) << radius;
+    }
+    EXPECT_LT(2 * marked[0], marked[1]);
 }
 
 TEST(Shadows, SameMasksForAnyThreadCount) {
