@@ -234,7 +234,8 @@ private:
     /// rays to the light's disk at that discontinuity's own depth: only such an edge can cast a
     /// partial shadow on it (a receiver no silhouette reaches sees the whole disk or none of it).
     ///
-    /// The search descends the min pyramid of discontinuity depths from the top. A block can
+    /// The search descends the min pyramid of discontinuity depths, from the level whose blocks
+    /// are as wide as the widest reach in the face (at most 3 x 3 of them to start). A block can
     /// hold a discontinuity that reaches the receiver only if its nearest depth is nearer than
     /// the receiver and the block's texel centres lie within the reach of that nearest depth (the
     /// widest any of its discontinuities can have), widened by kPenumbraEdgeSlackTexels: the
@@ -245,8 +246,8 @@ private:
         struct Block {
             int level, x, y;
         };
-        // Start at the level whose blocks are as wide as the widest reach any discontinuity in the
-        // face can have (that of the nearest), with the few blocks that reach covers.
+        // The widest reach any discontinuity in the face can have is the nearest one's. Each block
+        // popped pushes at most four, so the stack stays under 9 + 3 levels deep.
         const int levels = int(marks.discontinuityDepth.size());
         const float widest = penumbraReachTexels(r, t, marks.discontinuityDepth.back()[0]) + kPenumbraEdgeSlackTexels;
         const int size = map_->size(), last = size - 1;
