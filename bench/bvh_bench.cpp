@@ -363,6 +363,12 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
                     run.label.c_str(), ms, ms / referenceMs, 100.0 * double(differ) / receivers,
                     100.0 * double(stats.shadows.markedPixels) / receivers, stats.bvhBuildMs, stats.adjacencyMs, bench::median(surfacesMs),
                     bench::median(mapMs), bench::median(maskMs));
+        if (run.options.mode == rt::ShadowMode::RayTraced && run.options.soft) {
+            // What a perfect penumbra estimate would trace: the receivers in partial shadow.
+            size_t partial = 0;
+            for (const float v : mask) partial += v > 0.0f && v < 1.0f;
+            std::printf("      (%.2f%% of receivers in partial shadow)\n", 100.0 * double(partial) / receivers);
+        }
     }
 }
 
