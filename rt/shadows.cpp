@@ -356,42 +356,50 @@ private:
         marks.thinDepth.assign(hybrid ? size_t(size) * size : 0, ShadowMap::kEmpty);
         if (hybrid) thinTriangles_ += markThinTriangles(f, marks);
         if (!options_.soft) return;  // the rest serves the penumbra search alone
-        marks.nearestDepth = ShadowMap::kEmpty;
-        for (int y = 0; y < size; ++y)
-            for (int x = 0; x < size; ++x) marks.nearestDepth = std::min(marks.nearestDepth, map_->depthAt(f, x, y));
+        const ShadowMapFace& face = map_->face(f);
+        const size_t side = size_t(size);
+        auto row = [&](int y) { return face.depth.data() + size_t(y) * side; };
+        // The nearest caster, per row and then over the rows (a minimum: the same in any order).
+        std::vector<float> rowNearest(side);
+        raster::parallelFor(side, [&](size_t y) { rowNearest[y] = *std::min_element(row(int(y)), row(int(y)) + side); });
+        marks.nearestDepth = *std::min_element(rowNearest.begin(), rowNearest.end());
         if (!hybrid) return;  // the map's own penumbra width (PCF) needs the nearest depth alone
         // A discontinuity: a texel whose 3x3 neighbourhood spans more depth than a surface four
         // texels steep would (or meets an empty texel: a silhouette against nothing), at the depth
         // of its near side, the one that casts. A thin caster counts as one: its penumbra is as
-        // wide as any other's.
-        const ShadowMapFace& face = map_->face(f);
-        std::vector<float> level0(size_t(size) * size, ShadowMap::kEmpty);
-        raster::parallelFor(size_t(size), [&](size_t yy) {
+        // wide as any other's. The neighbourhood's range is taken separably, down the three rows
+        // and then across three columns (the same minimum and maximum, in loops that vectorise).
+        std::vector<float> level0(side * side);
+        raster::parallelFor(side, [&](size_t yy) {
             const int y = int(yy);
+            const float *above = row(std::max(0, y - 1)), *centre = row(y), *below = row(std::min(size - 1, y + 1));
+            std::vector<float> columnLo(side), columnHi(side);
+            for (size_t x = 0; x < side; ++x) {
+                columnLo[x] = std::min({above[x], centre[x], below[x]});
+                columnHi[x] = std::max({above[x], centre[x], below[x]});
+            }
             for (int x = 0; x < size; ++x) {
-                float lo = map_->depthAt(f, x, y), hi = lo;
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        if (x + dx < 0 || y + dy < 0 || x + dx >= size || y + dy >= size) continue;
-                        const float d = map_->depthAt(f, x + dx, y + dy);
-                        lo = std::min(lo, d), hi = std::max(hi, d);
-                    }
+                const size_t left = size_t(std::max(0, x - 1)), right = size_t(std::min(size - 1, x + 1));
+                const float lo = std::min({columnLo[left], columnLo[size_t(x)], columnLo[right]});
+                const float hi = std::max({columnHi[left], columnHi[size_t(x)], columnHi[right]});
                 const float texel = 2.0f * face.halfExtent * (face.perspective ? std::min(lo, face.farPlane) : 1.0f) / float(size);
                 const bool edge = (hi - lo > 4.0f * texel) || std::isinf(hi) != std::isinf(lo);
-                level0[size_t(y) * size + x] = std::min(edge ? lo : ShadowMap::kEmpty, marks.thinDepth[size_t(y) * size + x]);
+                level0[yy * side + size_t(x)] = std::min(edge ? lo : ShadowMap::kEmpty, marks.thinDepth[yy * side + size_t(x)]);
             }
         });
         marks.discontinuityDepth.push_back(std::move(level0));
         marks.levelSize.push_back(size);
-        while (marks.levelSize.back() > 1) {
+        while (marks.levelSize.back() > 1) {  // each level the minimum of the 2x2 below
             const int below = marks.levelSize.back(), n = (below + 1) / 2;
             const std::vector<float>& b = marks.discontinuityDepth.back();
-            std::vector<float> up(size_t(n) * n, ShadowMap::kEmpty);
-            for (int y = 0; y < below; ++y)
-                for (int x = 0; x < below; ++x) {
-                    float& u = up[size_t(y / 2) * n + x / 2];
-                    u = std::min(u, b[size_t(y) * below + x]);
+            std::vector<float> up(size_t(n) * n);
+            raster::parallelFor(size_t(n), [&](size_t uy) {
+                const size_t y0 = 2 * uy, y1 = std::min(size_t(below) - 1, y0 + 1);
+                for (size_t ux = 0; ux < size_t(n); ++ux) {
+                    const size_t x0 = 2 * ux, x1 = std::min(size_t(below) - 1, x0 + 1);
+                    up[uy * n + ux] = std::min({b[y0 * below + x0], b[y0 * below + x1], b[y1 * below + x0], b[y1 * below + x1]});
                 }
+            });
             marks.discontinuityDepth.push_back(std::move(up));
             marks.levelSize.push_back(n);
         }
