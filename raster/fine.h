@@ -19,13 +19,17 @@ struct SampleEdgeOffsets {
     int64_t edge[3][S];  // subpixels², added to the edge value at the pixel centre
 };
 
+/// What sample s of the pattern adds to edge k's value at the pixel centre, in subpixels².
+inline int64_t sampleEdgeOffset(const TriangleSetup& t, const SamplePattern& sp, int k, int s) {
+    return int64_t{t.edgeA[k]} * (sp.dx[s] * kSampleOffsetUnitSubpixels) +
+           int64_t{t.edgeB[k]} * (sp.dy[s] * kSampleOffsetUnitSubpixels);
+}
+
 template <int S>
 void computeSampleEdgeOffsets(const TriangleSetup& t, const SamplePattern& sp,
                               SampleEdgeOffsets<S>& out) {
     for (int k = 0; k < 3; ++k)
-        for (int s = 0; s < S; ++s)
-            out.edge[k][s] = int64_t{t.edgeA[k]} * (sp.dx[s] * kSampleOffsetUnitSubpixels) +
-                             int64_t{t.edgeB[k]} * (sp.dy[s] * kSampleOffsetUnitSubpixels);
+        for (int s = 0; s < S; ++s) out.edge[k][s] = sampleEdgeOffset(t, sp, k, s);
 }
 
 /// Biased edge values at the centre of pixel (x, y).

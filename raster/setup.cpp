@@ -55,9 +55,7 @@ bool coversAnySample(const TriangleSetup& t, const SamplePattern& sp) {
             edgesAtPixelCentre(t, x, y, centre);
             for (int s = 0; s < sp.count; ++s) {
                 int64_t any = 0;
-                for (int k = 0; k < 3; ++k)
-                    any |= centre[k] + int64_t{t.edgeA[k]} * (sp.dx[s] * kSampleOffsetUnitSubpixels) +
-                           int64_t{t.edgeB[k]} * (sp.dy[s] * kSampleOffsetUnitSubpixels);
+                for (int k = 0; k < 3; ++k) any |= centre[k] + sampleEdgeOffset(t, sp, k, s);
                 if (any >= 0) return true;
             }
         }

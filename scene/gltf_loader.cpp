@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <limits>
 #include <map>
 #include <set>
@@ -16,6 +14,7 @@
 #include <tiny_gltf.h>
 
 #include "scene/input_error.h"
+#include "scene/ply_loader.h"  // readFileBytes
 
 namespace cuberille::scene {
 namespace {
@@ -713,7 +712,7 @@ std::string placeOfLoadError(bool binary, const std::string& error) {
 /// tinygltf trusts a chunk's own length and copies buffers out of it, so a BIN chunk claiming
 /// bytes past the end of the file would have it read past its allocation.
 /// Returns "" when the container holds, else the place and the problem.
-std::string glbContainerProblem(const std::vector<unsigned char>& bytes) {
+std::string glbContainerProblem(const std::string& bytes) {
     auto u32 = [&](size_t at) {
         uint32_t v;
         std::memcpy(&v, bytes.data() + at, 4);
@@ -748,13 +747,11 @@ GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, f
     bool ok = false;
     if (binary) {
         // Read here (as LoadBinaryFromFile would) so the container is checked before tinygltf parses it.
-        std::ifstream in(path, std::ios::binary);
-        const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        if (!in.good() && !in.eof()) throw InputError(file + ": cannot read file");
+        const std::string bytes = readFileBytes(path);
         if (bytes.size() > std::numeric_limits<uint32_t>::max())
             throw InputError(file + ": " + std::to_string(bytes.size()) + " bytes, more than a GLB can hold (its length is 32 bits)");
         if (const std::string problem = glbContainerProblem(bytes); !problem.empty()) throw InputError(file + ": " + problem);
-        ok = loader.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(), unsigned(bytes.size()),
+        ok = loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(bytes.data()), unsigned(bytes.size()),
                                          path.parent_path().string());
     } else {
         ok = loader.LoadASCIIFromFile(&model, &error, &warning, file);
