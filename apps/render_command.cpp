@@ -430,6 +430,11 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
                         {"thinTriangles", st.thinTriangles},
                         {"bvhBuildMs", sh.bvhBuildMs},
                         {"adjacencyMs", sh.adjacencyMs},
+                        {"bvhUpdated", sh.bvhUpdated},
+                        {"bvhRebuilt", sh.bvhRebuilt},
+                        {"degradation", sh.degradation},
+                        {"bvhUpdateMs", sh.bvhUpdateMs},
+                        {"castersMs", sh.castersMs},
                         {"surfacesMs", sh.surfacesMs},
                         {"mapMs", st.mapMs},
                         {"maskMs", st.maskMs},
@@ -510,6 +515,9 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
                     st.receiverPixels ? 100.0 * double(st.markedPixels) / double(st.receiverPixels) : 0.0,
                     (unsigned long long)st.raysTraced, r.shadows->totalMs, r.shadows->bvhBuildMs, r.shadows->surfacesMs,
                     st.mapMs, st.maskMs);
+        if (r.shadows->bvhUpdated)
+            std::printf("  shadow casters moved: bvh %s in %.1f ms, degradation %.3f\n", r.shadows->bvhRebuilt ? "rebuilt" : "refitted",
+                        r.shadows->bvhUpdateMs, r.shadows->degradation);
     }
 }
 
@@ -570,12 +578,13 @@ int runTurntable(const RenderOptions& o) {
 
 // --animate N: frame i poses the first animation at --time + i / --fps and is written as
 // OUT_00i.ext. The glTF loader poses at load, so each frame loads the file again; the frustum
-// cull's hierarchy is built on the first pose and refitted to each next one (rebuilt when
-// Lauterbach's criterion fires), which --stats reports per frame.
+// cull's hierarchy and the shadow stage's are built on the first pose and refitted to each next
+// one (rebuilt when Lauterbach's criterion fires), which --stats reports per frame.
 int runAnimation(const RenderOptions& o) {
     validate(o);
     raster::ThreadLimit threadLimit(o.threads);
     std::optional<SceneFrustumCull> culling;
+    std::optional<SceneShadows> shadows;
     nlohmann::json frames = nlohmann::json::array();
     for (int i = 0; i < o.animate; ++i) {
         RenderOptions frame = o;
@@ -589,8 +598,10 @@ int runAnimation(const RenderOptions& o) {
             if (culling) culling->update(s);
             else culling.emplace(s);
         }
-        std::optional<SceneShadows> shadows;
-        if (o.shadows.mode != rt::ShadowMode::None) shadows.emplace(s, o.shadows);
+        if (o.shadows.mode != rt::ShadowMode::None) {  // like the cull: built on the first pose, refitted to the next
+            if (shadows) shadows->update(s);
+            else shadows.emplace(s, o.shadows);
+        }
         renderFrame(s, frame, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, r);
         writeSequenceFrame(frame, i, r, frames);
     }

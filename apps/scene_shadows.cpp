@@ -1,5 +1,7 @@
 #include "apps/scene_shadows.h"
 
+#include <stdexcept>
+
 #include "raster/clock.h"
 #include "rt/bvh_build.h"
 #include "scene/input_error.h"
@@ -11,6 +13,28 @@ SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& optio
     bool anyLight = false;
     for (int l = 0; l < s.lighting.lightCount; ++l) anyLight = anyLight || rt::castsShadows(s.lighting.lights[l]);
     if (!anyLight) return;
+    double t0 = raster::nowMs();
+    gatherCasters(s);
+    if (indices_.empty()) return;
+    active_ = true;
+    visibility_.setCasters({positions_, indices_}, ranges_);
+    pendingUpdate_.castersMs = raster::nowMs() - t0;
+    if (options.mode == rt::ShadowMode::Hybrid || options.mode == rt::ShadowMode::RayTraced) {
+        t0 = raster::nowMs();
+        bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, rt::BvhUpdateMethod::Refit);
+        bvhBuildMs_ = raster::nowMs() - t0;
+    }
+    if (options.mode == rt::ShadowMode::Hybrid) {
+        t0 = raster::nowMs();
+        findAdjacency();
+        adjacencyMs_ = raster::nowMs() - t0;
+    }
+}
+
+void SceneShadows::gatherCasters(const scene::Scene& s) {
+    positions_.clear();
+    indices_.clear();
+    ranges_.clear();
     for (const scene::Mesh& m : s.meshes) {
         if (m.alphaMode == raster::AlphaMode::Blend) continue;
         const uint32_t base = uint32_t(positions_.size());
@@ -19,19 +43,32 @@ SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& optio
                            uint32_t(m.positions.size()), m.doubleSided ? raster::CullMode::None : s.cull});
         for (const uint32_t i : m.indices) indices_.push_back(base + i);
     }
-    if (indices_.empty()) return;
+    bounds_ = {};
     for (const glm::vec3& p : positions_) bounds_.grow(p);
-    active_ = true;
-    if (options.mode == rt::ShadowMode::Hybrid || options.mode == rt::ShadowMode::RayTraced) {
-        const double t0 = raster::nowMs();
-        bvh_ = rt::buildBvh({positions_, indices_});
-        bvhBuildMs_ = raster::nowMs() - t0;
+}
+
+// The adjacency matches edges by position, so a pose that pulls apart two vertices that shared a
+// place (a skinned seam) changes it: it is found again for every pose, not carried over.
+void SceneShadows::findAdjacency() { adjacency_ = rt::buildMeshAdjacency({positions_, indices_}); }
+
+void SceneShadows::update(const scene::Scene& s) {
+    if (!active_) return;
+    const double t0 = raster::nowMs();
+    const std::vector<uint32_t> before = indices_;
+    gatherCasters(s);
+    if (indices_ != before) throw std::runtime_error("the animated scene changed its shadow casters' triangles");
+    visibility_.setCasters({positions_, indices_}, ranges_);
+    pendingUpdate_ = {};
+    pendingUpdate_.castersMs = raster::nowMs() - t0;
+    pendingUpdate_.bvhUpdated = true;
+    const double t1 = raster::nowMs();
+    if (bvh_) {
+        const rt::BvhUpdateReport report = bvh_->update({positions_, indices_});
+        pendingUpdate_.bvhRebuilt = report.rebuilt;
+        pendingUpdate_.degradation = report.degradation;
     }
-    if (options.mode == rt::ShadowMode::Hybrid) {
-        const double t0 = raster::nowMs();
-        adjacency_ = rt::buildMeshAdjacency({positions_, indices_});
-        adjacencyMs_ = raster::nowMs() - t0;
-    }
+    if (options_.mode == rt::ShadowMode::Hybrid) findAdjacency();
+    pendingUpdate_.bvhUpdateMs = raster::nowMs() - t1;
 }
 
 raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height, ShadowFrameStats& stats) {
@@ -39,6 +76,12 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     stats.soft = options_.soft;
     stats.casterTriangles = indices_.size() / 3;
     if (!bvhReported_) stats.bvhBuildMs = bvhBuildMs_, stats.adjacencyMs = adjacencyMs_, bvhReported_ = true;
+    stats.bvhUpdated = pendingUpdate_.bvhUpdated;
+    stats.bvhRebuilt = pendingUpdate_.bvhRebuilt;
+    stats.degradation = pendingUpdate_.degradation;
+    stats.bvhUpdateMs = pendingUpdate_.bvhUpdateMs;
+    stats.castersMs = pendingUpdate_.castersMs;
+    pendingUpdate_ = {};
     raster::Lighting lighting = s.lighting;
     if (!active_) return lighting;
     const rt::TriangleMeshView casters{positions_, indices_};
@@ -46,10 +89,10 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     // The visibility buffer is a pass of its own, always in the standard depth convention.
     scene::Camera standard = s.camera;
     standard.reversedDepth = false;
-    const rt::ScreenSurfaces surfaces =
-        rt::findScreenSurfaces(casters, ranges_, standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
+    const rt::ScreenSurfaces& surfaces = visibility_.draw(standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
     stats.surfacesMs = raster::nowMs() - t0;
-    masks_ = rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &*bvh_ : nullptr, bounds_, adjacency_.empty() ? nullptr : &adjacency_}, options_, gpu_);
+    rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &bvh_->bvh() : nullptr, bounds_, adjacency_.empty() ? nullptr : &adjacency_},
+                       options_, gpu_, masks_);
     stats.shadows = masks_.stats;
     for (int l = 0; l < lighting.lightCount; ++l)
         if (!masks_.visibility[size_t(l)].empty()) lighting.lights[l].visibility = masks_.visibility[size_t(l)].data();

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rt/bvh.h"
+#include "rt/deforming_bvh.h"
 #include "rt/screen_surfaces.h"
 #include "rt/shadows.h"
 #include "scene/scene.h"
@@ -25,6 +26,14 @@ struct ShadowFrameStats {
     size_t casterTriangles = 0;
     double bvhBuildMs = 0.0;   // once per scene, reported with the first frame
     double adjacencyMs = 0.0;  // hybrid: the casters' edge adjacency, likewise
+    // Animated scenes: how the hierarchy followed the casters to this frame's pose (update()).
+    bool bvhUpdated = false;   // the casters moved since the last frame; the fields below say how
+    bool bvhRebuilt = false;   // Lauterbach's criterion passed its threshold: rebuilt, not refitted
+    double degradation = 0.0;  // the criterion's value after the refit (rt/bvh_refit.h)
+    double bvhUpdateMs = 0.0;  // the refit or rebuild, and for hybrid the edge adjacency found again
+    /// The casters gathered from the scene and their planes found for the visibility buffer: once
+    /// per pose (at construction, reported with the first frame, and in each update()).
+    double castersMs = 0.0;
     double surfacesMs = 0.0;  // the visibility buffer and surface reconstruction
     double totalMs = 0.0;     // the whole stage this frame; the BVH build (at construction) is not in it
 };
@@ -36,6 +45,12 @@ public:
     /// Whether the stage runs at all: a mode other than none, casters and a shadow-casting light.
     bool active() const { return active_; }
 
+    /// The next pose of an animated scene (the same meshes and triangles, moved): the casters
+    /// are gathered again and their hierarchy refitted to them, or rebuilt when Lauterbach's
+    /// criterion fires (rt/deforming_bvh.h), instead of built anew each frame; the next run()
+    /// reports which. Throws std::runtime_error when the casters' triangles changed.
+    void update(const scene::Scene& scene);
+
     /// One frame's masks for the scene's current camera; returns the lighting to shade with
     /// (the scene's lights, each pointing at its mask). Valid until the next call.
     raster::Lighting run(const scene::Scene& scene, int width, int height, ShadowFrameStats& stats);
@@ -44,18 +59,23 @@ public:
     const std::vector<uint8_t>& markedPixels() const { return masks_.marked; }
 
 private:
+    void gatherCasters(const scene::Scene& scene);
+    void findAdjacency();
+
     rt::ShadowOptions options_;
     bool active_ = false;
     std::vector<glm::vec3> positions_;
     std::vector<uint32_t> indices_;
     std::vector<rt::CasterRange> ranges_;
     rt::Aabb bounds_;
-    std::optional<rt::Bvh> bvh_;
+    std::optional<rt::DeformingBvh> bvh_;  // hybrid and raytraced only
     double bvhBuildMs_ = 0.0;
     rt::MeshAdjacency adjacency_;  // hybrid only: thin casters are looked for at silhouettes
     double adjacencyMs_ = 0.0;
     bool bvhReported_ = false;
-    rt::ShadowMasks masks_;
+    ShadowFrameStats pendingUpdate_;  // what construction or update() did, for the next run() to report
+    rt::VisibilityBuffer visibility_;  // per pose: the casters' planes and id colours
+    rt::ShadowMasks masks_;            // reused from frame to frame
     // The software GPU the visibility buffer and the shadow maps are drawn with, one pass after
     // another: its render targets are allocated once and reused by every later frame.
     raster::Pipeline gpu_;

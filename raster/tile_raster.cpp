@@ -363,11 +363,22 @@ private:
     ShadeQueue queue_;  // a member, so the compiler sees it alias nothing (the loop vectorises)
 };
 
+/// Asks for every cache line of a set-up record, ahead of its use.
+inline void prefetchSetup(const TriangleSetup& t) {
+    const char* p = reinterpret_cast<const char*>(&t);
+    for (size_t line = 0; line < sizeof(TriangleSetup); line += 64) __builtin_prefetch(p + line);
+}
+
 template <int S, class Shader>
 void rasterizeBinned(const TriangleBatch& batch, int tile, const Shader& shader,
                      const SamplePattern& sp, const TileTarget& target) {
     const uint32_t begin = batch.tileOffsets[tile], end = batch.tileOffsets[tile + 1];
+    // A dense mesh's set-ups are read in tile order, far from the order the front end wrote
+    // them in: each is a cache miss. Fetching a few ahead overlaps those misses with the
+    // rasterization of the triangles before them.
+    constexpr uint32_t kPrefetchAhead = 8;
     for (uint32_t i = begin; i < end; ++i) {
+        if (i + kPrefetchAhead < end) prefetchSetup(batch.triangles[batch.tileTriangles[i + kPrefetchAhead]]);
         const uint32_t index = batch.tileTriangles[i];
         const TriangleSetup& t = batch.triangles[index];
         TriangleRaster<S, Shader>(t, batch.varyings.data() + t.varyingOffset, shader, sp,

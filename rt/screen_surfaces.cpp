@@ -66,52 +66,66 @@ bool ScreenSurfaces::surfaceAt(int x, int y, Surface& out) const {
     return true;
 }
 
-ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,
-                                  const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu) {
-    std::vector<glm::vec4> colors(casters.triangleCount());
-    for (uint32_t t = 0; t < colors.size(); ++t) colors[t] = idColor(t);
+void VisibilityBuffer::setCasters(const TriangleMeshView& casters, std::span<const CasterRange> ranges) {
+    casters_ = casters;
+    ranges_.assign(ranges.begin(), ranges.end());
+    const size_t triangles = casters.triangleCount();
+    idColors_.resize(triangles);
+    for (uint32_t t = 0; t < triangles; ++t) idColors_[t] = idColor(t);
+    // Each range is drawn over its own vertices (as the scene draws its mesh), so the vertex
+    // stage shades each vertex once: indices are rebased to the range's first vertex.
+    rangeIndices_.assign(casters.indices.begin(), casters.indices.end());
+    for (const CasterRange& r : ranges)
+        for (size_t i = size_t(r.firstTriangle) * 3; i < size_t(r.firstTriangle + r.triangleCount) * 3; ++i)
+            rangeIndices_[i] -= r.firstVertex;
+    std::vector<TrianglePlane>& planes = surfaces_.planes;
+    planes.assign(triangles, TrianglePlane{});
+    raster::parallelFor((triangles + 4095) / 4096, [&](size_t chunk) {
+        for (size_t t = chunk * 4096; t < std::min(triangles, (chunk + 1) * 4096); ++t) {
+            const glm::vec3 a = casters.vertex(t, 0), b = casters.vertex(t, 1), c = casters.vertex(t, 2);
+            const glm::vec3 normal = glm::cross(b - a, c - a);
+            const float length = glm::length(normal);
+            if (!(length > 0.0f) || !std::isfinite(length)) continue;  // degenerate: no surface
+            planes[t].normal = normal / length;
+            planes[t].offset = glm::dot(planes[t].normal, a);
+        }
+    });
+}
+
+const ScreenSurfaces& VisibilityBuffer::draw(const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu) {
     raster::FramebufferDesc desc;
     desc.widthPixels = width;
     desc.heightPixels = height;
     desc.samples = 1;
     gpu.beginFrame(desc);
-    // Each range is drawn over its own vertices (as the scene draws its mesh), so the vertex
-    // stage shades each vertex once: indices are rebased to the range's first vertex.
-    std::vector<uint32_t> local(casters.indices.begin(), casters.indices.end());
-    for (const CasterRange& r : ranges)
-        for (size_t i = size_t(r.firstTriangle) * 3; i < size_t(r.firstTriangle + r.triangleCount) * 3; ++i)
-            local[i] -= r.firstVertex;
-    for (const CasterRange& r : ranges) {
+    for (const CasterRange& r : ranges_) {
         raster::DrawCall d;
         d.space = raster::PositionSpace::Clip;
         d.clipFromObject = clipFromWorld;
-        d.positions = casters.positions.subspan(r.firstVertex, r.vertexCount);
-        d.indices = std::span<const uint32_t>(local).subspan(size_t(r.firstTriangle) * 3, size_t(r.triangleCount) * 3);
-        d.triangleColors = std::span<const glm::vec4>(colors).subspan(r.firstTriangle, r.triangleCount);
+        d.positions = casters_.positions.subspan(r.firstVertex, r.vertexCount);
+        d.indices = std::span<const uint32_t>(rangeIndices_).subspan(size_t(r.firstTriangle) * 3, size_t(r.triangleCount) * 3);
+        d.triangleColors = std::span<const glm::vec4>(idColors_).subspan(r.firstTriangle, r.triangleCount);
         d.state.shading = raster::ShadingModel::ConstantColor;
         d.state.cull = r.cull;
         gpu.draw(d);
     }
     gpu.endFrame();
 
-    ScreenSurfaces s;
+    ScreenSurfaces& s = surfaces_;
     s.width = width;
     s.height = height;
     s.worldFromClip = glm::inverse(clipFromWorld);
-    s.planes.resize(casters.triangleCount());
-    raster::parallelFor((s.planes.size() + 4095) / 4096, [&](size_t chunk) {
-        for (size_t t = chunk * 4096; t < std::min(s.planes.size(), (chunk + 1) * 4096); ++t) {
-            const glm::vec3 a = casters.vertex(t, 0), b = casters.vertex(t, 1), c = casters.vertex(t, 2);
-            const glm::vec3 normal = glm::cross(b - a, c - a);
-            const float length = glm::length(normal);
-            if (!(length > 0.0f) || !std::isfinite(length)) continue;  // degenerate: no surface
-            s.planes[t].normal = normal / length;
-            s.planes[t].offset = glm::dot(s.planes[t].normal, a);
-        }
-    });
     const float farthest = readIds(gpu.framebuffer(), s.triangle);
+    s.seenHull.clear();
     if (farthest >= 0.0f) s.seenHull = frustumCorners(s.worldFromClip, farthest);
     return s;
+}
+
+ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,
+                                  const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu) {
+    VisibilityBuffer buffer;
+    buffer.setCasters(casters, ranges);
+    return buffer.draw(clipFromWorld, width, height, gpu);
 }
 
 }  // namespace cuberille::rt

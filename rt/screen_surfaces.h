@@ -57,7 +57,29 @@ struct ScreenSurfaces {
     bool surfaceAt(int x, int y, Surface& out) const;
 };
 
-/// Draws the visibility buffer with `gpu`, whose render targets are reused from frame to frame.
+/// Visibility buffers of one set of casters, frame after frame. What depends on the casters alone
+/// — each triangle's plane and its id as a flat colour, the indices rebased to each range's first
+/// vertex — is made once per pose (setCasters), not once per frame, and the per-pixel storage is
+/// reused: a static scene seen from a moving camera pays for the draw and the ids alone.
+class VisibilityBuffer {
+public:
+    /// The casters of the frames to come (a new pose of an animated scene: call again). They must
+    /// stay alive, unmoved, until the next call.
+    void setCasters(const TriangleMeshView& casters, std::span<const CasterRange> ranges);
+
+    /// Draws this frame's visibility buffer with `gpu`, whose render targets are reused from frame
+    /// to frame. The surfaces are valid until the next draw() or setCasters().
+    const ScreenSurfaces& draw(const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu);
+
+private:
+    TriangleMeshView casters_;
+    std::vector<CasterRange> ranges_;
+    std::vector<uint32_t> rangeIndices_;  // the casters' indices, rebased to each range's first vertex
+    std::vector<glm::vec4> idColors_;     // per triangle, its id as ConstantColor draws it
+    ScreenSurfaces surfaces_;             // planes set per pose, the rest per frame
+};
+
+/// One visibility buffer, drawn with `gpu` (a VisibilityBuffer used once).
 ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,
                                   const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu);
 

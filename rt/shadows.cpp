@@ -608,10 +608,19 @@ bool castsShadows(const raster::Light& light) {
 ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting,
                            const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu) {
     ShadowMasks out;
+    computeShadows(surfaces, lighting, casters, options, gpu, out);
+    return out;
+}
+
+void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting, const ShadowCasters& casters,
+                    const ShadowOptions& options, raster::Pipeline& gpu, ShadowMasks& out) {
     out.width = surfaces.width;
     out.height = surfaces.height;
+    out.stats = {};
+    out.marked.clear();
     out.visibility.resize(size_t(lighting.lightCount));
-    if (options.mode == ShadowMode::None || casters.mesh.triangleCount() == 0) return out;
+    for (std::vector<float>& mask : out.visibility) mask.clear();  // unshadowed until computed (storage kept)
+    if (options.mode == ShadowMode::None || casters.mesh.triangleCount() == 0) return;
     const size_t pixels = size_t(surfaces.width) * surfaces.height;
     out.marked.assign(pixels, 0);
     for (int l = 0; l < lighting.lightCount; ++l) {
@@ -655,7 +664,6 @@ ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lightin
         }
         out.stats.maskMs += raster::nowMs() - t0;
     }
-    return out;
 }
 
 }  // namespace cuberille::rt

@@ -75,6 +75,10 @@ struct ShadowCasters {
 /// `gpu` draws the shadow maps; its render targets are reused from frame to frame.
 ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting,
                            const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu);
+/// The same into `out`, whose storage is reused (a renderer keeps one from frame to frame, so a
+/// frame's masks cost no fresh pages).
+void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting, const ShadowCasters& casters,
+                    const ShadowOptions& options, raster::Pipeline& gpu, ShadowMasks& out);
 
 /// Whether a light casts shadows at all in this stage (a light of zero intensity does not).
 bool castsShadows(const raster::Light& light);

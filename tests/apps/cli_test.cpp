@@ -348,10 +348,29 @@ TEST_F(Cli, AnimatedGltfWithFrustumCullingAndShadowsIsTheSameForAnyThreadCount) 
     EXPECT_TRUE(first["rebuilt"].get<bool>()) << "built on the first pose";
     EXPECT_FALSE(stats["frames"][1]["frustumCull"]["rebuilt"].get<bool>()) << "refitted to the next";
     EXPECT_GT(stats["frames"][1]["shadows"]["receiverPixels"].get<uint64_t>(), 0u);
+    EXPECT_FALSE(stats["frames"][0]["shadows"]["bvhUpdated"].get<bool>()) << "the shadow BVH is built on the first pose";
+    EXPECT_TRUE(stats["frames"][1]["shadows"]["bvhUpdated"].get<bool>()) << "and follows the next";
+    EXPECT_FALSE(stats["frames"][1]["shadows"]["bvhRebuilt"].get<bool>()) << "a sliding cube is refitted";
     // --animate is for glTF only, and exclusive with --turntable.
     EXPECT_EQ(run("render " + write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").string() + " --animate 2 --out " +
                   (dir_ / "x.png").string()).exitCode, 2);
     EXPECT_EQ(run("render " + gltf.string() + " --animate 2 --turntable 2 --out " + (dir_ / "x.png").string()).exitCode, 2);
+}
+
+TEST_F(Cli, AnAnimationsShadowsFromARefittedHierarchyAreThoseOfAFreshOne) {
+    // Frame 2 at 2 frames a second is posed at 1 s; rendered alone at --time 1 its shadow stage
+    // builds its hierarchy on that pose instead of refitting the first one's.
+    const fs::path gltf = dir_ / "slide.gltf";
+    writeAnimatedGltf(gltf);
+    for (const char* mode : {"hybrid", "raytraced"}) {
+        const std::string common = "render " + gltf.string() + " --camera-index 0 --width 96 --height 64 --shadow-map-size 256 --shadows " + mode;
+        const std::string name = mode;
+        ASSERT_EQ(run(common + " --animate 3 --fps 2 --out " + (dir_ / (name + ".png")).string()).exitCode, 0);
+        ASSERT_EQ(run(common + " --time 1 --out " + (dir_ / (name + "_alone.png")).string()).exitCode, 0);
+        const std::string animated = fileBytes(dir_ / (name + "_002.png"));
+        ASSERT_FALSE(animated.empty());
+        EXPECT_EQ(animated, fileBytes(dir_ / (name + "_alone.png"))) << mode;
+    }
 }
 
 TEST_F(Cli, ExplainWritesEveryStageAndRefusesBadInputWithExitTwo) {

@@ -1,0 +1,135 @@
+// The shadow stage wired to an animated scene (apps/scene_shadows.h): its hierarchy follows the
+// casters from pose to pose by refitting, is rebuilt when Lauterbach's criterion says so, and
+// the masks it gives are those of a stage built fresh on the same pose, pixel for pixel.
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "apps/scene_shadows.h"
+
+namespace cuberille {
+namespace {
+
+constexpr int kWidth = 96, kHeight = 72;
+
+/// A ground quad under a sheet of small triangles (a 12 x 12 grid, two triangles a cell, each
+/// with its own three vertices) held up over it, a sun from above and to the side, a camera
+/// looking down at both. `pose` moves each sheet triangle's vertices, given the triangle's index.
+template <class Pose>
+scene::Scene sheetOverGround(Pose pose) {
+    scene::Scene s;
+    scene::Mesh ground;
+    ground.positions = {{-4, 0, -4}, {4, 0, -4}, {4, 0, 4}, {-4, 0, 4}};
+    ground.normals.assign(4, glm::vec3(0, 1, 0));
+    ground.indices = {0, 2, 1, 0, 3, 2};
+    ground.doubleSided = true;
+    s.meshes.push_back(ground);
+    scene::Mesh sheet;
+    constexpr int n = 12;
+    auto corner = [](int i, int j) { return glm::vec3(-1.5f + 3.0f * float(i) / n, 1.0f, -1.5f + 3.0f * float(j) / n); };
+    auto triangle = [&](const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
+        const uint32_t t = uint32_t(sheet.indices.size() / 3);
+        for (const glm::vec3& p : {a, b, c}) {
+            sheet.indices.push_back(uint32_t(sheet.positions.size()));
+            sheet.positions.push_back(pose(p, t));
+        }
+    };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            triangle(corner(i, j), corner(i, j + 1), corner(i + 1, j));
+            triangle(corner(i + 1, j), corner(i, j + 1), corner(i + 1, j + 1));
+        }
+    sheet.normals.assign(sheet.positions.size(), glm::vec3(0, 1, 0));
+    sheet.doubleSided = true;
+    s.meshes.push_back(sheet);
+    s.camera.position = {0, 7, 5};
+    s.camera.target = {0, 0, 0};
+    s.lighting = raster::Lighting::directional(glm::normalize(glm::vec3(0.3f, 1.0f, 0.2f)), glm::vec3(1.0f), glm::vec3(0.1f));
+    return s;
+}
+
+glm::vec3 still(const glm::vec3& p, uint32_t) { return p; }
+glm::vec3 slid(const glm::vec3& p, uint32_t) { return p + glm::vec3(0.7f, 0.2f, -0.4f); }
+/// Every triangle thrown its own way (a hash of its index), as in BvhRefit's exploding soup:
+/// neighbours part, and boxes built around the first pose balloon.
+glm::vec3 exploded(const glm::vec3& p, uint32_t t) {
+    auto unit = [](uint32_t h) { return float((h * 2654435761u) >> 8) / float(1u << 24) * 2.0f - 1.0f; };
+    return p + 2.0f * glm::vec3(unit(t * 3 + 1), 0.4f * (unit(t * 3 + 2) + 1.0f), unit(t * 3 + 3));
+}
+
+std::vector<float> mask(apps::SceneShadows& stage, const scene::Scene& s, apps::ShadowFrameStats& stats) {
+    const raster::Lighting lit = stage.run(s, kWidth, kHeight, stats);
+    return {lit.lights[0].visibility, lit.lights[0].visibility + size_t(kWidth) * kHeight};
+}
+
+size_t shadowedPixels(const std::vector<float>& m) {
+    size_t n = 0;
+    for (const float v : m) n += v < 1.0f;
+    return n;
+}
+
+class AnimatedShadows : public ::testing::TestWithParam<rt::ShadowMode> {
+protected:
+    rt::ShadowOptions options() const {
+        rt::ShadowOptions o;
+        o.mode = GetParam();
+        o.mapSizeTexels = 256;
+        return o;
+    }
+};
+
+TEST_P(AnimatedShadows, RigidMotionIsRefittedAndShadowsAsAFreshStage) {
+    const scene::Scene first = sheetOverGround(still), next = sheetOverGround(slid);
+    apps::SceneShadows stage(first, options());
+    apps::ShadowFrameStats stats;
+    const std::vector<float> before = mask(stage, first, stats);
+    EXPECT_FALSE(stats.bvhUpdated) << "the first frame builds";
+    stage.update(next);
+    const std::vector<float> after = mask(stage, next, stats);
+    EXPECT_TRUE(stats.bvhUpdated);
+    EXPECT_FALSE(stats.bvhRebuilt) << "a translation leaves every box's shape as it was";
+    EXPECT_LT(stats.degradation, 0.05);
+    apps::SceneShadows fresh(next, options());
+    apps::ShadowFrameStats freshStats;
+    EXPECT_EQ(after, mask(fresh, next, freshStats)) << "a refitted hierarchy finds the same occluders";
+    EXPECT_NE(before, after) << "the sheet's shadow moved";
+    EXPECT_GT(shadowedPixels(after), size_t(kWidth * kHeight / 50)) << "the sheet shadows the ground";
+    EXPECT_FALSE(freshStats.bvhUpdated);
+    stage.update(next);  // stats are per frame: a second update reports again, then nothing
+    mask(stage, next, stats);
+    EXPECT_TRUE(stats.bvhUpdated);
+    mask(stage, next, stats);
+    EXPECT_FALSE(stats.bvhUpdated);
+}
+
+TEST_P(AnimatedShadows, AnExplodingMeshRebuildsAndShadowsAsAFreshStage) {
+    const scene::Scene first = sheetOverGround(still), next = sheetOverGround(exploded);
+    apps::SceneShadows stage(first, options());
+    apps::ShadowFrameStats stats;
+    mask(stage, first, stats);
+    stage.update(next);
+    const std::vector<float> after = mask(stage, next, stats);
+    EXPECT_TRUE(stats.bvhRebuilt) << "degradation " << stats.degradation;
+    EXPECT_GT(stats.degradation, 0.4);
+    apps::SceneShadows fresh(next, options());
+    apps::ShadowFrameStats freshStats;
+    EXPECT_EQ(after, mask(fresh, next, freshStats));
+}
+
+TEST_P(AnimatedShadows, ChangedTrianglesAreRefused) {
+    scene::Scene first = sheetOverGround(still), next = sheetOverGround(slid);
+    next.meshes[1].indices.resize(next.meshes[1].indices.size() - 3);
+    apps::SceneShadows stage(first, options());
+    EXPECT_THROW(stage.update(next), std::runtime_error);
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, AnimatedShadows, ::testing::Values(rt::ShadowMode::Hybrid, rt::ShadowMode::RayTraced),
+                         [](const ::testing::TestParamInfo<rt::ShadowMode>& p) {
+                             return p.param == rt::ShadowMode::Hybrid ? std::string("Hybrid") : std::string("RayTraced");
+                         });
+
+}  // namespace
+}  // namespace cuberille
