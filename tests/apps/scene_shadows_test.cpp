@@ -119,6 +119,26 @@ TEST_P(AnimatedShadows, AnExplodingMeshRebuildsAndShadowsAsAFreshStage) {
     EXPECT_EQ(after, mask(fresh, next, freshStats));
 }
 
+TEST_P(AnimatedShadows, AMovedCameraAndANewSizeGetTheMasksOfAFreshStage) {
+    // The stage keeps its visibility buffer's per-pose data and its masks' storage between
+    // frames; nothing of one frame may leak into the next.
+    scene::Scene s = sheetOverGround(still);
+    apps::SceneShadows stage(s, options());
+    apps::ShadowFrameStats stats;
+    mask(stage, s, stats);
+    s.camera.position = {5, 3, -4};
+    const raster::Lighting moved = stage.run(s, kWidth / 2, kHeight + 8, stats);
+    apps::SceneShadows fresh(s, options());
+    apps::ShadowFrameStats freshStats;
+    const raster::Lighting reference = fresh.run(s, kWidth / 2, kHeight + 8, freshStats);
+    const size_t pixels = size_t(kWidth / 2) * (kHeight + 8);
+    EXPECT_EQ(std::vector<float>(moved.lights[0].visibility, moved.lights[0].visibility + pixels),
+              std::vector<float>(reference.lights[0].visibility, reference.lights[0].visibility + pixels));
+    EXPECT_EQ(stats.shadows.receiverPixels, freshStats.shadows.receiverPixels);
+    EXPECT_EQ(stats.shadows.markedPixels, freshStats.shadows.markedPixels);
+    EXPECT_EQ(stage.markedPixels(), fresh.markedPixels());
+}
+
 TEST_P(AnimatedShadows, ChangedTrianglesAreRefused) {
     scene::Scene first = sheetOverGround(still), next = sheetOverGround(slid);
     next.meshes[1].indices.resize(next.meshes[1].indices.size() - 3);
