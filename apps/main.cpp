@@ -29,7 +29,7 @@ void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int&
 
 /// The render options parsed from names after CLI11 has read them.
 struct RenderNames {
-    std::string view = "color", shadows = "none", textureFilter = "file", depth = "standard";
+    std::string view = "color", shadows = "none", textureFilter = "file", depth = "standard", bvhUpdate = "refit";
 };
 
 void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNames& names) {
@@ -78,6 +78,11 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
         ->capture_default_str();
     render->add_flag("--frustum-cull", o.frustumCull,
                      "3D scenes: cull triangles against the view frustum through a BVH (refitted per --animate frame)");
+    render->add_option("--bvh-update", names.bvhUpdate,
+                       "With --animate: how the frustum cull's and the shadow stage's BVHs follow each pose: refit "
+                       "(bottom-up, rebuilt past Lauterbach's 0.4), lazy (Larsson's: the upper half refitted, the "
+                       "rest on first touch by a ray) or rebuild (a new tree every frame)")
+        ->capture_default_str();
     render->add_option("--pixel-error", o.pixelError,
                        "Voxel models: refine blocks until a voxel projects to at most this many pixels "
                        "(0: always the finest level)")
@@ -275,6 +280,7 @@ int main(int argc, char** argv) {
             renderOptions.shadows.mode = cuberille::apps::parseShadowMode(renderNames.shadows);
             renderOptions.textureFilter = cuberille::apps::parseTextureFilter(renderNames.textureFilter);
             renderOptions.depth = cuberille::apps::parseDepthConvention(renderNames.depth);
+            renderOptions.bvhUpdate = cuberille::apps::parseBvhUpdate(renderNames.bvhUpdate);
             return cuberille::apps::runRenderCommand(renderOptions);
         }
         if (app.got_subcommand("pack")) return cuberille::apps::runPackCommand(packOptions);

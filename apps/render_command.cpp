@@ -131,6 +131,22 @@ raster::DepthConvention parseDepthConvention(const std::string& name) {
     throw scene::InputError("--depth: '" + name + "' is not standard or reversed");
 }
 
+rt::BvhUpdateMethod parseBvhUpdate(const std::string& name) {
+    if (name == "refit") return rt::BvhUpdateMethod::Refit;
+    if (name == "lazy") return rt::BvhUpdateMethod::Lazy;
+    if (name == "rebuild") return rt::BvhUpdateMethod::Rebuild;
+    throw scene::InputError("--bvh-update: '" + name + "' is not refit, lazy or rebuild");
+}
+
+const char* bvhUpdateName(rt::BvhUpdateMethod method) {
+    switch (method) {
+        case rt::BvhUpdateMethod::Refit: return "refit";
+        case rt::BvhUpdateMethod::Lazy: return "lazy";
+        case rt::BvhUpdateMethod::Rebuild: return "rebuild";
+    }
+    return "?";
+}
+
 const char* textureFilterName(TextureFilterOverride f) {
     switch (f) {
         case TextureFilterOverride::File: return "file";
@@ -596,11 +612,11 @@ int runAnimation(const RenderOptions& o) {
         r.load = s.loadStats;
         if (o.frustumCull) {
             if (culling) culling->update(s);
-            else culling.emplace(s);
+            else culling.emplace(s, o.bvhUpdate);
         }
         if (o.shadows.mode != rt::ShadowMode::None) {  // like the cull: built on the first pose, refitted to the next
             if (shadows) shadows->update(s);
-            else shadows.emplace(s, o.shadows);
+            else shadows.emplace(s, o.shadows, o.bvhUpdate);
         }
         renderFrame(s, frame, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, r);
         writeSequenceFrame(frame, i, r, frames);

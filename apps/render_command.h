@@ -40,6 +40,7 @@ struct RenderOptions {
     int animate = 0;          // glTF, > 0: that many frames of the animation from --time, OUT_000.ext ...
     float fps = 30.0f;        // --animate: frames a second of animation time
     bool frustumCull = false; // 3D scenes: cull triangles against the frustum through a BVH
+    rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit;  // --animate: how BVHs follow each pose
     int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)
     TextureFilterOverride textureFilter = TextureFilterOverride::File;
     raster::DepthConvention depth = raster::DepthConvention::Standard;  // --depth standard|reversed
@@ -71,6 +72,8 @@ View parseView(const std::string& name);  // throws scene::InputError
 TextureFilterOverride parseTextureFilter(const std::string& name);  // throws scene::InputError
 const char* textureFilterName(TextureFilterOverride filter);
 raster::DepthConvention parseDepthConvention(const std::string& name);  // throws scene::InputError
+rt::BvhUpdateMethod parseBvhUpdate(const std::string& name);             // throws scene::InputError
+const char* bvhUpdateName(rt::BvhUpdateMethod method);
 /// The frame options every rendering command takes (--width, --height, --msaa, --threads);
 /// throws scene::InputError naming the option.
 void validateFrameOptions(int width, int height, int msaa, int threads);

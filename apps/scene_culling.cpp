@@ -20,10 +20,10 @@ void SceneFrustumCull::gather(const scene::Scene& s) {
     }
 }
 
-SceneFrustumCull::SceneFrustumCull(const scene::Scene& s) {
+SceneFrustumCull::SceneFrustumCull(const scene::Scene& s, rt::BvhUpdateMethod method) {
     const double t0 = raster::nowMs();
     gather(s);
-    bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, rt::BvhUpdateMethod::Refit);
+    bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, method);
     pending_.buildMs = raster::nowMs() - t0;
     pending_.rebuilt = true;
 }

@@ -28,7 +28,9 @@ struct FrustumCullStats {
 
 class SceneFrustumCull {
 public:
-    explicit SceneFrustumCull(const scene::Scene& scene);
+    /// `method`: how update() follows each new pose (rt/deforming_bvh.h). The cull reads every box
+    /// it reaches, so a lazy tree is brought up to date first: lazy saves the cull nothing.
+    explicit SceneFrustumCull(const scene::Scene& scene, rt::BvhUpdateMethod method = rt::BvhUpdateMethod::Refit);
 
     /// A new pose of the same scene (same meshes, same triangles, moved vertices): refit.
     void update(const scene::Scene& scene);

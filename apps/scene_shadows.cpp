@@ -8,7 +8,8 @@
 
 namespace cuberille::apps {
 
-SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& options) : options_(options) {
+SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& options, rt::BvhUpdateMethod bvhUpdate)
+    : options_(options) {
     if (options.mode == rt::ShadowMode::None) return;
     bool anyLight = false;
     for (int l = 0; l < s.lighting.lightCount; ++l) anyLight = anyLight || rt::castsShadows(s.lighting.lights[l]);
@@ -21,7 +22,7 @@ SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& optio
     pendingUpdate_.castersMs = raster::nowMs() - t0;
     if (options.mode == rt::ShadowMode::Hybrid || options.mode == rt::ShadowMode::RayTraced) {
         t0 = raster::nowMs();
-        bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, rt::BvhUpdateMethod::Refit);
+        bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, bvhUpdate);
         bvhBuildMs_ = raster::nowMs() - t0;
     }
     if (options.mode == rt::ShadowMode::Hybrid) {
@@ -91,8 +92,11 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     standard.reversedDepth = false;
     const rt::ScreenSurfaces& surfaces = visibility_.draw(standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
     stats.surfacesMs = raster::nowMs() - t0;
-    rt::computeShadows(surfaces, s.lighting, {casters, bvh_ ? &bvh_->bvh() : nullptr, bounds_, adjacency_.empty() ? nullptr : &adjacency_},
-                       options_, gpu_, masks_);
+    const rt::ShadowCasters shadowCasters{.mesh = casters,
+                                          .bounds = bounds_,
+                                          .adjacency = adjacency_.empty() ? nullptr : &adjacency_,
+                                          .deforming = bvh_ ? &*bvh_ : nullptr};
+    rt::computeShadows(surfaces, s.lighting, shadowCasters, options_, gpu_, masks_);
     stats.shadows = masks_.stats;
     for (int l = 0; l < lighting.lightCount; ++l)
         if (!masks_.visibility[size_t(l)].empty()) lighting.lights[l].visibility = masks_.visibility[size_t(l)].data();

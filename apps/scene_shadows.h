@@ -40,7 +40,10 @@ struct ShadowFrameStats {
 
 class SceneShadows {
 public:
-    SceneShadows(const scene::Scene& scene, const rt::ShadowOptions& options);
+    /// `bvhUpdate`: how update() makes the casters' hierarchy follow each new pose
+    /// (rt/deforming_bvh.h); with Lazy the shadow rays refresh the lower boxes they reach.
+    SceneShadows(const scene::Scene& scene, const rt::ShadowOptions& options,
+                 rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit);
 
     /// Whether the stage runs at all: a mode other than none, casters and a shadow-casting light.
     bool active() const { return active_; }

@@ -11,7 +11,11 @@ DeformingBvh::DeformingBvh(const TriangleMeshView& mesh, BvhUpdateMethod method,
       threshold_(rebuildThreshold),
       mesh_(mesh) {
     bvh_ = std::make_unique<Bvh>(buildBvh(mesh, build_));
-    if (method_ == BvhUpdateMethod::Lazy) lazy_.emplace(*bvh_);
+    if (method_ == BvhUpdateMethod::Lazy) {
+        // Every box of a new tree is current: the first pose is answered before any update.
+        lazy_.emplace(*bvh_);
+        lazy_->updateAfterFullRefit(mesh_);
+    }
 }
 
 void DeformingBvh::rebuild() {

@@ -333,7 +333,7 @@ private:
 
     bool occluded(const glm::vec3& origin, const glm::vec3& direction, float distance) const {
         Ray ray{origin, direction, 0.0f, std::isinf(distance) ? distance : distance * (1.0f - 1e-4f)};
-        return anyHit(*casters_.bvh, casters_.mesh, ray);
+        return casters_.deforming ? casters_.deforming->anyHit(ray) : anyHit(*casters_.bvh, casters_.mesh, ray);
     }
 
     // ---- per-face marks for the hybrid method -------------------------------------------------

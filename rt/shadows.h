@@ -26,6 +26,7 @@
 #include "raster/pipeline.h"
 #include "rt/aabb.h"
 #include "rt/bvh.h"
+#include "rt/deforming_bvh.h"
 #include "rt/mesh_adjacency.h"
 #include "rt/screen_surfaces.h"
 #include "rt/triangle_mesh.h"
@@ -70,6 +71,9 @@ struct ShadowCasters {
     /// The mesh's edge adjacency (Hybrid): thin-caster marking keeps to the triangles at a
     /// silhouette from the light. Null: every thin triangle is marked.
     const MeshAdjacency* adjacency = nullptr;
+    /// Instead of `bvh`: the hierarchy of a deforming mesh, which rays ask through its own
+    /// queries (after a lazy update its lower boxes are refreshed by the rays that reach them).
+    const DeformingBvh* deforming = nullptr;
 };
 
 /// `gpu` draws the shadow maps; its render targets are reused from frame to frame.

@@ -370,7 +370,18 @@ TEST_F(Cli, AnAnimationsShadowsFromARefittedHierarchyAreThoseOfAFreshOne) {
         const std::string animated = fileBytes(dir_ / (name + "_002.png"));
         ASSERT_FALSE(animated.empty());
         EXPECT_EQ(animated, fileBytes(dir_ / (name + "_alone.png"))) << mode;
+        // Larsson's lazy update and a rebuild every frame: the same images again.
+        for (const char* method : {"lazy", "rebuild"}) {
+            const std::string tag = name + "_" + method;
+            ASSERT_EQ(run(common + " --frustum-cull --animate 3 --fps 2 --bvh-update " + method + " --stats " +
+                          (dir_ / (tag + ".json")).string() + " --out " + (dir_ / (tag + ".png")).string()).exitCode, 0);
+            EXPECT_EQ(animated, fileBytes(dir_ / (tag + "_002.png"))) << mode << " " << method;
+            const nlohmann::json stats = nlohmann::json::parse(std::ifstream(dir_ / (tag + ".json")));
+            EXPECT_EQ(stats["frames"][1]["shadows"]["bvhRebuilt"].get<bool>(), std::string(method) == "rebuild") << method;
+            EXPECT_EQ(stats["frames"][1]["frustumCull"]["rebuilt"].get<bool>(), std::string(method) == "rebuild") << method;
+        }
     }
+    EXPECT_EQ(run("render " + gltf.string() + " --animate 2 --bvh-update sometimes --out " + (dir_ / "x.png").string()).exitCode, 2);
 }
 
 TEST_F(Cli, ExplainWritesEveryStageAndRefusesBadInputWithExitTwo) {

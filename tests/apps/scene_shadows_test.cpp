@@ -146,6 +146,30 @@ TEST_P(AnimatedShadows, ChangedTrianglesAreRefused) {
     EXPECT_THROW(stage.update(next), std::runtime_error);
 }
 
+TEST_P(AnimatedShadows, EveryUpdateMethodGivesTheMasksOfAFreshStage) {
+    // Larsson's lazy update leaves the lower boxes stale until a ray reaches them; the rays must
+    // still meet exactly the occluders of a tree built on the pose, frame after frame.
+    const scene::Scene first = sheetOverGround(still);
+    for (const rt::BvhUpdateMethod method : {rt::BvhUpdateMethod::Refit, rt::BvhUpdateMethod::Lazy, rt::BvhUpdateMethod::Rebuild}) {
+        apps::SceneShadows stage(first, options(), method);
+        apps::ShadowFrameStats stats;
+        mask(stage, first, stats);
+        for (int frame = 1; frame <= 3; ++frame) {
+            const float step = 0.3f * float(frame);
+            const scene::Scene pose = sheetOverGround([&](const glm::vec3& p, uint32_t t) {
+                return p + glm::vec3(step, 0.1f * step * float(t % 3), -0.5f * step);  // a drift and a ripple
+            });
+            stage.update(pose);
+            const std::vector<float> moved = mask(stage, pose, stats);
+            EXPECT_TRUE(stats.bvhUpdated);
+            EXPECT_EQ(stats.bvhRebuilt, method == rt::BvhUpdateMethod::Rebuild) << int(method) << " frame " << frame;
+            apps::SceneShadows fresh(pose, options());
+            apps::ShadowFrameStats freshStats;
+            EXPECT_EQ(moved, mask(fresh, pose, freshStats)) << int(method) << " frame " << frame;
+        }
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(Modes, AnimatedShadows, ::testing::Values(rt::ShadowMode::Hybrid, rt::ShadowMode::RayTraced),
                          [](const ::testing::TestParamInfo<rt::ShadowMode>& p) {
                              return p.param == rt::ShadowMode::Hybrid ? std::string("Hybrid") : std::string("RayTraced");

@@ -201,6 +201,10 @@ TEST(DeformingBvh, RebuildsWhenTheCriterionFiresAndAnswersLikeBruteForceThrougho
         SCOPED_TRACE(int(method));
         OwnedMesh moved = soup;
         DeformingBvh bvh(moved.view(), method);
+        for (const Ray& ray : randomRays(100, 99)) {  // the first pose, before any update
+            ASSERT_EQ(bvh.closestHit(ray).triangle, closestHitBruteForce(moved.view(), ray).triangle);
+            ASSERT_EQ(bvh.anyHit(ray), anyHitBruteForce(moved.view(), ray));
+        }
         int rebuilt = 0;
         for (int frame = 1; frame <= 16; ++frame) {
             for (size_t i = 0; i < soup.positions.size(); ++i) moved.positions[i] = soup.positions[i] + 0.15f * float(frame) * velocity[i];
