@@ -138,15 +138,6 @@ rt::BvhUpdateMethod parseBvhUpdate(const std::string& name) {
     throw scene::InputError("--bvh-update: '" + name + "' is not refit, lazy or rebuild");
 }
 
-const char* bvhUpdateName(rt::BvhUpdateMethod method) {
-    switch (method) {
-        case rt::BvhUpdateMethod::Refit: return "refit";
-        case rt::BvhUpdateMethod::Lazy: return "lazy";
-        case rt::BvhUpdateMethod::Rebuild: return "rebuild";
-    }
-    return "?";
-}
-
 const char* textureFilterName(TextureFilterOverride f) {
     switch (f) {
         case TextureFilterOverride::File: return "file";

@@ -73,7 +73,6 @@ TextureFilterOverride parseTextureFilter(const std::string& name);  // throws sc
 const char* textureFilterName(TextureFilterOverride filter);
 raster::DepthConvention parseDepthConvention(const std::string& name);  // throws scene::InputError
 rt::BvhUpdateMethod parseBvhUpdate(const std::string& name);             // throws scene::InputError
-const char* bvhUpdateName(rt::BvhUpdateMethod method);
 /// The frame options every rendering command takes (--width, --height, --msaa, --threads);
 /// throws scene::InputError naming the option.
 void validateFrameOptions(int width, int height, int msaa, int threads);
