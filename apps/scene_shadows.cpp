@@ -1,6 +1,7 @@
 #include "apps/scene_shadows.h"
 
 #include <stdexcept>
+#include <utility>
 
 #include "raster/clock.h"
 #include "rt/bvh_build.h"
@@ -19,16 +20,16 @@ SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& optio
     if (indices_.empty()) return;
     active_ = true;
     visibility_.setCasters({positions_, indices_}, ranges_);
-    pendingUpdate_.castersMs = raster::nowMs() - t0;
+    pending_.castersMs = raster::nowMs() - t0;
     if (options.mode == rt::ShadowMode::Hybrid || options.mode == rt::ShadowMode::RayTraced) {
         t0 = raster::nowMs();
         bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, bvhUpdate);
-        bvhBuildMs_ = raster::nowMs() - t0;
+        pending_.bvhBuildMs = raster::nowMs() - t0;
     }
     if (options.mode == rt::ShadowMode::Hybrid) {
         t0 = raster::nowMs();
         findAdjacency();
-        adjacencyMs_ = raster::nowMs() - t0;
+        pending_.adjacencyMs = raster::nowMs() - t0;
     }
 }
 
@@ -58,31 +59,24 @@ void SceneShadows::update(const scene::Scene& s) {
     const std::vector<uint32_t> before = indices_;
     gatherCasters(s);
     if (indices_ != before) throw std::runtime_error("the animated scene changed its shadow casters' triangles");
-    visibility_.setCasters({positions_, indices_}, ranges_);
-    pendingUpdate_ = {};
-    pendingUpdate_.castersMs = raster::nowMs() - t0;
-    pendingUpdate_.bvhUpdated = true;
+    visibility_.moveCasters({positions_, indices_});
+    pending_.castersMs = raster::nowMs() - t0;
+    pending_.bvhUpdated = true;
     const double t1 = raster::nowMs();
     if (bvh_) {
         const rt::BvhUpdateReport report = bvh_->update({positions_, indices_});
-        pendingUpdate_.bvhRebuilt = report.rebuilt;
-        pendingUpdate_.degradation = report.degradation;
+        pending_.bvhRebuilt = report.rebuilt;
+        pending_.degradation = report.degradation;
     }
     if (options_.mode == rt::ShadowMode::Hybrid) findAdjacency();
-    pendingUpdate_.bvhUpdateMs = raster::nowMs() - t1;
+    pending_.bvhUpdateMs = raster::nowMs() - t1;
 }
 
 raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height, ShadowFrameStats& stats) {
+    stats = std::exchange(pending_, {});
     stats.mode = options_.mode;
     stats.soft = options_.soft;
     stats.casterTriangles = indices_.size() / 3;
-    if (!bvhReported_) stats.bvhBuildMs = bvhBuildMs_, stats.adjacencyMs = adjacencyMs_, bvhReported_ = true;
-    stats.bvhUpdated = pendingUpdate_.bvhUpdated;
-    stats.bvhRebuilt = pendingUpdate_.bvhRebuilt;
-    stats.degradation = pendingUpdate_.degradation;
-    stats.bvhUpdateMs = pendingUpdate_.bvhUpdateMs;
-    stats.castersMs = pendingUpdate_.castersMs;
-    pendingUpdate_ = {};
     raster::Lighting lighting = s.lighting;
     if (!active_) return lighting;
     const rt::TriangleMeshView casters{positions_, indices_};

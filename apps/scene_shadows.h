@@ -72,11 +72,10 @@ private:
     std::vector<rt::CasterRange> ranges_;
     rt::Aabb bounds_;
     std::optional<rt::DeformingBvh> bvh_;  // hybrid and raytraced only
-    double bvhBuildMs_ = 0.0;
     rt::MeshAdjacency adjacency_;  // hybrid only: thin casters are looked for at silhouettes
-    double adjacencyMs_ = 0.0;
-    bool bvhReported_ = false;
-    ShadowFrameStats pendingUpdate_;  // what construction or update() did, for the next run() to report
+    /// What construction or update() did (builds, refits and their times), for the next run() to
+    /// report: each is reported once, with the frame that follows it.
+    ShadowFrameStats pending_;
     rt::VisibilityBuffer visibility_;  // per pose: the casters' planes and id colours
     rt::ShadowMasks masks_;            // reused from frame to frame
     // The software GPU the visibility buffer and the shadow maps are drawn with, one pass after

@@ -11,20 +11,21 @@ DeformingBvh::DeformingBvh(const TriangleMeshView& mesh, BvhUpdateMethod method,
       threshold_(rebuildThreshold),
       mesh_(mesh) {
     bvh_ = std::make_unique<Bvh>(buildBvh(mesh, build_));
-    if (method_ == BvhUpdateMethod::Lazy) {
-        // Every box of a new tree is current: the first pose is answered before any update.
-        lazy_.emplace(*bvh_);
-        lazy_->updateAfterFullRefit(mesh_);
-    }
+    startLazy();
+}
+
+// Every box of a new tree is current, so the lazy updater starts with none stale: the pose is
+// answered before any update, and no query refreshes what the build just computed.
+void DeformingBvh::startLazy() {
+    if (method_ != BvhUpdateMethod::Lazy) return;
+    lazy_.emplace(*bvh_);
+    lazy_->updateAfterFullRefit(mesh_);
 }
 
 void DeformingBvh::rebuild() {
     lazy_.reset();
     *bvh_ = buildBvh(mesh_, build_);
-    if (method_ == BvhUpdateMethod::Lazy) {
-        lazy_.emplace(*bvh_);
-        lazy_->update(mesh_);
-    }
+    startLazy();
     ++rebuilds_;
 }
 

@@ -38,6 +38,7 @@ public:
 
 private:
     void rebuild();
+    void startLazy();
 
     BvhUpdateMethod method_;
     BvhBuildOptions build_;

@@ -67,7 +67,6 @@ bool ScreenSurfaces::surfaceAt(int x, int y, Surface& out) const {
 }
 
 void VisibilityBuffer::setCasters(const TriangleMeshView& casters, std::span<const CasterRange> ranges) {
-    casters_ = casters;
     ranges_.assign(ranges.begin(), ranges.end());
     const size_t triangles = casters.triangleCount();
     idColors_.resize(triangles);
@@ -78,6 +77,12 @@ void VisibilityBuffer::setCasters(const TriangleMeshView& casters, std::span<con
     for (const CasterRange& r : ranges)
         for (size_t i = size_t(r.firstTriangle) * 3; i < size_t(r.firstTriangle + r.triangleCount) * 3; ++i)
             rangeIndices_[i] -= r.firstVertex;
+    moveCasters(casters);
+}
+
+void VisibilityBuffer::moveCasters(const TriangleMeshView& casters) {
+    casters_ = casters;
+    const size_t triangles = casters.triangleCount();
     std::vector<TrianglePlane>& planes = surfaces_.planes;
     planes.assign(triangles, TrianglePlane{});
     raster::parallelFor((triangles + 4095) / 4096, [&](size_t chunk) {

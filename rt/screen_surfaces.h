@@ -63,9 +63,12 @@ struct ScreenSurfaces {
 /// reused: a static scene seen from a moving camera pays for the draw and the ids alone.
 class VisibilityBuffer {
 public:
-    /// The casters of the frames to come (a new pose of an animated scene: call again). They must
-    /// stay alive, unmoved, until the next call.
+    /// The casters of the frames to come. They must stay alive until the next call, moved only
+    /// as moveCasters() is told.
     void setCasters(const TriangleMeshView& casters, std::span<const CasterRange> ranges);
+    /// A new pose of the same casters (same indices and ranges, moved positions): only the
+    /// planes are found again.
+    void moveCasters(const TriangleMeshView& casters);
 
     /// Draws this frame's visibility buffer with `gpu`, whose render targets are reused from frame
     /// to frame. The surfaces are valid until the next draw() or setCasters().
