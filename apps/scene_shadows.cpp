@@ -87,9 +87,9 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     const rt::ScreenSurfaces& surfaces = visibility_.draw(standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
     stats.surfacesMs = raster::nowMs() - t0;
     const rt::ShadowCasters shadowCasters{.mesh = casters,
+                                          .bvh = bvh_ ? &*bvh_ : nullptr,
                                           .bounds = bounds_,
-                                          .adjacency = adjacency_.empty() ? nullptr : &adjacency_,
-                                          .deforming = bvh_ ? &*bvh_ : nullptr};
+                                          .adjacency = adjacency_.empty() ? nullptr : &adjacency_};
     rt::computeShadows(surfaces, s.lighting, shadowCasters, options_, gpu_, masks_);
     stats.shadows = masks_.stats;
     for (int l = 0; l < lighting.lightCount; ++l)

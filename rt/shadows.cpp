@@ -333,7 +333,7 @@ private:
 
     bool occluded(const glm::vec3& origin, const glm::vec3& direction, float distance) const {
         Ray ray{origin, direction, 0.0f, std::isinf(distance) ? distance : distance * (1.0f - 1e-4f)};
-        return casters_.deforming ? casters_.deforming->anyHit(ray) : anyHit(*casters_.bvh, casters_.mesh, ray);
+        return casters_.bvh->anyHit(ray);
     }
 
     // ---- per-face marks for the hybrid method -------------------------------------------------
@@ -370,21 +370,24 @@ private:
         // wide as any other's. The neighbourhood's range is taken separably, down the three rows
         // and then across three columns (the same minimum and maximum, in loops that vectorise).
         std::vector<float> level0(side * side);
-        raster::parallelFor(side, [&](size_t yy) {
-            const int y = int(yy);
-            const float *above = row(std::max(0, y - 1)), *centre = row(y), *below = row(std::min(size - 1, y + 1));
+        constexpr size_t kRowsPerTask = 16;  // each task's two column buffers serve its rows
+        raster::parallelFor((side + kRowsPerTask - 1) / kRowsPerTask, [&](size_t task) {
             std::vector<float> columnLo(side), columnHi(side);
-            for (size_t x = 0; x < side; ++x) {
-                columnLo[x] = std::min({above[x], centre[x], below[x]});
-                columnHi[x] = std::max({above[x], centre[x], below[x]});
-            }
-            for (int x = 0; x < size; ++x) {
-                const size_t left = size_t(std::max(0, x - 1)), right = size_t(std::min(size - 1, x + 1));
-                const float lo = std::min({columnLo[left], columnLo[size_t(x)], columnLo[right]});
-                const float hi = std::max({columnHi[left], columnHi[size_t(x)], columnHi[right]});
-                const float texel = 2.0f * face.halfExtent * (face.perspective ? std::min(lo, face.farPlane) : 1.0f) / float(size);
-                const bool edge = (hi - lo > 4.0f * texel) || std::isinf(hi) != std::isinf(lo);
-                level0[yy * side + size_t(x)] = std::min(edge ? lo : ShadowMap::kEmpty, marks.thinDepth[yy * side + size_t(x)]);
+            for (size_t yy = task * kRowsPerTask; yy < std::min(side, (task + 1) * kRowsPerTask); ++yy) {
+                const int y = int(yy);
+                const float *above = row(std::max(0, y - 1)), *centre = row(y), *below = row(std::min(size - 1, y + 1));
+                for (size_t x = 0; x < side; ++x) {
+                    columnLo[x] = std::min({above[x], centre[x], below[x]});
+                    columnHi[x] = std::max({above[x], centre[x], below[x]});
+                }
+                for (int x = 0; x < size; ++x) {
+                    const size_t left = size_t(std::max(0, x - 1)), right = size_t(std::min(size - 1, x + 1));
+                    const float lo = std::min({columnLo[left], columnLo[size_t(x)], columnLo[right]});
+                    const float hi = std::max({columnHi[left], columnHi[size_t(x)], columnHi[right]});
+                    const float texel = 2.0f * face.halfExtent * (face.perspective ? std::min(lo, face.farPlane) : 1.0f) / float(size);
+                    const bool edge = (hi - lo > 4.0f * texel) || std::isinf(hi) != std::isinf(lo);
+                    level0[yy * side + size_t(x)] = std::min(edge ? lo : ShadowMap::kEmpty, marks.thinDepth[yy * side + size_t(x)]);
+                }
             }
         });
         marks.discontinuityDepth.push_back(std::move(level0));

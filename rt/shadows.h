@@ -66,14 +66,14 @@ struct ShadowMasks {
 /// RayTraced only; null for Map).
 struct ShadowCasters {
     TriangleMeshView mesh;
-    const Bvh* bvh = nullptr;
+    /// Rays ask the hierarchy through its own queries, so a lazily updated one (a deforming
+    /// mesh, rt/deforming_bvh.h) refreshes the lower boxes they reach; a static scene's is
+    /// one that is never updated.
+    const DeformingBvh* bvh = nullptr;
     Aabb bounds;
     /// The mesh's edge adjacency (Hybrid): thin-caster marking keeps to the triangles at a
     /// silhouette from the light. Null: every thin triangle is marked.
     const MeshAdjacency* adjacency = nullptr;
-    /// Instead of `bvh`: the hierarchy of a deforming mesh, which rays ask through its own
-    /// queries (after a lazy update its lower boxes are refreshed by the rays that reach them).
-    const DeformingBvh* deforming = nullptr;
 };
 
 /// `gpu` draws the shadow maps; its render targets are reused from frame to frame.

@@ -53,7 +53,7 @@ struct Rendered {
 Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, const ShadowOptions& options, int width = 320,
                    int height = 240, bool silhouettesOnly = true) {
     const TriangleMeshView mesh = scene.view();
-    const Bvh bvh = buildBvh(mesh);
+    const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);  // a static scene's: never updated
     const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
     const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), float(width) / float(height), 0.1f, 50.0f) *
                                     glm::lookAtRH(glm::vec3(3.0f, 4.0f, 6.0f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
