@@ -117,28 +117,37 @@ void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size, rast
 ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size,
                             raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld) {
     ShadowMap map;
-    map.size_ = size;
-    map.lightPosition_ = light.position;
+    map.redraw(light, casters, bounds, size, gpu, focus, focusMarginWorld);
+    return map;
+}
+
+void ShadowMap::redraw(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size,
+                       raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld) {
+    std::vector<ShadowMapFace> faces;
     switch (light.type) {
         case raster::LightType::Directional:
-            map.faces_.push_back(orthographicFace(glm::normalize(light.direction), bounds, focus, focusMarginWorld, size));
+            faces.push_back(orthographicFace(glm::normalize(light.direction), bounds, focus, focusMarginWorld, size));
             break;
         case raster::LightType::Spot: {
             const float halfAngle = std::min(std::acos(std::clamp(light.cosOuterCone, -1.0f, 1.0f)), glm::radians(85.0f));
-            map.faces_.push_back(perspectiveFace(light.position, glm::normalize(light.direction), halfAngle, bounds));
+            faces.push_back(perspectiveFace(light.position, glm::normalize(light.direction), halfAngle, bounds));
             break;
         }
         case raster::LightType::Point:
             for (const glm::vec3 axis : {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, -1, 0),
                                          glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)})
-                map.faces_.push_back(perspectiveFace(light.position, axis, glm::radians(45.0f), bounds));
+                faces.push_back(perspectiveFace(light.position, axis, glm::radians(45.0f), bounds));
             break;
     }
-    for (ShadowMapFace& f : map.faces_) {
+    for (size_t i = 0; i < faces.size(); ++i) {
+        ShadowMapFace& f = faces[i];
+        if (i < faces_.size()) f.depth = std::move(faces_[i].depth);  // every texel is written below
         f.texelFromWorld = texelTransform(f, size);
         drawDepth(f, casters, size, gpu);
     }
-    return map;
+    size_ = size;
+    lightPosition_ = light.position;
+    faces_ = std::move(faces);
 }
 
 glm::vec3 ShadowMap::project(int face, const glm::vec3& p) const {

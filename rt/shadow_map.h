@@ -53,6 +53,10 @@ public:
     static ShadowMap render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& casterBounds,
                             int sizeTexels, raster::Pipeline& gpu, std::span<const glm::vec3> focus = {},
                             float focusMarginWorld = 0.0f);
+    /// The same, drawn into this map: its faces' depth storage is reused (a renderer keeps one
+    /// map per light from frame to frame, so a frame's map costs no fresh pages).
+    void redraw(const raster::Light& light, const TriangleMeshView& casters, const Aabb& casterBounds, int sizeTexels,
+                raster::Pipeline& gpu, std::span<const glm::vec3> focus = {}, float focusMarginWorld = 0.0f);
 
     ShadowMapTexel locate(const glm::vec3& p) const;
     /// Linear depth at a texel; +inf outside the face or where no caster was drawn.

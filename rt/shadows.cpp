@@ -13,7 +13,36 @@
 #include "rt/shadow_map.h"
 
 namespace cuberille::rt {
+namespace shadow_detail {
+
+/// A map face's marks for the hybrid method.
+struct FaceMarks {
+    // Per texel, the nearest thin caster's depth at its centre, as the map would have stored
+    // it; +inf: none.
+    std::vector<float> thinDepth;
+    // A min pyramid of discontinuity depths: level 0 holds, per texel, the near side's depth
+    // of a discontinuity there (+inf: none); each level above the minimum of 2x2 below.
+    std::vector<std::vector<float>> discontinuityDepth;
+    std::vector<int> levelSize;
+    float nearestDepth = 0.0f;  // the nearest caster depth in the face
+};
+
+}  // namespace shadow_detail
+
+struct LightShadowStorage {
+    ShadowMap map;
+    std::vector<shadow_detail::FaceMarks> faces;  // per face of the map (hybrid, soft)
+    // Scratch of the thin-caster marking, per face in turn.
+    std::vector<glm::vec3> projected;    // per caster vertex: texel x, texel y, linear depth
+    std::vector<int8_t> facing;          // per caster triangle: its side toward the light
+    std::vector<uint8_t> nearSilhouette;  // per position id
+};
+
+void LightShadowStorageDelete::operator()(LightShadowStorage* storage) const { delete storage; }
+
 namespace {
+
+using shadow_detail::FaceMarks;
 
 // A soft shadow's silhouette lies within a texel of the discontinuity texels either side of it (it
 // passes between two adjacent texel centres that disagree); a sixteenth more covers rounding.
@@ -95,6 +124,13 @@ std::vector<glm::vec2> diskSamples(int n) {
     return samples;
 }
 
+/// Levels of a min pyramid over size x size texels, halved (rounding up) down to one.
+int pyramidLevels(int size) {
+    int levels = 1;
+    for (; size > 1; size = (size + 1) / 2) ++levels;
+    return levels;
+}
+
 void perpendicularBasis(const glm::vec3& w, glm::vec3& u, glm::vec3& v) {
     u = glm::normalize(glm::cross(std::abs(w.x) > 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0), w));
     v = glm::cross(w, u);
@@ -104,8 +140,11 @@ void perpendicularBasis(const glm::vec3& w, glm::vec3& u, glm::vec3& v) {
 
 class LightShadows {
 public:
-    LightShadows(const raster::Light& light, const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu)
-        : light_(light), casters_(casters), options_(options), gpu_(gpu) {
+    /// Draws into `storage`, whatever an earlier frame left there.
+    LightShadows(const raster::Light& light, const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu,
+                 LightShadowStorage& storage)
+        : light_(light), casters_(casters), options_(options), gpu_(gpu), storage_(storage), map_(storage.map),
+          faces_(storage.faces) {
         const float radius = 0.5f * glm::length(casters.bounds.extent());
         rayOffset_ = 1e-4f * std::max(radius, 1e-3f);
         if (options.soft) disk_ = diskSamples(std::max(1, options.softSamplesPerSide));
@@ -115,11 +154,10 @@ public:
     /// ray to the light's disk can stray over the casters' depth (their bounding sphere's diameter).
     void prepareMap(const ScreenSurfaces& surfaces) {
         const float margin = options_.soft ? options_.lightRadius * glm::length(casters_.bounds.extent()) : 0.0f;
-        map_ = std::make_unique<ShadowMap>(ShadowMap::render(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels,
-                                                             gpu_, surfaces.seenHull, margin));
+        map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, surfaces.seenHull, margin);
         if (options_.mode != ShadowMode::Hybrid && !options_.soft) return;
-        faces_.resize(size_t(map_->faceCount()));
-        for (int f = 0; f < map_->faceCount(); ++f) prepareFace(f);
+        faces_.resize(size_t(map_.faceCount()));
+        for (int f = 0; f < map_.faceCount(); ++f) prepareFace(f);
     }
 
     /// The light's visibility at one receiver; sets *marked when rays decided it, adds rays.
@@ -129,7 +167,7 @@ public:
             *marked = true;
             return trace(p, n, in, rays);
         }
-        const ShadowMapTexel t = map_->locate(p);
+        const ShadowMapTexel t = map_.locate(p);
         if (t.face < 0) {  // outside the map: only rays can tell
             if (options_.mode == ShadowMode::Map) return 1.0f;
             *marked = true;
@@ -156,7 +194,7 @@ private:
     };
 
     Receiver receiver(const glm::vec3& n, const ShadowMapTexel& t) const {
-        const ShadowMapFace& face = map_->face(t.face);
+        const ShadowMapFace& face = map_.face(t.face);
         const glm::vec3 q(t.position, t.receiverDepth);  // where locate found the point
         const glm::vec3 nv = glm::mat3(face.viewFromWorld) * n;
         // The receiver's plane, carried one texel over: view x is texel x, view y is texel -y.
@@ -177,17 +215,17 @@ private:
     bool litAt(const Receiver& r, const ShadowMapTexel& t, int dx, int dy) const {
         const float cx = float(t.x + dx) + 0.5f - r.qx, cy = float(t.y + dy) + 0.5f - r.qy;
         const float planeDepth = r.depth + r.slopeX * cx + r.slopeY * cy;
-        return planeDepth - r.bias <= map_->depthAt(t.face, t.x + dx, t.y + dy);
+        return planeDepth - r.bias <= map_.depthAt(t.face, t.x + dx, t.y + dy);
     }
 
     bool potentiallyIncorrect(const Receiver& r, const ShadowMapTexel& t, int* decision) const {
-        const int size = map_->size();
+        const int size = map_.size();
         if (t.x < 1 || t.y < 1 || t.x >= size - 1 || t.y >= size - 1) return true;  // a neighbour is off the face
         const bool centre = litAt(r, t, 0, 0);
         const FaceMarks& marks = faces_[size_t(t.face)];
         // litAt over the 3x3 texels, all inside the face: the same comparison, read straight
         // from the depth rows.
-        const float* depth = map_->face(t.face).depth.data();
+        const float* depth = map_.face(t.face).depth.data();
         for (int dy = -1; dy <= 1; ++dy) {
             const float* row = depth + size_t(t.y + dy) * size_t(size);
             const float cy = float(t.y + dy) + 0.5f - r.qy;
@@ -214,10 +252,10 @@ private:
     /// How far sideways, in texels at the blocker, the rays from a receiver to the light's disk
     /// reach at a blocker's depth: the light's radius carried over the gap between them.
     float penumbraReachTexels(const Receiver& r, const ShadowMapTexel& t, float blockerDepth) const {
-        const ShadowMapFace& face = map_->face(t.face);
+        const ShadowMapFace& face = map_.face(t.face);
         const float gap = std::max(0.0f, r.depth - blockerDepth);
         if (face.perspective) {
-            const float texelAtBlocker = 2.0f * face.halfExtent * std::max(blockerDepth, face.nearPlane) / float(map_->size());
+            const float texelAtBlocker = 2.0f * face.halfExtent * std::max(blockerDepth, face.nearPlane) / float(map_.size());
             return options_.lightRadius * gap / std::max(r.depth, 1e-6f) / texelAtBlocker;
         }
         return options_.lightRadius * gap / r.texelWorld;
@@ -250,7 +288,7 @@ private:
         // popped pushes at most four, so the stack stays under 9 + 3 levels deep.
         const int levels = int(marks.discontinuityDepth.size());
         const float widest = penumbraReachTexels(r, t, marks.discontinuityDepth.back()[0]) + kPenumbraEdgeSlackTexels;
-        const int size = map_->size(), last = size - 1;
+        const int size = map_.size(), last = size - 1;
         const bool wholeFace = !(widest < float(size));  // NaN too: search from the top
         int start = wholeFace ? levels - 1 : 0;
         while (start + 1 < levels && float(1 << start) < widest) ++start;
@@ -338,25 +376,14 @@ private:
 
     // ---- per-face marks for the hybrid method -------------------------------------------------
 
-    struct FaceMarks {
-        // Per texel, the nearest thin caster's depth at its centre, as the map would have stored
-        // it; +inf: none.
-        std::vector<float> thinDepth;
-        // A min pyramid of discontinuity depths: level 0 holds, per texel, the near side's depth
-        // of a discontinuity there (+inf: none); each level above the minimum of 2x2 below.
-        std::vector<std::vector<float>> discontinuityDepth;
-        std::vector<int> levelSize;
-        float nearestDepth = 0.0f;  // the nearest caster depth in the face
-    };
-
     void prepareFace(int f) {
-        const int size = map_->size();
+        const int size = map_.size();
         FaceMarks& marks = faces_[size_t(f)];
         const bool hybrid = options_.mode == ShadowMode::Hybrid;
         marks.thinDepth.assign(hybrid ? size_t(size) * size : 0, ShadowMap::kEmpty);
         if (hybrid) thinTriangles_ += markThinTriangles(f, marks);
         if (!options_.soft) return;  // the rest serves the penumbra search alone
-        const ShadowMapFace& face = map_->face(f);
+        const ShadowMapFace& face = map_.face(f);
         const size_t side = size_t(size);
         auto row = [&](int y) { return face.depth.data() + size_t(y) * side; };
         // The nearest caster, per row and then over the rows (a minimum: the same in any order).
@@ -369,7 +396,11 @@ private:
         // of its near side, the one that casts. A thin caster counts as one: its penumbra is as
         // wide as any other's. The neighbourhood's range is taken separably, down the three rows
         // and then across three columns (the same minimum and maximum, in loops that vectorise).
-        std::vector<float> level0(side * side);
+        const int levels = pyramidLevels(size);
+        marks.discontinuityDepth.resize(size_t(levels));  // each level's storage kept, every entry rewritten
+        marks.levelSize.assign(1, size);
+        std::vector<float>& level0 = marks.discontinuityDepth[0];
+        level0.resize(side * side);
         constexpr size_t kRowsPerTask = 16;  // each task's two column buffers serve its rows
         raster::parallelFor((side + kRowsPerTask - 1) / kRowsPerTask, [&](size_t task) {
             std::vector<float> columnLo(side), columnHi(side);
@@ -390,12 +421,11 @@ private:
                 }
             }
         });
-        marks.discontinuityDepth.push_back(std::move(level0));
-        marks.levelSize.push_back(size);
-        while (marks.levelSize.back() > 1) {  // each level the minimum of the 2x2 below
+        for (int level = 1; level < levels; ++level) {  // each level the minimum of the 2x2 below
             const int below = marks.levelSize.back(), n = (below + 1) / 2;
-            const std::vector<float>& b = marks.discontinuityDepth.back();
-            std::vector<float> up(size_t(n) * n);
+            const std::vector<float>& b = marks.discontinuityDepth[size_t(level) - 1];
+            std::vector<float>& up = marks.discontinuityDepth[size_t(level)];
+            up.resize(size_t(n) * n);
             raster::parallelFor(size_t(n), [&](size_t uy) {
                 const size_t y0 = 2 * uy, y1 = std::min(size_t(below) - 1, y0 + 1);
                 for (size_t ux = 0; ux < size_t(n); ++ux) {
@@ -403,7 +433,6 @@ private:
                     up[uy * n + ux] = std::min({b[y0 * below + x0], b[y0 * below + x1], b[y1 * below + x0], b[y1 * below + x1]});
                 }
             });
-            marks.discontinuityDepth.push_back(std::move(up));
             marks.levelSize.push_back(n);
         }
     }
@@ -420,12 +449,13 @@ private:
         const size_t count = casters_.mesh.triangleCount();
         constexpr size_t kChunk = 16384;
         const std::span<const glm::vec3> positions = casters_.mesh.positions;
-        std::vector<glm::vec3> projected(positions.size());
+        std::vector<glm::vec3>& projected = storage_.projected;
+        projected.resize(positions.size());
         raster::parallelFor((positions.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
             for (size_t v = chunk * kChunk; v < std::min(positions.size(), (chunk + 1) * kChunk); ++v)
-                projected[v] = map_->project(f, positions[v]);
+                projected[v] = map_.project(f, positions[v]);
         });
-        const std::vector<uint8_t> nearSilhouette = positionsNearSilhouette(f, projected);
+        const std::vector<uint8_t>& nearSilhouette = positionsNearSilhouette(f, projected);
         const std::vector<uint32_t>* positionId = nearSilhouette.empty() ? nullptr : &casters_.adjacency->positionId;
         auto atSilhouette = [&](size_t t) {
             if (!positionId) return true;  // no adjacency: any thin triangle may be missed
@@ -454,14 +484,19 @@ private:
     /// sheet around it covers every direction from each corner, so the texels about it sample
     /// the sheet, and where those samples disagree the 3x3 test marks the receiver anyway.
     /// Empty without adjacency.
-    std::vector<uint8_t> positionsNearSilhouette(int f, const std::vector<glm::vec3>& projected) const {
+    const std::vector<uint8_t>& positionsNearSilhouette(int f, const std::vector<glm::vec3>& projected) const {
+        std::vector<uint8_t>& near = storage_.nearSilhouette;
         const MeshAdjacency* adjacency = casters_.adjacency;
-        if (!adjacency || adjacency->positionId.size() != casters_.mesh.positions.size()) return {};
-        const float nearPlane = map_->face(f).nearPlane;
+        if (!adjacency || adjacency->positionId.size() != casters_.mesh.positions.size()) {
+            near.clear();
+            return near;
+        }
+        const float nearPlane = map_.face(f).nearPlane;
         const size_t count = casters_.mesh.triangleCount();
         // Facing in the map's own texel space: the sign of the projected area (0: edge-on, or
         // reaching behind the light's view, both treated as a silhouette).
-        std::vector<int8_t> facing(count);
+        std::vector<int8_t>& facing = storage_.facing;
+        facing.resize(count);  // every entry is written below
         constexpr size_t kChunk = 16384;
         raster::parallelFor((count + kChunk - 1) / kChunk, [&](size_t chunk) {
             for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t) {
@@ -472,7 +507,7 @@ private:
                 facing[t] = !inView ? 0 : twiceArea > 0.0f ? 1 : twiceArea < 0.0f ? -1 : 0;
             }
         });
-        std::vector<uint8_t> near(adjacency->positionCount, 0);
+        near.assign(adjacency->positionCount, 0);
         for (const uint32_t p : adjacency->openPositions) near[p] = 1;
         const std::vector<MeshAdjacency::SharedEdge>& edges = adjacency->shared;
         raster::parallelFor((edges.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
@@ -493,8 +528,8 @@ private:
     }
 
     bool isThin(int f, size_t t, const std::vector<glm::vec3>& projected) const {
-        const int size = map_->size();
-        const ShadowMapFace& face = map_->face(f);
+        const int size = map_.size();
+        const ShadowMapFace& face = map_.face(f);
         const TriangleMeshView& mesh = casters_.mesh;
         glm::vec3 q[3];
         cornersInMap(t, projected, q);
@@ -521,12 +556,12 @@ private:
     /// clipped to the row's slab (centre y +- that distance), widened by the same distance.
     void markTexelsOf(int f, size_t t, const std::vector<glm::vec3>& projected, FaceMarks& marks) const {
         constexpr float kReach = 0.7072f;  // half a texel's diagonal, rounded up
-        const int size = map_->size();
+        const int size = map_.size();
         glm::vec3 q[3];
         cornersInMap(t, projected, q);
         const float loY = std::min({q[0].y, q[1].y, q[2].y}), hiY = std::max({q[0].y, q[1].y, q[2].y});
         const int y0 = std::max(0, int(std::floor(loY)) - 1), y1 = std::min(size - 1, int(std::floor(hiY)) + 1);
-        const ThinTriangleDepth depth(q, map_->face(f).perspective);
+        const ThinTriangleDepth depth(q, map_.face(f).perspective);
         const glm::vec2 a(q[0]), b(q[1]), c(q[2]);
         for (int y = y0; y <= y1; ++y) {
             const float centreY = float(y) + 0.5f;
@@ -594,8 +629,9 @@ private:
     raster::Pipeline& gpu_;
     float rayOffset_ = 0.0f;
     std::vector<glm::vec2> disk_;
-    std::unique_ptr<ShadowMap> map_;
-    std::vector<FaceMarks> faces_;
+    LightShadowStorage& storage_;
+    ShadowMap& map_;
+    std::vector<FaceMarks>& faces_;
     uint64_t thinTriangles_ = 0;
 
 public:
@@ -626,11 +662,13 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
     if (options.mode == ShadowMode::None || casters.mesh.triangleCount() == 0) return;
     const size_t pixels = size_t(surfaces.width) * surfaces.height;
     out.marked.assign(pixels, 0);
+    if (out.storage.size() < size_t(lighting.lightCount)) out.storage.resize(size_t(lighting.lightCount));
     for (int l = 0; l < lighting.lightCount; ++l) {
         const raster::Light& light = lighting.lights[l];
         if (!castsShadows(light)) continue;
         ++out.stats.lightsShadowed;
-        LightShadows shadows(light, casters, options, gpu);
+        if (!out.storage[size_t(l)]) out.storage[size_t(l)].reset(new LightShadowStorage);
+        LightShadows shadows(light, casters, options, gpu, *out.storage[size_t(l)]);
         double t0 = raster::nowMs();
         if (options.mode != ShadowMode::RayTraced) shadows.prepareMap(surfaces);
         out.stats.mapMs += raster::nowMs() - t0;

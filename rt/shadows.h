@@ -20,6 +20,7 @@
 // sample positions on area lights are a fixed stratified pattern.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "raster/draw.h"
@@ -55,11 +56,22 @@ struct ShadowStats {
     double maskMs = 0.0;  // every receiver decided: map lookups, marking, rays
 };
 
+/// One light's shadow maps and hybrid marks, with the scratch space its marking uses (defined in
+/// rt/shadows.cpp). Kept from frame to frame in ShadowMasks: a 2048-texel map and its marks are
+/// 32 MB, pages a frame would otherwise fault in afresh.
+struct LightShadowStorage;
+struct LightShadowStorageDelete {
+    void operator()(LightShadowStorage* storage) const;
+};
+
 struct ShadowMasks {
     int width = 0, height = 0;
     std::vector<std::vector<float>> visibility;  // per light of the Lighting; empty: unshadowed
     std::vector<uint8_t> marked;                 // per pixel: rays were traced for some light
     ShadowStats stats;
+    /// Per light: its maps and marks as the last frame into these masks left them, drawn over by
+    /// the next one (their contents are not part of the result).
+    std::vector<std::unique_ptr<LightShadowStorage, LightShadowStorageDelete>> storage;
 };
 
 /// The geometry that casts shadows, in world space, with its BVH (needed by Hybrid and

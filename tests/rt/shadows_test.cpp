@@ -228,6 +228,64 @@ TEST(Shadows, SoftMarksFollowThePenumbraNotEveryEdge) {
     EXPECT_LT(2 * marked[0], marked[1]);
 }
 
+/// A renderer keeps one ShadowMasks from frame to frame, and each light's maps and marks are drawn
+/// over the last frame's: whatever that frame was (another light type with another face count,
+/// another map size, mode, penumbra or view, so another focus), the result is the one fresh
+/// storage gives.
+TEST(Shadows, MasksDrawnOverAnEarlierFramesEqualFreshOnes) {
+    const OwnedMesh scene = testScene();
+    const TriangleMeshView mesh = scene.view();
+    const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);
+    const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
+    const ShadowCasters casters{mesh, &bvh, meshBounds(mesh), &adjacency};
+    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
+    raster::Pipeline gpu;
+    auto surfacesFrom = [&](glm::vec3 eye) {
+        const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), 320.0f / 240.0f, 0.1f, 50.0f) *
+                                        glm::lookAtRH(eye, glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
+        return findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, 320, 240, gpu);
+    };
+    const ScreenSurfaces views[2] = {surfacesFrom({3.0f, 4.0f, 6.0f}), surfacesFrom({-2.0f, 2.5f, 2.5f})};
+
+    raster::Lighting point = sun();
+    point.lights[0].type = raster::LightType::Point;
+    point.lights[0].position = {0.5f, 4.0f, 0.8f};
+    point.lights[0].intensity = glm::vec3(5.0f);
+    struct Frame {
+        raster::Lighting lighting;
+        ShadowMode mode;
+        bool soft;
+        int mapSize;
+        int view;
+    };
+    const Frame frames[] = {{point, ShadowMode::Hybrid, true, 512, 0},  {sun(), ShadowMode::Hybrid, false, 1024, 0},
+                            {sun(), ShadowMode::Hybrid, false, 1024, 1}, {sun(), ShadowMode::Hybrid, true, 256, 1},
+                            {point, ShadowMode::Map, false, 256, 0},    {sun(), ShadowMode::Map, true, 512, 1},
+                            {point, ShadowMode::Hybrid, false, 1024, 0}};
+    ShadowMasks kept;
+    int thinFrames = 0;
+    for (const Frame& f : frames) {
+        ShadowOptions options;
+        options.mode = f.mode;
+        options.soft = f.soft;
+        options.softSamplesPerSide = 2;
+        options.mapSizeTexels = f.mapSize;
+        const ScreenSurfaces& surfaces = views[f.view];
+        computeShadows(surfaces, f.lighting, casters, options, gpu, kept);
+        raster::Pipeline freshGpu;
+        const ShadowMasks fresh = computeShadows(surfaces, f.lighting, casters, options, freshGpu);
+        const std::string frame = std::string(f.soft ? "soft " : "hard ") + (f.mode == ShadowMode::Map ? "map " : "hybrid ") +
+                                  std::to_string(f.mapSize) + (f.lighting.lights[0].type == raster::LightType::Point ? " point" : " sun") +
+                                  " view " + std::to_string(f.view);
+        EXPECT_EQ(kept.visibility[0], fresh.visibility[0]) << frame;
+        EXPECT_EQ(kept.marked, fresh.marked) << frame;
+        EXPECT_EQ(kept.stats.markedPixels, fresh.stats.markedPixels) << frame;
+        EXPECT_EQ(kept.stats.thinTriangles, fresh.stats.thinTriangles) << frame;
+        thinFrames += fresh.stats.thinTriangles > 0;
+    }
+    EXPECT_GE(thinFrames, 3) << "the thin pole should be marked in most hybrid frames, or stale marks go unseen";
+}
+
 TEST(Shadows, SameMasksForAnyThreadCount) {
     const OwnedMesh scene = testScene();
     ShadowOptions options;
