@@ -49,21 +49,18 @@ std::vector<glm::vec3> frustumCorners(const glm::mat4& worldFromClip, float fart
 
 }  // namespace
 
-bool ScreenSurfaces::surfaceAt(int x, int y, Surface& out) const {
-    const TrianglePlane& plane = planes[triangle[size_t(y) * size_t(width) + size_t(x)]];
-    // The camera ray through the pixel centre, from the near to the far plane: the clip-space
-    // points (nx, ny, 0, 1) and (nx, ny, 1, 1) taken back to the world, without the products
-    // by zero and one a full matrix product would spend.
-    const float nx = (float(x) + 0.5f) / float(width) * 2.0f - 1.0f;
+ScreenSurfaces::CameraRow ScreenSurfaces::cameraRow(int y) const {
+    // Clip-space x of pixel x's centre is (x + 1/2) 2 / width - 1, affine in x: the row's points
+    // are the worldFromClip product at x = 0 plus x steps of its first column.
+    const float ndcPerPixelX = 2.0f / float(width);
+    const float nx = 0.5f * ndcPerPixelX - 1.0f;
     const float ny = 1.0f - (float(y) + 0.5f) / float(height) * 2.0f;
-    const glm::vec4 n4 = worldFromClip[0] * nx + worldFromClip[1] * ny + worldFromClip[3];
-    const glm::vec4 f4 = n4 + worldFromClip[2];
-    const glm::vec3 origin = glm::vec3(n4) * (1.0f / n4.w), direction = glm::vec3(f4) * (1.0f / f4.w) - origin;
-    const float denominator = glm::dot(plane.normal, direction);
-    if (denominator == 0.0f) return false;  // degenerate (zero normal) or seen exactly edge-on
-    out.position = origin + direction * ((plane.offset - glm::dot(plane.normal, origin)) / denominator);
-    out.normal = denominator > 0.0f ? -plane.normal : plane.normal;
-    return true;
+    CameraRow row;
+    row.firstPixel = size_t(y) * size_t(width);
+    row.nearAtLeft = worldFromClip[0] * nx + worldFromClip[1] * ny + worldFromClip[3];
+    row.nearPerPixel = worldFromClip[0] * ndcPerPixelX;
+    row.nearToFar = worldFromClip[2];
+    return row;
 }
 
 void VisibilityBuffer::setCasters(const TriangleMeshView& casters, std::span<const CasterRange> ranges) {

@@ -52,10 +52,38 @@ struct ScreenSurfaces {
 
     static constexpr uint32_t kNone = ~0u;
     bool covered(size_t pixel) const { return triangle[pixel] != kNone; }
-    /// The surface at a covered pixel; false where its triangle is degenerate or seen exactly
-    /// edge-on (no point to shade: the pixel is left unshadowed).
-    bool surfaceAt(int x, int y, Surface& out) const;
+
+    /// The camera rays through one row's pixel centres, as homogeneous world points: the ray of
+    /// pixel x runs from near = nearAtLeft + x nearPerPixel (clip-space (nx, ny, 0, 1)) to
+    /// near + nearToFar (clip-space depth 1). What surfaceAt needs of a row, found once for it.
+    struct CameraRow {
+        size_t firstPixel = 0;
+        glm::vec4 nearAtLeft{0.0f}, nearPerPixel{0.0f}, nearToFar{0.0f};
+    };
+    CameraRow cameraRow(int y) const;
+    /// The surface at a covered pixel of the row; false where its triangle is degenerate or seen
+    /// exactly edge-on (no point to shade: the pixel is left unshadowed).
+    bool surfaceAt(const CameraRow& row, int x, Surface& out) const;
+    bool surfaceAt(int x, int y, Surface& out) const { return surfaceAt(cameraRow(y), x, out); }
 };
+
+// The plane (n, -d) meets the segment between the homogeneous points near and far where its
+// homogeneous distances there, a and c, cancel: at a far - c near. One division takes that point
+// to the world, where carrying both ends there and then finding the crossing would take three.
+// Its w is zero exactly when the crossing is at infinity (the ray runs along the plane) or the
+// plane is degenerate (n = 0, so a = c = 0); the ray runs with the normal when w < 0 (near and
+// far have w of one sign, in front of the camera).
+inline bool ScreenSurfaces::surfaceAt(const CameraRow& row, int x, Surface& out) const {
+    const TrianglePlane& plane = planes[triangle[row.firstPixel + size_t(x)]];
+    const glm::vec4 near = row.nearAtLeft + float(x) * row.nearPerPixel, far = near + row.nearToFar;
+    const glm::vec4 homogeneousPlane(plane.normal, -plane.offset);
+    const float a = glm::dot(homogeneousPlane, near), c = glm::dot(homogeneousPlane, far);
+    const glm::vec4 crossing = a * far - c * near;
+    if (crossing.w == 0.0f) return false;
+    out.position = glm::vec3(crossing) * (1.0f / crossing.w);
+    out.normal = crossing.w < 0.0f ? -plane.normal : plane.normal;
+    return true;
+}
 
 /// Visibility buffers of one set of casters, frame after frame. What depends on the casters alone
 /// — each triangle's plane and its id as a flat colour, the indices rebased to each range's first

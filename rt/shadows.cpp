@@ -56,10 +56,11 @@ struct Incidence {
     bool reaches = false;     // the light can contribute here at all (facing, in cone, in range)
 };
 
-Incidence incidence(const raster::Light& light, const glm::vec3& p, const glm::vec3& n) {
+/// `toSun`: a directional light's unit direction toward it, the same at every receiver.
+Incidence incidence(const raster::Light& light, const glm::vec3& toSun, const glm::vec3& p, const glm::vec3& n) {
     Incidence in;
     if (light.type == raster::LightType::Directional) {
-        in.toLight = -glm::normalize(light.direction);
+        in.toLight = toSun;
         in.distance = std::numeric_limits<float>::infinity();
     } else {
         const glm::vec3 d = light.position - p;
@@ -199,13 +200,14 @@ private:
         const glm::vec3 nv = glm::mat3(face.viewFromWorld) * n;
         // The receiver's plane, carried one texel over: view x is texel x, view y is texel -y.
         const float nz = std::max(nv.z, 0.05f);  // steeper than 20 texels of depth per texel: clamp
+        const float depthPerTexel = t.texelWorld / nz;  // times the normal's x, or -y: the plane's slopes
         Receiver r;
         r.qx = q.x;
         r.qy = q.y;
         r.depth = q.z;
         r.texelWorld = t.texelWorld;
-        r.slopeX = nv.x / nz * t.texelWorld;
-        r.slopeY = -nv.y / nz * t.texelWorld;
+        r.slopeX = nv.x * depthPerTexel;
+        r.slopeY = -nv.y * depthPerTexel;
         r.bias = 0.5f * t.texelWorld + rayOffset_;  // rounding of the map and of curved receivers
         return r;
     }
@@ -221,20 +223,23 @@ private:
     bool potentiallyIncorrect(const Receiver& r, const ShadowMapTexel& t, int* decision) const {
         const int size = map_.size();
         if (t.x < 1 || t.y < 1 || t.x >= size - 1 || t.y >= size - 1) return true;  // a neighbour is off the face
-        const bool centre = litAt(r, t, 0, 0);
         const FaceMarks& marks = faces_[size_t(t.face)];
         // litAt over the 3x3 texels, all inside the face: the same comparison, read straight
-        // from the depth rows.
+        // from the depth rows and counted without a branch (a shadow edge passes near unless all
+        // nine agree, which an early exit would mispredict at every edge).
         const float* depth = map_.face(t.face).depth.data();
+        int lit = 0;
         for (int dy = -1; dy <= 1; ++dy) {
             const float* row = depth + size_t(t.y + dy) * size_t(size);
             const float cy = float(t.y + dy) + 0.5f - r.qy;
             for (int dx = -1; dx <= 1; ++dx) {
                 const float cx = float(t.x + dx) + 0.5f - r.qx;
                 const float planeDepth = r.depth + r.slopeX * cx + r.slopeY * cy;
-                if ((planeDepth - r.bias <= row[t.x + dx]) != centre) return true;  // a shadow edge passes near
+                lit += planeDepth - r.bias <= row[t.x + dx];
             }
         }
+        if (lit != 0 && lit != 9) return true;
+        const bool centre = lit == 9;
         // A thin caster the map may have missed, tested as the map's own texel would be (litAt):
         // its depth at the texel centre against the receiver's plane carried there. Only the
         // receiver's own texel matters: the ray to the light leaves from its point there, and a
@@ -678,13 +683,15 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
         mask.assign(pixels, 1.0f);
         // Counters per row, summed in row order: integers, so the totals are exact anyway.
         std::vector<std::array<uint64_t, 3>> rowCounts(size_t(surfaces.height));
+        const glm::vec3 toSun = -glm::normalize(light.direction);  // used for directional lights only
         raster::parallelFor(size_t(surfaces.height), [&](size_t y) {
             std::array<uint64_t, 3>& c = rowCounts[y];
+            const ScreenSurfaces::CameraRow row = surfaces.cameraRow(int(y));
             for (int x = 0; x < surfaces.width; ++x) {
                 const size_t i = y * surfaces.width + x;
                 Surface surface;
-                if (!surfaces.covered(i) || !surfaces.surfaceAt(x, int(y), surface)) continue;
-                const Incidence in = incidence(light, surface.position, surface.normal);
+                if (!surfaces.covered(i) || !surfaces.surfaceAt(row, x, surface)) continue;
+                const Incidence in = incidence(light, toSun, surface.position, surface.normal);
                 if (!in.reaches) {
                     mask[i] = 0.0f;  // the shading gives this light nothing here anyway
                     continue;
