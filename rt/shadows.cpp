@@ -374,9 +374,26 @@ private:
         return float(lit) / float(disk_.size());
     }
 
+    /// Whether a caster lies on the segment from `origin` toward the light. It is traced from the
+    /// light's end back to the receiver: traversal enters the nearer box first, so an occluder is
+    /// met before the dense surface about the receiver, every triangle of which a ray leaving the
+    /// receiver must first prove it misses. (A lit segment visits the same boxes either way.)
     bool occluded(const glm::vec3& origin, const glm::vec3& direction, float distance) const {
-        Ray ray{origin, direction, 0.0f, std::isinf(distance) ? distance : distance * (1.0f - 1e-4f)};
+        const float length = std::isinf(distance) ? exitDistance(origin, direction) : distance * (1.0f - 1e-4f);
+        if (!(length > 0.0f)) return false;  // the ray leaves the casters' bounds at once
+        const Ray ray{origin + direction * length, -direction, 0.0f, length};
         return casters_.bvh->anyHit(ray);
+    }
+
+    /// How far a ray from `origin` runs before it leaves the casters' bounds for good (widened by
+    /// the ray offset, so no caster on the boundary is cut off); 0 or less if it never meets them.
+    float exitDistance(const glm::vec3& origin, const glm::vec3& direction) const {
+        float exit = std::numeric_limits<float>::infinity();
+        for (int a = 0; a < 3; ++a) {
+            const float toFarSide = (direction[a] < 0.0f ? casters_.bounds.lo[a] - rayOffset_ : casters_.bounds.hi[a] + rayOffset_) - origin[a];
+            if (direction[a] != 0.0f) exit = std::min(exit, toFarSide / direction[a]);
+        }
+        return exit;
     }
 
     // ---- per-face marks for the hybrid method -------------------------------------------------

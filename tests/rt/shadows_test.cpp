@@ -9,6 +9,7 @@
 
 #include "raster/parallel.h"
 #include "rt/bvh_build.h"
+#include "rt/ray.h"
 #include "rt/screen_surfaces.h"
 #include "rt/shadow_map.h"
 #include "rt/shadows.h"
@@ -67,6 +68,22 @@ Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, con
 
 raster::Lighting sun() { return raster::Lighting::directional(glm::normalize(glm::vec3(0.4f, 1.0f, 0.3f)), glm::vec3(1.0f), glm::vec3(0.1f)); }
 
+/// A point light above the scene and a spot light from the side, lighting it whole between them.
+raster::Lighting pointAndSpotLights() {
+    raster::Lighting lights;
+    lights.ambient = glm::vec3(0.1f);
+    lights.lightCount = 2;
+    lights.lights[0].type = raster::LightType::Point;
+    lights.lights[0].position = {0.5f, 4.0f, 0.8f};
+    lights.lights[0].intensity = glm::vec3(5.0f);
+    lights.lights[1].type = raster::LightType::Spot;
+    lights.lights[1].position = {-2.0f, 3.5f, 2.0f};
+    lights.lights[1].direction = glm::normalize(glm::vec3(0.5f, -1.0f, -0.5f));
+    lights.lights[1].intensity = glm::vec3(5.0f);
+    lights.lights[1].cosOuterCone = 0.8f;
+    return lights;
+}
+
 TEST(Shadows, HybridEqualsRayTracedExceptAtCountedLimits) {
     const OwnedMesh scene = testScene();
     for (const int mapSize : {256, 1024}) {
@@ -108,6 +125,53 @@ TEST(Shadows, TheReferenceHasShadowsAndLight) {
     EXPECT_GT(lit, 20000u);
 }
 
+/// The reference itself against brute force: each receiver's ray to the light, from the same
+/// offset origin, tested against every triangle in the direction it leaves the receiver (the
+/// stage traces the segment from the light's end back, through the BVH). They may part only on
+/// rays that graze a triangle's edge at the segment's very end, where rounding decides.
+TEST(Shadows, TheReferenceEqualsBruteForceRaysForEveryLightType) {
+    const OwnedMesh scene = testScene();
+    const TriangleMeshView mesh = scene.view();
+    raster::Lighting lights = pointAndSpotLights();
+    lights.lights[2] = sun().lights[0];
+    lights.lightCount = 3;
+    ShadowOptions options;
+    options.mode = ShadowMode::RayTraced;
+    const Rendered r = shadowsOf(scene, lights, options, 160, 120);
+    const float rayOffset = 1e-4f * std::max(0.5f * glm::length(meshBounds(mesh).extent()), 1e-3f);  // as the stage offsets
+    for (int l = 0; l < 3; ++l) {
+        const raster::Light& light = lights.lights[l];
+        size_t tested = 0, shadowed = 0, differ = 0;
+        for (size_t i = 0; i < r.surfaces.triangle.size(); ++i) {
+            Surface s;
+            const int x = int(i % size_t(r.surfaces.width)), y = int(i / size_t(r.surfaces.width));
+            if (!r.surfaces.covered(i) || !r.surfaces.surfaceAt(x, y, s)) continue;
+            const float v = r.masks.visibility[size_t(l)][i];
+            const bool directional = light.type == raster::LightType::Directional;
+            const glm::vec3 toLight = directional ? -glm::normalize(light.direction) : glm::normalize(light.position - s.position);
+            const bool inCone = light.type != raster::LightType::Spot || glm::dot(light.direction, -toLight) > light.cosOuterCone;
+            if (!(glm::dot(s.normal, toLight) > 0.0f) || !inCone) {
+                EXPECT_EQ(v, 0.0f) << "light " << l << " pixel " << i << ": facing away or outside the cone";
+                continue;
+            }
+            const Ray ray{s.position + s.normal * rayOffset, toLight, 0.0f,
+                          directional ? std::numeric_limits<float>::infinity() : glm::distance(light.position, s.position) * (1.0f - 1e-4f)};
+            const WatertightRay test(ray);
+            bool blocked = false;
+            for (size_t t = 0; t < mesh.triangleCount() && !blocked; ++t) {
+                RayHit hit;
+                blocked = test.intersect(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), ray.tMin, ray.tMax, &hit);
+            }
+            ++tested;
+            shadowed += blocked;
+            differ += (v == 0.0f) != blocked;
+        }
+        EXPECT_GT(tested, 5000u) << "light " << l;
+        EXPECT_GT(shadowed, 100u) << "light " << l << ": the scene should cast shadows";
+        EXPECT_LE(double(differ), 1e-3 * double(tested)) << "light " << l << ": " << differ << " of " << tested << " differ";
+    }
+}
+
 TEST(Shadows, MapDiffersFromRayTracedOnlyWhereHybridMarks) {
     const OwnedMesh scene = testScene();
     ShadowOptions options;
@@ -132,17 +196,7 @@ TEST(Shadows, MapDiffersFromRayTracedOnlyWhereHybridMarks) {
 
 TEST(Shadows, PointAndSpotLightsHybridEqualsRayTraced) {
     const OwnedMesh scene = testScene();
-    raster::Lighting lights;
-    lights.ambient = glm::vec3(0.1f);
-    lights.lightCount = 2;
-    lights.lights[0].type = raster::LightType::Point;
-    lights.lights[0].position = {0.5f, 4.0f, 0.8f};
-    lights.lights[0].intensity = glm::vec3(5.0f);
-    lights.lights[1].type = raster::LightType::Spot;
-    lights.lights[1].position = {-2.0f, 3.5f, 2.0f};
-    lights.lights[1].direction = glm::normalize(glm::vec3(0.5f, -1.0f, -0.5f));
-    lights.lights[1].intensity = glm::vec3(5.0f);
-    lights.lights[1].cosOuterCone = 0.8f;
+    const raster::Lighting lights = pointAndSpotLights();
     ShadowOptions options;
     options.mapSizeTexels = 1024;
     options.mode = ShadowMode::RayTraced;
@@ -247,10 +301,8 @@ TEST(Shadows, MasksDrawnOverAnEarlierFramesEqualFreshOnes) {
     };
     const ScreenSurfaces views[2] = {surfacesFrom({3.0f, 4.0f, 6.0f}), surfacesFrom({-2.0f, 2.5f, 2.5f})};
 
-    raster::Lighting point = sun();
-    point.lights[0].type = raster::LightType::Point;
-    point.lights[0].position = {0.5f, 4.0f, 0.8f};
-    point.lights[0].intensity = glm::vec3(5.0f);
+    raster::Lighting point = pointAndSpotLights();
+    point.lightCount = 1;  // the point light alone
     struct Frame {
         raster::Lighting lighting;
         ShadowMode mode;
