@@ -27,15 +27,19 @@ struct FaceMarks {
     float nearestDepth = 0.0f;  // the nearest caster depth in the face
 };
 
+/// The thin-caster marking's working space, used by each face of a map in turn.
+struct ThinMarkingScratch {
+    std::vector<glm::vec3> projected;     // per caster vertex: texel x, texel y, linear depth
+    std::vector<int8_t> facing;           // per caster triangle: its side toward the light
+    std::vector<uint8_t> nearSilhouette;  // per position id
+};
+
 }  // namespace shadow_detail
 
 struct LightShadowStorage {
     ShadowMap map;
     std::vector<shadow_detail::FaceMarks> faces;  // per face of the map (hybrid, soft)
-    // Scratch of the thin-caster marking, per face in turn.
-    std::vector<glm::vec3> projected;    // per caster vertex: texel x, texel y, linear depth
-    std::vector<int8_t> facing;          // per caster triangle: its side toward the light
-    std::vector<uint8_t> nearSilhouette;  // per position id
+    shadow_detail::ThinMarkingScratch scratch;
 };
 
 void LightShadowStorageDelete::operator()(LightShadowStorage* storage) const { delete storage; }
@@ -43,6 +47,7 @@ void LightShadowStorageDelete::operator()(LightShadowStorage* storage) const { d
 namespace {
 
 using shadow_detail::FaceMarks;
+using shadow_detail::ThinMarkingScratch;
 
 // A soft shadow's silhouette lies within a texel of the discontinuity texels either side of it (it
 // passes between two adjacent texel centres that disagree); a sixteenth more covers rounding.
@@ -144,8 +149,8 @@ public:
     /// Draws into `storage`, whatever an earlier frame left there.
     LightShadows(const raster::Light& light, const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu,
                  LightShadowStorage& storage)
-        : light_(light), casters_(casters), options_(options), gpu_(gpu), storage_(storage), map_(storage.map),
-          faces_(storage.faces) {
+        : light_(light), casters_(casters), options_(options), gpu_(gpu), map_(storage.map), faces_(storage.faces),
+          scratch_(storage.scratch) {
         const float radius = 0.5f * glm::length(casters.bounds.extent());
         rayOffset_ = 1e-4f * std::max(radius, 1e-3f);
         if (options.soft) disk_ = diskSamples(std::max(1, options.softSamplesPerSide));
@@ -471,7 +476,7 @@ private:
         const size_t count = casters_.mesh.triangleCount();
         constexpr size_t kChunk = 16384;
         const std::span<const glm::vec3> positions = casters_.mesh.positions;
-        std::vector<glm::vec3>& projected = storage_.projected;
+        std::vector<glm::vec3>& projected = scratch_.projected;
         projected.resize(positions.size());
         raster::parallelFor((positions.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
             for (size_t v = chunk * kChunk; v < std::min(positions.size(), (chunk + 1) * kChunk); ++v)
@@ -507,7 +512,7 @@ private:
     /// the sheet, and where those samples disagree the 3x3 test marks the receiver anyway.
     /// Empty without adjacency.
     const std::vector<uint8_t>& positionsNearSilhouette(int f, const std::vector<glm::vec3>& projected) const {
-        std::vector<uint8_t>& near = storage_.nearSilhouette;
+        std::vector<uint8_t>& near = scratch_.nearSilhouette;
         const MeshAdjacency* adjacency = casters_.adjacency;
         if (!adjacency || adjacency->positionId.size() != casters_.mesh.positions.size()) {
             near.clear();
@@ -517,7 +522,7 @@ private:
         const size_t count = casters_.mesh.triangleCount();
         // Facing in the map's own texel space: the sign of the projected area (0: edge-on, or
         // reaching behind the light's view, both treated as a silhouette).
-        std::vector<int8_t>& facing = storage_.facing;
+        std::vector<int8_t>& facing = scratch_.facing;
         facing.resize(count);  // every entry is written below
         constexpr size_t kChunk = 16384;
         raster::parallelFor((count + kChunk - 1) / kChunk, [&](size_t chunk) {
@@ -651,9 +656,9 @@ private:
     raster::Pipeline& gpu_;
     float rayOffset_ = 0.0f;
     std::vector<glm::vec2> disk_;
-    LightShadowStorage& storage_;
     ShadowMap& map_;
     std::vector<FaceMarks>& faces_;
+    ThinMarkingScratch& scratch_;
     uint64_t thinTriangles_ = 0;
 
 public:

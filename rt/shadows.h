@@ -26,7 +26,6 @@
 #include "raster/draw.h"
 #include "raster/pipeline.h"
 #include "rt/aabb.h"
-#include "rt/bvh.h"
 #include "rt/deforming_bvh.h"
 #include "rt/mesh_adjacency.h"
 #include "rt/screen_surfaces.h"
