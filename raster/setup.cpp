@@ -96,8 +96,16 @@ bool projectToWindow(const glm::vec4& p, const SetupContext& c, WindowVertex& ou
 }
 
 int32_t snapToSubpixels(float windowCoordinate) {
-    // In double, v * 256 is exact and adding 0.5 cannot round for |v| < 2^44.
-    return static_cast<int32_t>(std::floor(double(windowCoordinate) * kSubpixelsPerPixel + 0.5));
+    // In double, v * 256 and its distance from floor(v * 256) are exact for any float v, so the
+    // tie is seen exactly and broken to the even subpixel, as Direct3D converts floats to fixed
+    // point (and llvmpipe's lrintf does): a tie rounded up instead can collapse a thin sliver to
+    // zero area that the same vertices, snapped as a GPU snaps them, give a non-zero one.
+    const double scaled = double(windowCoordinate) * kSubpixelsPerPixel;
+    const double below = std::floor(scaled);
+    const double fraction = scaled - below;
+    const bool belowIsOdd = std::fmod(below, 2.0) != 0.0;
+    const bool roundUp = fraction > 0.5 || (fraction == 0.5 && belowIsOdd);
+    return static_cast<int32_t>(roundUp ? below + 1.0 : below);
 }
 
 SetupResult setupTriangle(const WindowVertex& w0, const WindowVertex& w1, const WindowVertex& w2,

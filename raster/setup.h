@@ -3,7 +3,7 @@
 // rasterizes.
 //
 // 1. Perspective divide and viewport transform to window space (pixels, y down).
-// 2. Snap x and y to 1/256 pixel, rounding to nearest (ties up), in exact double arithmetic.
+// 2. Snap x and y to 1/256 pixel, rounding to nearest (ties to even), in exact double arithmetic.
 // 3. The doubled signed area from the snapped vertices, in int64: zero-area triangles cover
 //    nothing and stop here; its sign gives the facing for culling. Clockwise-on-screen order
 //    is then enforced (swapping v1 and v2) so that the inside of every edge is E >= 0.
@@ -74,7 +74,8 @@ struct SetupContext {
                                 const SamplePattern& samples, CullMode cull, int varyingCount);
 };
 
-/// Snaps a window coordinate to subpixels: round to nearest, ties up, exactly.
+/// Snaps a window coordinate to subpixels: round to nearest, ties to the even subpixel, exactly
+/// (Direct3D's float-to-fixed-point rule).
 int32_t snapToSubpixels(float windowCoordinate);
 
 /// A vertex after the perspective divide and the viewport transform, x and y snapped.

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -318,6 +319,60 @@ TEST(Setup, TrianglesBetweenSampleCentresAreDroppedBeforeBinning) {
     const raster::StageCounters covering = drawOne({{3.1f, 3.1f, 0.5f}, {3.95f, 3.1f, 0.5f}, {3.1f, 3.95f, 0.5f}});
     EXPECT_EQ(covering.trianglesSetUp, 1u);
     EXPECT_EQ(covering.samplesPassed, 1u);
+}
+
+TEST(Snapping, TiesGoToTheEvenSubpixel) {
+    // Direct3D's float-to-fixed rule: exact halves of a subpixel round to the even neighbour,
+    // everything else to the nearest; negative coordinates (the guard band) alike.
+    const float subpixel = 1.0f / raster::kSubpixelsPerPixel;
+    EXPECT_EQ(raster::snapToSubpixels(0.5f * subpixel), 0);
+    EXPECT_EQ(raster::snapToSubpixels(1.5f * subpixel), 2);
+    EXPECT_EQ(raster::snapToSubpixels(2.5f * subpixel), 2);
+    EXPECT_EQ(raster::snapToSubpixels(-0.5f * subpixel), 0);
+    EXPECT_EQ(raster::snapToSubpixels(-1.5f * subpixel), -2);
+    EXPECT_EQ(raster::snapToSubpixels(-2.5f * subpixel), -2);
+    EXPECT_EQ(raster::snapToSubpixels(70.158203125f), 17960);  // 17960.5 subpixels
+    EXPECT_EQ(raster::snapToSubpixels(62.6552734375f), 16040);  // 16039.75
+    EXPECT_EQ(raster::snapToSubpixels(2.49f * subpixel), 2);
+    EXPECT_EQ(raster::snapToSubpixels(2.51f * subpixel), 3);
+    // Every tie in a range of coordinates, against the rule written out in integers.
+    for (int twice = -4096; twice <= 4096; ++twice) {
+        const float v = float(twice) / (2.0f * raster::kSubpixelsPerPixel);
+        const int below = (twice - 1) / 2, above = (twice + 1) / 2;  // neighbours of an odd half
+        const int expected = twice % 2 == 0 ? twice / 2 : (below % 2 == 0 ? below : above);
+        ASSERT_EQ(raster::snapToSubpixels(v), expected) << twice << " half-subpixels";
+    }
+}
+
+TEST(Setup, AThinSliverSnappedAsAGpuSnapsKeepsItsSamples) {
+    // A sliver whose snapped vertices (16262, 14119), (20642, 16040), (25022, 17960) have twice
+    // the area -4380: at pixel (85, 64), 4x sample 2 (-6, 2)/16, its edge functions are 1630,
+    // 480 and 2270 (written out below), strictly inside, so set-up must keep it and that sample
+    // must be covered. Rounding the tie 17960.5 up instead collapses it to zero area.
+    const int64_t x[3] = {16262, 20642, 25022}, y[3] = {14119, 16040, 17960};
+    const int64_t sx = 85 * 256 + 128 - 6 * 16, sy = 64 * 256 + 128 + 2 * 16;
+    auto edge = [&](int i, int j) { return (x[j] - x[i]) * (sy - y[i]) - (y[j] - y[i]) * (sx - x[i]); };
+    const int64_t doubleArea = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+    ASSERT_EQ(doubleArea, -4380);
+    const int64_t e[3] = {-edge(1, 2), -edge(2, 0), -edge(0, 1)};  // inside is > 0 for this winding
+    ASSERT_GT(std::min({e[0], e[1], e[2]}), 0);
+
+    const std::vector<glm::vec3> positions = {{63.5234375f, 55.15234375f, 0.5f},
+                                              {80.6328125f, 62.6552734375f, 0.5f},
+                                              {97.7421875f, 70.158203125f, 0.5f}};
+    raster::DrawCall d;
+    d.space = raster::PositionSpace::Window;
+    d.positions = positions;
+    d.state.depthTest = false;
+    d.state.constantColor = glm::vec4(1.0f);
+    d.state.shading = raster::ShadingModel::ConstantColor;
+    raster::Pipeline p;
+    p.beginFrame(frame(256, 192, 4));
+    p.draw(d);
+    p.endFrame();
+    EXPECT_EQ(p.stats().counters.trianglesDegenerate, 0u);
+    EXPECT_EQ(p.stats().counters.trianglesSetUp, 1u);
+    EXPECT_EQ(sampleColor(p.framebuffer(), 85, 64, 2), glm::vec4(1.0f));
 }
 
 }  // namespace
