@@ -18,6 +18,7 @@
 #include "raster/limits.h"
 #include "raster/parallel.h"
 #include "scene/input_error.h"
+#include "scene/file_names.h"
 
 extern char** environ;
 
@@ -246,7 +247,10 @@ void validate(const AccuracyOptions& o) {
     if (o.threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
 }
 
-bool isThreeD(const std::string& scene) { return !scene.ends_with(".tri") && !scene.ends_with(".cvox"); }
+bool isThreeD(const std::string& scene) {
+    const scene::FileKind kind = scene::fileKindOf(scene);
+    return kind != scene::FileKind::TriangleList && kind != scene::FileKind::VoxelModel;
+}
 bool isFile(const std::string& scene) { return scene.find('.') != std::string::npos || scene.find('/') != std::string::npos; }
 
 std::string shellQuote(const std::string& s) {
@@ -263,7 +267,7 @@ std::vector<std::string> renderArgs(const AccuracyOptions& o, const std::vector<
                                     const fs::path& image, const fs::path& stats, int width, int height) {
     std::vector<std::string> a{o.executable.string(), "render", o.scene, "--width", std::to_string(width),
                                "--height", std::to_string(height), "--threads", std::to_string(o.threads)};
-    if (isFile(o.scene) && !o.scene.ends_with(".tri"))
+    if (isFile(o.scene) && scene::fileKindOf(o.scene) != scene::FileKind::TriangleList)
         a.insert(a.end(), {"--azimuth", formatNumber(o.azimuth), "--elevation", formatNumber(o.elevation)});
     if (o.cameraIndex >= 0) a.insert(a.end(), {"--camera-index", std::to_string(o.cameraIndex)});
     if (o.timeSeconds != 0.0f) a.insert(a.end(), {"--time", formatNumber(o.timeSeconds)});
@@ -350,7 +354,7 @@ RunOutcome runOnce(const AccuracyOptions& o, const std::vector<std::string>& kno
 
 SceneTraits probeScene(const AccuracyOptions& o) {
     SceneTraits t;
-    t.voxel = o.scene.ends_with(".cvox");
+    t.voxel = scene::fileKindOf(o.scene) == scene::FileKind::VoxelModel;
     t.threeD = isThreeD(o.scene);
     std::vector<std::string> knobs;
     if (t.threeD) knobs = {"--shadows", "raytraced"};

@@ -13,6 +13,7 @@
 #include "raster/sample_pattern.h"
 #include "raster/setup.h"
 #include "scene/input_error.h"
+#include "scene/file_names.h"
 
 namespace cuberille::apps {
 namespace {
@@ -291,7 +292,7 @@ raster::Image resolveStage(const scene::TriScene& s, const Region& r, const Expl
 scene::TriScene sceneFor(const ExplainOptions& o) {
     if (!o.scene.empty() && !o.triangle.empty()) throw scene::InputError("explain: give a .tri scene or --triangle, not both");
     if (!o.scene.empty()) {
-        if (!o.scene.ends_with(".tri")) throw scene::InputError("explain: '" + o.scene + "' is not a .tri scene");
+        if (scene::fileKindOf(o.scene) != scene::FileKind::TriangleList) throw scene::InputError("explain: '" + o.scene + "' is not a .tri scene");
         return scene::loadTriScene(o.scene);
     }
     if (o.triangle.empty()) throw scene::InputError("explain: give a .tri scene or --triangle \"x0 y0 x1 y1 x2 y2\"");

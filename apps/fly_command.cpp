@@ -8,6 +8,7 @@
 #include "apps/atomic_file.h"
 #include "apps/frame_plot.h"
 #include "apps/image_io.h"
+#include "apps/process_memory.h"
 #include "apps/render_command.h"
 #include "lod/camera_path.h"
 #include "raster/clock.h"
@@ -15,6 +16,7 @@
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
 #include "scene/input_error.h"
+#include "scene/file_names.h"
 
 namespace cuberille::apps {
 namespace {
@@ -23,7 +25,7 @@ constexpr double kMib = 1024.0 * 1024.0;
 
 void validate(const FlyOptions& o) {
     using scene::InputError;
-    if (!o.model.string().ends_with(".cvox")) throw InputError(o.model.string() + ": fly needs a voxel model (.cvox)");
+    if (scene::fileKindOf(o.model) != scene::FileKind::VoxelModel) throw InputError(o.model.string() + ": fly needs a voxel model (.cvox)");
     if (o.frames < 1 || o.frames > 1000000) throw InputError("--frames: must be 1 to 1000000");
     validateFrameOptions(o.width, o.height, o.msaa, o.threads);
     if (o.saveEvery < 0) throw InputError("--save-every: must be 0 (the final image only) or more");
@@ -138,6 +140,11 @@ void printSummary(const FlyOptions& o, const FlyResult& r) {
     std::printf("  read %.1f MiB from disk (%.2f MiB a frame); held at most %.1f of %.0f MiB\n",
                 double(r.bytesReadFromDisk) / kMib, readMib / double(r.frames.size()), double(r.peakHeldBytes) / kMib,
                 double(r.budgetBytes) / kMib);
+    if (!r.residentBytes.empty())
+        std::printf("  process resident memory %.0f MiB after the first frame, %.0f MiB at most, %.0f MiB after the last\n",
+                    double(r.residentBytes.front()) / kMib,
+                    double(*std::max_element(r.residentBytes.begin(), r.residentBytes.end())) / kMib,
+                    double(r.residentBytes.back()) / kMib);
     const size_t settling = r.frames.size() - size_t(r.pathFrames);
     if (o.settleFrames > 0)
         std::printf("  %s after %zu more frame%s of the last view\n", r.settled ? "settled" : "not settled", settling,
@@ -153,6 +160,7 @@ FlyResult runFly(const FlyOptions& o) {
     FlyResult r;
     const double start = raster::nowMs();
     const voxel::CvoxReader reader(o.model);
+    if (reader.blockCount() == 0) throw scene::InputError(o.model.string() + ": no voxels to fly through (a model of no blocks)");
     lod::StreamingOptions so;
     so.budgetBytes = uint64_t(o.budgetMib * kMib);
     so.uploadLimitBytes = uint64_t(o.uploadLimitMib * kMib);
@@ -178,12 +186,15 @@ FlyResult runFly(const FlyOptions& o) {
     for (int i = 0; i < o.frames; ++i) {
         const float t = o.frames > 1 ? float(i) / float(o.frames - 1) : 0.0f;
         r.frames.push_back(flight.frame(path.at(t, lens)));
+        r.residentBytes.push_back(residentBytes());
         if (i == 0) r.timeToFirstImageMs = raster::nowMs() - start;
         if (o.saveEvery > 0 && i % o.saveEvery == 0) saveImage(flight.pipeline(), framePath(o, i));
     }
     r.pathFrames = o.frames;
     if (o.settleFrames > 0) {
-        for (lod::FlightFrame& f : flight.settle(path.at(1.0f, lens), o.settleFrames)) r.frames.push_back(std::move(f));
+        const auto measure = [&](const lod::FlightFrame&) { r.residentBytes.push_back(residentBytes()); };
+        for (lod::FlightFrame& f : flight.settle(path.at(1.0f, lens), o.settleFrames, measure))
+            r.frames.push_back(std::move(f));
         r.settled = blocks.settled();
     }
     for (const lod::FlightFrame& f : r.frames) r.peakHeldBytes = std::max(r.peakHeldBytes, heldBytes(f.streaming));
@@ -198,11 +209,12 @@ std::string flyCsv(const FlyResult& r) {
     csv << "frame,settling,frame_ms,traversal_ms,io_wait_ms,upload_ms,raster_ms,requested_bytes,loaded_bytes,"
            "uploaded_bytes,revived_bytes,dropped_bytes,staged_bytes,resident_voxel_bytes,resident_vertex_bytes,"
            "resident_index_bytes,free_list_bytes,defragmentations,failed_blocks,requests,missing_blocks,stand_ins,"
-           "holes,triangle_blocks,occlusion_culled,faces";
+           "holes,triangle_blocks,occlusion_culled,faces,process_resident_bytes";
     for (size_t l = 0; l < levels; ++l) csv << ",drawn_level_" << l;
     csv << "\n";
     char ms[160];
-    for (const lod::FlightFrame& f : r.frames) {
+    for (size_t i = 0; i < r.frames.size(); ++i) {
+        const lod::FlightFrame& f = r.frames[i];
         const lod::StreamingFrameStats& s = f.streaming;
         std::snprintf(ms, sizeof ms, "%.3f,%.3f,%.3f,%.3f,%.3f", f.frameMs, f.traversalMs, f.ioWaitMs, f.uploadMs,
                       f.rasterMs);
@@ -212,7 +224,7 @@ std::string flyCsv(const FlyResult& r) {
             << s.freeListBytes[0] + s.freeListBytes[1] + s.freeListBytes[2] << ',' << s.defragmentations << ','
             << s.failedBlocks << ',' << s.requests << ',' << f.voxel.missingBlocks << ',' << f.voxel.standIns << ','
             << f.voxel.holes << ',' << f.voxel.triangleBlocksDrawn << ',' << f.voxel.occlusionCulled << ','
-            << f.voxel.facesEmitted;
+            << f.voxel.facesEmitted << ',' << (i < r.residentBytes.size() ? r.residentBytes[i] : 0);
         for (size_t l = 0; l < levels; ++l)
             csv << ',' << (l < f.voxel.selection.drawnPerLevel.size() ? f.voxel.selection.drawnPerLevel[l] : 0);
         csv << "\n";

@@ -31,6 +31,7 @@ struct FlyOptions {
 
 struct FlyResult {
     std::vector<lod::FlightFrame> frames;  // the path's, then the settling ones
+    std::vector<uint64_t> residentBytes;   // the process's resident set after each frame
     int pathFrames = 0;
     double openMs = 0.0;               // opening the model and reading its root
     double timeToFirstImageMs = 0.0;   // from the start to the first frame's image

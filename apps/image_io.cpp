@@ -16,9 +16,10 @@
 namespace cuberille::apps {
 
 ImageFormat imageFormatFor(const std::filesystem::path& path) {
+    const scene::FileKind kind = scene::fileKindOf(path);
+    if (kind == scene::FileKind::Png) return ImageFormat::Png;
+    if (kind == scene::FileKind::Exr) return ImageFormat::Exr;
     const std::string e = scene::lowerExtension(path);
-    if (e == ".png") return ImageFormat::Png;
-    if (e == ".exr") return ImageFormat::Exr;
     throw scene::InputError(path.string() + ": unsupported output format '" + e +
                             "' (use .png or .exr)");
 }

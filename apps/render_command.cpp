@@ -20,6 +20,7 @@
 #include "scene/procedural.h"
 #include "scene/tri_scene.h"
 #include "voxel/cvox_file.h"
+#include "scene/file_names.h"
 
 namespace cuberille::apps {
 namespace {
@@ -36,14 +37,15 @@ void validate(const RenderOptions& o) {
         throw InputError("--soft-samples: " + std::to_string(sh.softSamplesPerSide) + " is outside 1..16 (rays per side)");
     if (!(sh.lightRadius >= 0.0f) || !std::isfinite(sh.lightRadius))
         throw InputError("--light-radius: must be a finite number, 0 or more");
-    const bool threeD = !o.scene.ends_with(".tri") && !o.scene.ends_with(".cvox");
+    const scene::FileKind kind = scene::fileKindOf(o.scene);
+    const bool threeD = kind != scene::FileKind::TriangleList && kind != scene::FileKind::VoxelModel;
     if ((sh.mode != rt::ShadowMode::None || o.view == View::ShadowPixels) && !threeD)
         throw InputError("--shadows and --view shadow-pixels: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + o.scene);
     if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
         throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
     if (o.frustumCull && !threeD) throw InputError("--frustum-cull: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + o.scene);
     if (o.animate < 0 || o.animate > 3600) throw InputError("--animate: 0 to 3600 frames");
-    if (o.animate > 0 && !(o.scene.ends_with(".gltf") || o.scene.ends_with(".glb")))
+    if (o.animate > 0 && !scene::isGltfKind(kind))
         throw InputError("--animate: only for glTF files (.gltf, .glb), not " + o.scene);
     if (o.animate > 0 && o.turntable > 0) throw InputError("--animate and --turntable: one or the other");
     if (!(o.fps > 0.0f && o.fps <= 1000.0f)) throw InputError("--fps: must be in (0, 1000]");
@@ -150,8 +152,8 @@ const char* textureFilterName(TextureFilterOverride f) {
 
 namespace {
 
-bool isTriFile(const RenderOptions& o) { return o.scene.ends_with(".tri"); }
-bool isVoxelFile(const RenderOptions& o) { return o.scene.ends_with(".cvox"); }
+bool isTriFile(const RenderOptions& o) { return scene::fileKindOf(o.scene) == scene::FileKind::TriangleList; }
+bool isVoxelFile(const RenderOptions& o) { return scene::fileKindOf(o.scene) == scene::FileKind::VoxelModel; }
 
 
 void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which);
@@ -279,7 +281,9 @@ uint32_t finestLevelFor(const voxel::VoxelModel& model, uint32_t resolution) {
 /// A voxel model: blocks selected, expanded and drawn through the same pipeline.
 void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     const double t0 = raster::nowMs();
-    lod::VoxelScene s(voxel::readCvox(o.scene), o.azimuth, o.elevation);
+    voxel::VoxelModel model = voxel::readCvox(o.scene);
+    if (model.blocks.empty()) throw scene::InputError(o.scene + ": no voxels to draw (a model of no blocks)");
+    lod::VoxelScene s(std::move(model), o.azimuth, o.elevation);
     s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
     result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.model().triangleCount();
@@ -335,6 +339,7 @@ RenderResult renderAtScale(const RenderOptions& o, float windowScale) {
         return result;
     }
     scene::TriScene s = scene::loadTriScene(o.scene);
+    if (s.positions.empty()) throw scene::InputError(o.scene + ": no triangles to draw (no triangle lines)");
     for (glm::vec3& p : s.positions) p *= windowScale;
     result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.triangleCount();

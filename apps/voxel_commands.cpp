@@ -25,11 +25,8 @@ double peakResidentMib() {
     return double(u.ru_maxrss) / 1024.0;  // Linux reports KiB
 }
 
-bool hasExtension(const std::filesystem::path& p, const char* ext) { return scene::lowerExtension(p) == ext; }
-
-void requireExtension(const std::filesystem::path& p, const char* ext, const char* what) {
-    if (!hasExtension(p, ext))
-        throw scene::InputError(p.string() + ": " + what + " must end in " + ext);
+void requireKind(const std::filesystem::path& p, scene::FileKind kind, const char* ext, const char* what) {
+    if (scene::fileKindOf(p) != kind) throw scene::InputError(p.string() + ": " + what + " must end in " + ext);
 }
 
 void warnToStderr(const std::string& message) { std::fprintf(stderr, "cuberille: warning: %s\n", message.c_str()); }
@@ -60,6 +57,19 @@ nlohmann::json pyramidJson(const lod::PyramidStats& p) {
             {"simplifyMs", p.simplifyMs}};
 }
 
+// Every command that makes a model refuses an input without triangles: an empty output and exit
+// code 0 would hide a file read wrongly (docs/cli.md, exit codes).
+void requireTriangles(const voxel::MeshView& view, const std::filesystem::path& input, const char* command) {
+    if (view.triangleCount() == 0)
+        throw scene::InputError(input.string() + ": no triangles to " + command + " (no faces)");
+}
+
+std::string formatNumber(double v) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%g", v);
+    return buffer;
+}
+
 void writeModelFiles(const voxel::VoxelModel& model, const std::filesystem::path& out,
                      const std::filesystem::path& exportPath, double& writeMs) {
     const double t0 = raster::nowMs();
@@ -86,11 +96,12 @@ voxel::Separability parseSeparability(const std::string& name) {
 }
 
 int runPackCommand(const PackOptions& o) {
-    requireExtension(o.out, ".cgs", "the geometry stream");
+    requireKind(o.out, scene::FileKind::GeometryStream, ".cgs", "the geometry stream");
     if (o.chunkTriangles == 0) throw scene::InputError("--chunk-triangles must be at least 1");
     const double t0 = raster::nowMs();
     // A geometry stream is re-written with its own chunks; other files are cut at the asked size.
     const std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr, o.chunkTriangles);
+    requireTriangles(*view, o.input, "pack");
     const double loadMs = raster::nowMs() - t0;
     const double w0 = raster::nowMs();
     AtomicOutputFile out(o.out);
@@ -114,7 +125,7 @@ int runPackCommand(const PackOptions& o) {
 }
 
 int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
-    requireExtension(o.out, ".cvox", "the voxel model");
+    requireKind(o.out, scene::FileKind::VoxelModel, ".cvox", "the voxel model");
     if (!voxel::isValidResolution(o.resolution))
         throw scene::InputError("--resolution " + std::to_string(o.resolution) + ": expected a power of two from " +
                                 std::to_string(voxel::kMinResolution) + " to " + std::to_string(voxel::kMaxResolution));
@@ -130,9 +141,13 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
 
     const double t0 = raster::nowMs();
     const std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr);
+    requireTriangles(*view, o.input, "voxelize");
     const double openMs = raster::nowMs() - t0;
     voxel::VoxelizeStats s;
     voxel::VoxelModel model = voxel::voxelizeMesh(*view, vo, &s);
+    if (model.voxelCount() == 0)
+        throw scene::InputError(o.input.string() + ": no voxels: its " + std::to_string(s.triangles) +
+                                " triangles have no area at " + std::to_string(o.resolution) + "^3");
     lod::PyramidStats ps;
     lod::buildLodPyramid(model, po, &ps);
     double writeMs = 0;
@@ -182,7 +197,7 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
 }
 
 int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
-    requireExtension(o.out, ".cvox", "the voxel model");
+    requireKind(o.out, scene::FileKind::VoxelModel, ".cvox", "the voxel model");
     voxel::VolumeDesc d;
     d.dims = {o.dims[0], o.dims[1], o.dims[2]};
     if (d.dims.x == 0 || d.dims.y == 0 || d.dims.z == 0) throw scene::InputError("--dims: every dimension must be at least 1");
@@ -210,6 +225,9 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
     const double readMs = raster::nowMs() - t0;
     voxel::IsosurfaceStats s;
     voxel::VoxelModel model = voxel::extractIsosurface(bytes, d, io, &s);
+    if (s.voxels == 0)
+        throw scene::InputError(o.volume.string() + ": no voxels: the surface at --iso " + formatNumber(o.iso) +
+                                " is empty (no sample at or above it has a neighbour below it)");
     lod::PyramidOptions po;
     po.maxLevels = o.levels;
     lod::PyramidStats ps;
@@ -235,7 +253,7 @@ int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
 }
 
 int runInfoCommand(const InfoOptions& o) {
-    if (hasExtension(o.file, ".cvox")) {
+    if (scene::fileKindOf(o.file) == scene::FileKind::VoxelModel) {
         const voxel::VoxelModel m = voxel::readCvox(o.file);
         uint32_t levels = 0;
         for (const voxel::VoxelBlock& b : m.blocks) levels = std::max(levels, b.level + 1);

@@ -26,13 +26,15 @@ FlightFrame Flight::frame(const scene::Camera& camera, bool settling) {
     return f;
 }
 
-std::vector<FlightFrame> Flight::settle(const scene::Camera& camera, int maxFrames) {
+std::vector<FlightFrame> Flight::settle(const scene::Camera& camera, int maxFrames,
+                                       const std::function<void(const FlightFrame&)>& afterFrame) {
     std::vector<FlightFrame> frames;
     while (!blocks_.settled() && int(frames.size()) < maxFrames) {
         const double waited = blocks_.frameStats().stagedBytes ? 0.0 : blocks_.waitForLoads();
         frames.push_back(frame(camera, true));
         frames.back().ioWaitMs = waited;
         frames.back().frameMs += waited;
+        if (afterFrame) afterFrame(frames.back());
     }
     return frames;
 }

@@ -5,6 +5,7 @@
 // per-frame measurements of figures 34-39. After the path, the last view can be rendered until
 // loading settles, so the final image is the one every block resident would give.
 
+#include <functional>
 #include <vector>
 
 #include "lod/streaming_blocks.h"
@@ -35,7 +36,9 @@ public:
     FlightFrame frame(const scene::Camera& camera, bool settling = false);
     /// Renders the camera's view until loading settles (or maxFrames), waiting on the I/O thread
     /// between frames instead of spinning.
-    std::vector<FlightFrame> settle(const scene::Camera& camera, int maxFrames);
+    /// afterFrame, when given, sees each frame as it ends.
+    std::vector<FlightFrame> settle(const scene::Camera& camera, int maxFrames,
+                                    const std::function<void(const FlightFrame&)>& afterFrame = {});
 
     const raster::Pipeline& pipeline() const { return pipeline_; }
     int framesRendered() const { return frames_; }

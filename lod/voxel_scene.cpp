@@ -129,19 +129,6 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
                 if (source.acquire(outside, BlockParts::kVoxels))
                     expand.push_back({outside, false, {}}), roles.push_back(kShowOutside);
     }
-    faces_.resize(expand.size());
-    raster::parallelFor(expand.size(), [&](size_t k) {
-        const VoxelDraw& d = expand[k];
-        const voxel::BlockVoxels voxels = source.voxels(d.block);
-        glm::vec3 tint = levelColor(voxels.level);
-        if (o.coloring == BlockColoring::Visibility)
-            tint = roles[k] == kShowCulled    ? glm::vec3(0.9f, 0.15f, 0.1f)
-                   : roles[k] == kShowOutside ? glm::vec3(0.45f)
-                                              : glm::vec3(0.2f, 0.8f, 0.3f);
-        faces_[k].clear();
-        voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[k],
-                                o.coloring == BlockColoring::Model ? nullptr : &tint, d.standIn ? &d.region : nullptr);
-    });
     triangleTints_.resize(o.coloring == BlockColoring::Model ? 0 : triangleBlocks.size());
     for (size_t k = 0; k < triangleTints_.size(); ++k) {
         const glm::vec3 tint = o.coloring == BlockColoring::Level ? levelColor(0) * 0.6f : glm::vec3(0.95f, 0.85f, 0.2f);
@@ -178,15 +165,48 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
         stats.hybridTriangles += t.indices.size() / 3;
         ++stats.triangleBlocksDrawn;
     }
-    for (size_t k = 0; k < faces_.size(); ++k) {
-        const voxel::FaceMesh& f = faces_[k];
-        const bool shown = roles[k] == kShowCulled || roles[k] == kShowOutside;
-        const bool counted = o.occlusion && !o.viewFrom && !shown;
-        submit(f.positions, f.normals, f.colors, f.indices, counted ? int(k) : -1, roles[k] == kTest);
-        if (shown) continue;
-        stats.voxelsExpanded += f.voxels;
-        stats.facesEmitted += f.faces;
-        ++(roles[k] == kTest ? stats.visibilityTests : stats.voxelBlocksDrawn);
+    // Expansion and drawing a chunk of blocks at a time: a chunk expands block by block in
+    // parallel (each block's geometry is its own, so the draws, and the image, do not depend on
+    // the thread count), is drawn, and the pipeline is flushed before the next chunk reuses the
+    // scratch. So a frame holds the faces of one chunk, not of every block it draws, whatever
+    // the model's size (docs/streaming.md, memory). Where the flushes fall does not change the
+    // image (raster/pipeline.h).
+    for (size_t first = 0, count = 0; first < expand.size(); first += count) {
+        size_t voxels = 0;
+        for (count = 0; first + count < expand.size() && count < kBlocksPerExpansionChunk &&
+                        (count == 0 || voxels < kVoxelsPerExpansionChunk);
+             ++count)
+            voxels += source.voxels(expand[first + count].block).voxels.size();
+        if (faces_.size() < count) faces_.resize(count);
+        t0 = raster::nowMs();
+        raster::parallelFor(count, [&](size_t i) {
+            const size_t k = first + i;
+            const VoxelDraw& d = expand[k];
+            const voxel::BlockVoxels voxels = source.voxels(d.block);
+            glm::vec3 tint = levelColor(voxels.level);
+            if (o.coloring == BlockColoring::Visibility)
+                tint = roles[k] == kShowCulled    ? glm::vec3(0.9f, 0.15f, 0.1f)
+                       : roles[k] == kShowOutside ? glm::vec3(0.45f)
+                                                  : glm::vec3(0.2f, 0.8f, 0.3f);
+            faces_[i].clear();
+            voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[i],
+                                    o.coloring == BlockColoring::Model ? nullptr : &tint,
+                                    d.standIn ? &d.region : nullptr);
+        });
+        stats.expandMs += raster::nowMs() - t0;
+        for (size_t i = 0; i < count; ++i) {
+            const size_t k = first + i;
+            const voxel::FaceMesh& f = faces_[i];
+            const bool shown = roles[k] == kShowCulled || roles[k] == kShowOutside;
+            const bool counted = o.occlusion && !o.viewFrom && !shown;
+            submit(f.positions, f.normals, f.colors, f.indices, counted ? int(k) : -1, roles[k] == kTest);
+            if (shown) continue;
+            stats.voxelsExpanded += f.voxels;
+            stats.facesEmitted += f.faces;
+            ++(roles[k] == kTest ? stats.visibilityTests : stats.voxelBlocksDrawn);
+        }
+        pipeline.flush();
+        releaseExcessFaceScratch();
     }
 
     // The worst-served first: a hole, then the coarsest stand-in; among equals, front to back.
@@ -235,6 +255,16 @@ void VoxelScene::resolve(uint32_t block, Refinement refine, std::vector<VoxelDra
     draws.push_back(d);
     covers.push_back({block});
     ++stats.standIns;
+}
+
+// Each scratch slot keeps the capacity of the largest block it expanded; past the cap, all of it
+// is freed, so what the scratch holds between chunks and frames stays bounded.
+void VoxelScene::releaseExcessFaceScratch() {
+    size_t bytes = 0;
+    for (const voxel::FaceMesh& f : faces_)
+        bytes += (f.positions.capacity() + f.normals.capacity() + f.colors.capacity()) * sizeof(glm::vec3) +
+                 f.indices.capacity() * sizeof(uint32_t);
+    if (bytes > kFaceScratchBytes) faces_.clear(), faces_.shrink_to_fit();
 }
 
 void VoxelScene::planOcclusion(std::vector<uint32_t>& voxelBlocks, VoxelFrameStats& stats) {

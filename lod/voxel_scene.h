@@ -124,7 +124,17 @@ private:
         BlockRequest request;
     };
     std::vector<MissingBlock> missing_;
-    std::vector<voxel::FaceMesh> faces_;
+    /// A chunk of blocks is expanded (in parallel) and drawn before the pipeline is flushed and
+    /// the faces' scratch reused: up to this many blocks, enough to keep every core busy, ...
+    static constexpr size_t kBlocksPerExpansionChunk = 64;
+    /// ... and, past the first block, up to this many voxels: a voxel emits at most three faces
+    /// of 4 vertices (3 vec3 each) and 6 indices, 168 bytes, so a chunk's faces take at most
+    /// 33 MiB (one block past it: a block of 32³ voxels at most).
+    static constexpr size_t kVoxelsPerExpansionChunk = 65536;
+    /// Scratch kept from chunk to chunk and frame to frame; past it the slots are freed.
+    static constexpr size_t kFaceScratchBytes = size_t(64) << 20;
+    void releaseExcessFaceScratch();
+    std::vector<voxel::FaceMesh> faces_;  // one chunk's expanded blocks
     std::vector<std::vector<glm::vec3>> triangleTints_;  // debug views: one colour per vertex
 };
 

@@ -13,6 +13,7 @@
 // sum of edge value and per-sample offset, fits in int64 with room to spare. The products are
 // formed in int64 (never in int32), which is the one rule the code must keep.
 
+#include <cstddef>
 #include <cstdint>
 
 namespace cuberille::raster {
@@ -39,6 +40,10 @@ inline constexpr int kMaxVaryings = 16;  // floats interpolated per vertex
 inline constexpr int kTrianglesPerBatch = 4096;
 /// Batches binned before the back end drains them; bounds the memory of binned triangles.
 inline constexpr int kBatchesPerFlush = 64;
+/// Vertex-stage storage of flushed draws kept for later draws of the frame and of later frames;
+/// what is returned past it is freed. A frame's vertex memory is then this plus what one flush
+/// holds, whatever the number of draws or triangles (docs/streaming.md, memory).
+inline constexpr size_t kSpareVertexStorageBytes = size_t(64) << 20;
 
 static_assert(kTileSizePixels % kBlockSizePixels == 0);
 static_assert(kSubpixelsPerPixel % 16 == 0, "sample offsets in 1/16 pixel must be exact in subpixels");

@@ -92,8 +92,11 @@ void Pipeline::beginFrame(const FramebufferDesc& desc) {
     frameStartMs_ = nowMs();
     framebuffer_.reset(desc);
     stats_ = {};
+    drawInProgress_ = false;  // an earlier frame may have ended by an exception, mid-draw
+    recycleFinishedVertexOutputs();
     draws_.clear();
     drawsShaded_ = 0;
+    drawsRecycled_ = 0;
     queued_.clear();
     tileCounters_.assign(framebuffer_.tileCount(), {});
 }
@@ -104,10 +107,12 @@ void Pipeline::draw(const DrawCall& call) {
     const uint32_t drawIndex = uint32_t(draws_.size());
     draws_.push_back(call);
     const size_t triangles = call.triangleCount();
+    drawInProgress_ = true;
     for (size_t first = 0; first < triangles; first += kTrianglesPerBatch) {
         queued_.push_back({drawIndex, first});
         if (queued_.size() == kBatchesPerFlush) flush();
     }
+    drawInProgress_ = false;
 }
 
 void Pipeline::endFrame() {
@@ -129,6 +134,11 @@ void Pipeline::shadeVertices() {
     std::vector<std::pair<uint32_t, size_t>> tasks;  // (draw, first vertex)
     for (size_t d = drawsShaded_; d < draws_.size(); ++d) {
         const DrawCall& call = draws_[d];
+        if (!spareVertexOutputs_.empty()) {
+            spareVertexBytes_ -= spareVertexOutputs_.back().capacityBytes();
+            vertexOutputs_[d] = std::move(spareVertexOutputs_.back());
+            spareVertexOutputs_.pop_back();
+        }
         vertexOutputs_[d].resize(call.positions.size(), varyingLayoutFor(call));
         stats_.counters.verticesShaded += call.positions.size();
         for (size_t v = 0; v < call.positions.size(); v += kVerticesPerTask)
@@ -214,6 +224,23 @@ void Pipeline::flush() {
     stats_.times.backEndMs += t3 - t2;
     for (size_t b = 0; b < queued_.size(); ++b) stats_.counters += batches_[b].counters;
     queued_.clear();
+    recycleFinishedVertexOutputs();
+}
+
+// After a flush every shaded draw is finished but the one draw() may still be queueing: their
+// vertex storage goes to the spares (its capacity kept), so a frame of a million small draws
+// holds the vertices of one flush, not of the frame.
+void Pipeline::recycleFinishedVertexOutputs() {
+    const size_t finished = drawsShaded_ - (drawInProgress_ && drawsShaded_ > 0 ? 1 : 0);
+    for (; drawsRecycled_ < finished; ++drawsRecycled_) {
+        VertexStageOutput& done = vertexOutputs_[drawsRecycled_];
+        const size_t bytes = done.capacityBytes();
+        if (spareVertexBytes_ + bytes <= kSpareVertexStorageBytes) {
+            spareVertexBytes_ += bytes;
+            spareVertexOutputs_.push_back(std::move(done));
+        }
+        done = VertexStageOutput{};  // past the cap (or moved from): its storage is freed
+    }
 }
 
 }  // namespace cuberille::raster

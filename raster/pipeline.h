@@ -7,11 +7,15 @@
 //
 // Usage: beginFrame(desc); draw(...) any number of times; endFrame(); then read the
 // framebuffer through resolve.h. Like a GPU command buffer, draw() records: the arrays a
-// DrawCall points to must stay valid until endFrame() returns. Work runs in flushes: once
-// kBatchesPerFlush batches are queued (and at endFrame), the vertex stage shades every draw not
-// yet shaded, the front end sets up and bins all queued batches of all draws in one parallel
-// pass, and the back end drains them tile by tile. So many small draws still keep every core
-// busy, and memory for binned triangles stays bounded whatever the scene size.
+// DrawCall points to must stay valid until the next flush() or endFrame() returns. Work runs in
+// flushes: once kBatchesPerFlush batches are queued (and at flush() and endFrame), the vertex
+// stage shades every draw not yet shaded, the front end sets up and bins all queued batches of
+// all draws in one parallel pass, and the back end drains them tile by tile. So many small
+// draws still keep every core busy, and memory for binned triangles stays bounded whatever the
+// scene size. A flushed draw's vertex-stage storage is recycled for later draws, so a frame's
+// memory is bounded by what one flush holds, not by how many triangles the frame draws. Where
+// a flush falls never changes the image: batches are cut per draw and every tile consumes them
+// in submission order either way.
 //
 // Determinism: batch boundaries depend on triangle counts only; every tile consumes batches
 // in order; counters are integer sums. The image is the same for every thread count.
@@ -32,6 +36,9 @@ class Pipeline {
 public:
     void beginFrame(const FramebufferDesc& desc);
     void draw(const DrawCall& draw);
+    /// Runs every recorded draw through the pipeline now; then the caller may reuse their arrays
+    /// (a producer of geometry, such as voxel-face expansion, draws through bounded scratch).
+    void flush();
     void endFrame();
 
     const Framebuffer& framebuffer() const { return framebuffer_; }
@@ -46,13 +53,17 @@ private:
 
     void shadeVertices();
     void frontEnd(const BatchRef& ref, TriangleBatch& batch) const;
-    void flush();
+    void recycleFinishedVertexOutputs();
 
     Framebuffer framebuffer_;
     PipelineStats stats_;
     std::vector<DrawCall> draws_;
-    std::vector<VertexStageOutput> vertexOutputs_;  // per draw; capacity reused across frames
+    std::vector<VertexStageOutput> vertexOutputs_;  // per draw; emptied once the draw is flushed
+    std::vector<VertexStageOutput> spareVertexOutputs_;  // flushed draws' storage, for later draws
+    size_t spareVertexBytes_ = 0;  // their capacity, at most kSpareVertexStorageBytes
     size_t drawsShaded_ = 0;
+    size_t drawsRecycled_ = 0;  // draws below this one have given their vertex storage back
+    bool drawInProgress_ = false;  // draw() is queueing; its draw may have batches still to come
     std::vector<BatchRef> queued_;
     std::vector<TriangleBatch> batches_;  // reused across flushes and frames
     std::vector<TileCounters> tileCounters_;

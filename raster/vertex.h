@@ -43,6 +43,10 @@ struct VertexStageOutput {
     VaryingLayout layout;                // the draw's, derived once per flush
 
     void resize(size_t vertices, const VaryingLayout& varyingLayout);
+    size_t capacityBytes() const {
+        return clipPositions.capacity() * sizeof(glm::vec4) + outcodes.capacity() + window.capacity() * sizeof(WindowVertex) +
+               varyings.capacity() * sizeof(float);
+    }
 };
 
 VaryingLayout varyingLayoutFor(const DrawCall& draw);

@@ -15,6 +15,7 @@
 
 #include "scene/input_error.h"
 #include "scene/ply_loader.h"  // readFileBytes
+#include "scene/file_names.h"
 
 namespace cuberille::scene {
 namespace {
@@ -50,7 +51,6 @@ public:
             // No scene: every mesh once, untransformed (glTF 2.0 §3.3 allows files without scenes).
             for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f), -1, -1);
         }
-        if (meshes_.empty()) warn_(file_ + ": no triangles to draw");
         stats_.texturesDecoded = 0;
         for (const auto& [key, texture] : textures_) stats_.texturesDecoded += texture != nullptr;
         return {std::move(meshes_), std::move(cameras_), std::move(lights_), stats_};
@@ -743,7 +743,7 @@ GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, f
     tinygltf::TinyGLTF loader;
     tinygltf::Model model;
     std::string error, warning;
-    const bool binary = path.extension() == ".glb" || path.extension() == ".GLB";
+    const bool binary = fileKindOf(path) == FileKind::Glb;
     bool ok = false;
     if (binary) {
         // Read here (as LoadBinaryFromFile would) so the container is checked before tinygltf parses it.

@@ -9,19 +9,17 @@
 #include "scene/ply_loader.h"
 
 namespace cuberille::scene {
-bool isModelFile(const std::filesystem::path& path) {
-    return fileNameEndsWith(path, ".ply") || fileNameEndsWith(path, ".ply.gz") || fileNameEndsWith(path, ".obj") ||
-           fileNameEndsWith(path, ".gltf") || fileNameEndsWith(path, ".glb");
-}
+bool isModelFile(const std::filesystem::path& path) { return isMeshKind(fileKindOf(path)); }
 
 Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions& view, const WarningSink& warn) {
     Scene s;
     s.name = path.filename().string();
     std::vector<Camera> cameras;
     std::vector<raster::Light> lights;
-    if (fileNameEndsWith(path, ".obj")) {
+    const FileKind kind = fileKindOf(path);
+    if (kind == FileKind::Obj) {
         s.meshes = loadObj(path, warn);
-    } else if (fileNameEndsWith(path, ".gltf") || fileNameEndsWith(path, ".glb")) {
+    } else if (isGltfKind(kind)) {
         GltfScene g = loadGltf(path, warn, view.timeSeconds);
         s.meshes = std::move(g.meshes);
         cameras = std::move(g.cameras);
@@ -30,8 +28,12 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     } else {
         s.meshes.push_back(loadPly(path));
     }
-    Bounds b = boundsOf(s.meshes);
-    if (b.empty()) b = {glm::vec3(-1.0f), glm::vec3(1.0f)};  // nothing to draw (warned): any view
+    // A file that yields no triangle is bad input, not an empty picture (exit code 2).
+    if (s.triangleCount() == 0)
+        throw InputError(path.string() + ": no triangles to draw" +
+                         (isGltfKind(kind) ? " (no mesh of its scene has a primitive of triangles)"
+                              : " (no faces)"));
+    const Bounds b = boundsOf(s.meshes);
     if (view.cameraIndex >= 0) {
         if (view.cameraIndex >= int(cameras.size()))
             throw InputError("--camera-index " + std::to_string(view.cameraIndex) + ": " + path.string() + " has " +
@@ -54,7 +56,7 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     }
     s.background = {0.05f, 0.06f, 0.08f, 1.0f};
     // glTF says which materials are double-sided; PLY and OBJ scans promise no winding.
-    const bool isGltf = fileNameEndsWith(path, ".gltf") || fileNameEndsWith(path, ".glb");
+    const bool isGltf = isGltfKind(kind);
     s.cull = isGltf ? raster::CullMode::Back : raster::CullMode::None;
     return s;
 }

@@ -167,7 +167,7 @@ std::vector<Mesh> parseObj(const std::string& text, const std::string& file,
         if (!anyColors) b.mesh.colors.clear();
         meshes.push_back(std::move(b.mesh));
     }
-    if (meshes.empty()) throw InputError(file + ": no faces");
+    if (meshes.empty()) throw InputError(file + ": no triangles (no face lines)");
     return meshes;
 }
 

@@ -14,6 +14,7 @@
 
 #include "scene/input_error.h"
 #include "scene/text_parsing.h"
+#include "scene/file_names.h"
 
 namespace cuberille::scene {
 namespace {
@@ -210,6 +211,37 @@ size_t minimumInstanceBytes(const Element& e, Encoding encoding) {
     return std::max<size_t>(n, 1);
 }
 
+// A `tristrips` list restarts its strip at -1 (the convention of the Stanford and Cyberware
+// scans' writers); kRestartIndex marks the place in the gathered list.
+constexpr double kStripRestart = -1.0;
+constexpr uint32_t kRestartIndex = UINT32_MAX;
+
+// A polygon of n vertices as the fan (v0, v[k-1], v[k]), its winding kept.
+void appendFan(const std::vector<uint32_t>& polygon, std::vector<uint32_t>& indices) {
+    for (size_t k = 2; k < polygon.size(); ++k) indices.insert(indices.end(), {polygon[0], polygon[k - 1], polygon[k]});
+}
+
+// Strips separated by restarts. Triangle i of a strip is (s[i], s[i+1], s[i+2]), with its first
+// two vertices swapped when i is odd so that every triangle keeps the strip's first winding; i
+// counts from each restart. Triangles that repeat a vertex are the joins a writer uses to stitch
+// strips together: they have no area and are dropped.
+void appendStrips(const std::vector<uint32_t>& strips, std::vector<uint32_t>& indices) {
+    size_t stripStart = 0;
+    for (size_t k = 0; k < strips.size(); ++k) {
+        if (strips[k] == kRestartIndex) {
+            stripStart = k + 1;
+            continue;
+        }
+        const size_t i = k - stripStart;  // this vertex's place in its strip
+        if (i < 2) continue;
+        uint32_t a = strips[k - 2], b = strips[k - 1];
+        const uint32_t c = strips[k];
+        if ((i - 2) % 2 == 1) std::swap(a, b);
+        if (a == b || b == c || a == c) continue;
+        indices.insert(indices.end(), {a, b, c});
+    }
+}
+
 int findProperty(const Element& e, std::initializer_list<std::string_view> names) {
     for (size_t i = 0; i < e.properties.size(); ++i)
         for (std::string_view n : names)
@@ -229,7 +261,7 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
         if (e.count > reader.remaining() / minimumInstanceBytes(e, h.encoding))
             fail(file, "element '" + e.name + "'", std::to_string(e.count) + " instances cannot fit in the " +
                                                        std::to_string(reader.remaining()) + " bytes left");
-        const bool isVertex = e.name == "vertex", isFace = e.name == "face";
+        const bool isVertex = e.name == "vertex", isFace = e.name == "face", isStrips = e.name == "tristrips";
         const int x = findProperty(e, {"x"}), y = findProperty(e, {"y"}), z = findProperty(e, {"z"});
         const int nx = findProperty(e, {"nx"}), ny = findProperty(e, {"ny"}), nz = findProperty(e, {"nz"});
         const int r = findProperty(e, {"red", "r"}), g = findProperty(e, {"green", "g"}), b = findProperty(e, {"blue", "b"});
@@ -245,8 +277,8 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
             if (hasNormals) mesh.normals.resize(e.count);
             if (hasColors) mesh.colors.resize(e.count);
         }
-        if (isFace && list < 0) fail(file, "element 'face'", "no vertex_indices list");
-        if (isFace && !sawVertices) fail(file, "element 'face'", "faces before vertices");
+        if ((isFace || isStrips) && list < 0) fail(file, "element '" + e.name + "'", "no vertex_indices list");
+        if ((isFace || isStrips) && !sawVertices) fail(file, "element '" + e.name + "'", e.name + " before vertices");
         std::vector<double> values(e.properties.size());  // this instance's scalar properties
         std::vector<uint32_t> polygon;
         for (size_t i = 0; i < e.count; ++i) {
@@ -258,21 +290,31 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
                     continue;
                 }
                 const double countValue = reader.read(prop.countType, where);
-                if (!(countValue >= 0) || countValue > 1e6)
-                    fail(file, where, "list length " + formatValue(countValue) + " is not sane");
+                // A list can be long (one `tristrips` instance often holds a whole scan), but not
+                // longer than the bytes left can hold, checked before anything is gathered.
+                // (ASCII: a digit and a separator a value, the last one's separator optional.)
+                const size_t fitting = h.encoding == Encoding::Ascii ? (reader.remaining() + 1) / 2
+                                                                     : reader.remaining() / size_t(sizeOf(prop.type));
+                if (!(countValue >= 0) || countValue > double(fitting))
+                    fail(file, where, "list length " + formatValue(countValue) + " cannot fit in the " +
+                                          std::to_string(reader.remaining()) + " bytes left");
                 const size_t count = size_t(countValue);
-                const bool isIndices = isFace && int(p) == list;
+                const bool isIndices = (isFace || isStrips) && int(p) == list;
                 if (isIndices) polygon.clear();
                 for (size_t k = 0; k < count; ++k) {
                     const double v = reader.read(prop.type, where);
                     if (!isIndices) continue;
+                    if (isStrips && v == kStripRestart) {
+                        polygon.push_back(kRestartIndex);
+                        continue;
+                    }
                     if (!(v >= 0) || v >= double(vertexCount) || v != std::floor(v))
                         fail(file, where, "vertex index " + formatValue(v) + " is out of range (" +
                                               std::to_string(vertexCount) + " vertices)");
                     polygon.push_back(uint32_t(v));
                 }
-                for (size_t k = 2; isIndices && k < polygon.size(); ++k)
-                    mesh.indices.insert(mesh.indices.end(), {polygon[0], polygon[k - 1], polygon[k]});
+                if (isIndices && isFace) appendFan(polygon, mesh.indices);
+                if (isIndices && isStrips) appendStrips(polygon, mesh.indices);
             }
             reader.endInstance(where);
             if (!isVertex) continue;
@@ -295,7 +337,7 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
 
 std::string readFileBytes(const std::filesystem::path& path) {
     const std::string name = path.string();
-    if (path.extension() == ".gz") {
+    if (lowerExtension(path) == ".gz") {
         gzFile f = gzopen(name.c_str(), "rb");
         if (!f) throw InputError(name + ": cannot open file");
         std::string out;

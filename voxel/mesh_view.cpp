@@ -114,15 +114,18 @@ std::unique_ptr<MeshView> viewOfMeshes(std::vector<scene::Mesh> meshes, std::str
     return std::make_unique<MeshesView>(std::move(meshes), std::move(sourceName), keepColors, chunkTriangles);
 }
 
-bool isGeometryStreamFile(const std::filesystem::path& path) { return scene::fileNameEndsWith(path, ".cgs"); }
+bool isGeometryStreamFile(const std::filesystem::path& path) {
+    return scene::fileKindOf(path) == scene::FileKind::GeometryStream;
+}
 
 std::unique_ptr<MeshView> openMeshView(const std::filesystem::path& path, const scene::WarningSink& warn,
                                        uint32_t chunkTriangles) {
     if (isGeometryStreamFile(path)) return openGeometryStream(path);
-    if (scene::fileNameEndsWith(path, ".obj")) return viewOfMeshes(scene::loadObj(path, warn), path.string(), true, chunkTriangles);
-    if (scene::fileNameEndsWith(path, ".gltf") || scene::fileNameEndsWith(path, ".glb"))
+    const scene::FileKind kind = scene::fileKindOf(path);
+    if (kind == scene::FileKind::Obj) return viewOfMeshes(scene::loadObj(path, warn), path.string(), true, chunkTriangles);
+    if (scene::isGltfKind(kind))
         return viewOfMeshes(scene::loadGltf(path, warn, 0.0f).meshes, path.string(), true, chunkTriangles);
-    if (scene::fileNameEndsWith(path, ".ply") || scene::fileNameEndsWith(path, ".ply.gz")) {
+    if (kind == scene::FileKind::Ply) {
         scene::Mesh m = scene::loadPly(path);
         const bool colored = !m.colors.empty();
         if (colored) m.color = glm::vec3(1.0f);  // a scan's colours are its own, not tinted

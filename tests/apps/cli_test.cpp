@@ -11,10 +11,15 @@
 #include <span>
 #include <sys/wait.h>
 
+#include <zlib.h>
+
 #include <nlohmann/json.hpp>
 
 #include "apps/image_io.h"
 #include "tests/scene/gltf_builder.h"
+#include "tests/scene/ply_builder.h"
+#include "voxel/cvox_file.h"
+#include "tests/temp_paths.h"
 
 namespace {
 
@@ -39,9 +44,8 @@ CommandRun run(const std::string& args) {
 class Cli : public ::testing::Test {
 protected:
     void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("cuberille-cli-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-                "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        dir_ = cuberille::testing::uniqueTempPath(std::string("cli-") +
+                                                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
         fs::remove_all(dir_);
         fs::create_directories(dir_);
     }
@@ -292,31 +296,7 @@ TEST_F(Cli, SupersamplingAveragesAGridOfSamplesPerPixel) {
     }
 }
 
-// An animated glTF made in code: a floor, a cube sliding along x under the scene's light, and a
-// row of cubes far to the side that the camera never sees.
-void writeAnimatedGltf(const fs::path& path) {
-    cuberille::testing::GltfBuilder b;
-    std::vector<glm::vec3> cube;
-    for (int c = 0; c < 8; ++c) cube.push_back({(c & 1) ? 0.5f : -0.5f, (c & 2) ? 0.5f : -0.5f, (c & 4) ? 0.5f : -0.5f});
-    const std::vector<uint16_t> cubeIndices = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
-                                               2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
-    const int cubeMesh = b.push("meshes", {{"primitives", {{{"attributes", {{"POSITION", b.positions(cube)}}},
-                                                            {"indices", b.indices(cubeIndices)}}}}});
-    const int floorMesh = b.push(
-        "meshes", {{"primitives", {{{"attributes", {{"POSITION", b.positions({{-6, 0, -6}, {6, 0, -6}, {6, 0, 6}, {-6, 0, 6}})}}},
-                                    {"indices", b.indices({0, 2, 1, 0, 3, 2})}}}}});
-    std::vector<int> roots = {b.push("nodes", {{"mesh", floorMesh}}), b.push("nodes", {{"mesh", cubeMesh}, {"translation", {-2, 1, 0}}})};
-    for (int i = 0; i < 20; ++i) roots.push_back(b.push("nodes", {{"mesh", cubeMesh}, {"translation", {40 + 3 * i, 1, 0}}}));
-    const int camera = b.push("cameras", {{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}, {"zfar", 100}}}});
-    roots.push_back(b.push("nodes", {{"camera", camera}, {"translation", {0, 4, 10}}, {"rotation", {-0.1305262f, 0, 0, 0.9914449f}}}));
-    const int times = b.floats({0.0f, 1.0f}, 1, true);
-    const int moves = b.vec3s({{-2, 1, 0}, {2, 1, 0}});
-    b.push("animations", {{"samplers", {{{"input", times}, {"output", moves}}}},
-                          {"channels", {{{"sampler", 0}, {"target", {{"node", 1}, {"path", "translation"}}}}}}});
-    b.json()["scenes"] = {{{"nodes", roots}}};
-    b.json()["scene"] = 0;
-    b.write(path);
-}
+void writeAnimatedGltf(const fs::path& path) { cuberille::testing::writeSlidingCubeGltf(path); }
 
 std::string fileBytes(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
@@ -668,5 +648,145 @@ TEST_F(Cli, EveryReaderNamesTheFileThePlaceAndTheProblem) {
         EXPECT_NE(message.find(c.place), std::string::npos) << "no place in: " << message;
         EXPECT_NE(message.find(c.problem), std::string::npos) << message;
         EXPECT_FALSE(fs::exists(out));
+    }
+}
+
+// Strip files as scanners write them and the same mesh as a face list: one PLY reader serves
+// render and voxelize, so both see the same triangles (the same image bit for bit, the same voxels).
+TEST_F(Cli, StripAndFaceListPlyFilesGiveTheSameImageAndTheSameVoxels) {
+    using cuberille::testing::PlyConnectivity;
+    const cuberille::testing::PlyGrid grid;
+    auto renderAndVoxelize = [&](const std::string& name, PlyConnectivity kind, bool binary) {
+        const fs::path ply = write(name + ".ply", grid.ply(kind, binary));
+        const fs::path image = dir_ / (name + ".exr"), voxels = dir_ / (name + ".cvox");
+        CommandRun r = run("render " + ply.string() + " --width 64 --height 48 --msaa 4 --out " + image.string());
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        r = run("voxelize " + ply.string() + " --resolution 32 -o " + voxels.string());
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        return std::make_pair(cuberille::apps::readImage(image), fileBytes(voxels));
+    };
+    for (bool binary : {false, true}) {  // ASCII positions are rounded to 6 decimals: compare like with like
+        const auto faces = renderAndVoxelize(binary ? "facesb" : "facesa", PlyConnectivity::FaceList, binary);
+        ASSERT_FALSE(faces.second.empty());
+        for (PlyConnectivity kind : {PlyConnectivity::StripsWithRestarts, PlyConnectivity::StripPerInstance,
+                                     PlyConnectivity::StitchedStrip}) {
+            const std::string name = "strips" + std::to_string(int(kind)) + (binary ? "b" : "a");
+            const auto strips = renderAndVoxelize(name, kind, binary);
+            EXPECT_TRUE(strips.first.rgba == faces.first.rgba) << name << ": the images differ";
+            EXPECT_TRUE(strips.second == faces.second) << name << ": the voxel files differ";
+        }
+    }
+}
+
+// Every command whose input yields nothing to work on fails with exit code 2, names the file and
+// what was missing, and writes no output.
+TEST_F(Cli, NoCommandTurnsNothingIntoSuccess) {
+    const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\n";
+    const std::string corners = "0 0 0\n1 0 0\n0 1 0\n";
+    const std::vector<fs::path> meshes = {
+        write("points.ply", header + "end_header\n" + corners),
+        write("nofaces.ply", header + "element face 0\nproperty list uchar int vertex_indices\nend_header\n" + corners),
+        write("joins.ply", header + "element tristrips 1\nproperty list int int vertex_indices\nend_header\n" + corners +
+                               "4 0 1 1 2\n"),
+        write("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+    };
+    auto expectRefused = [&](const std::string& args, const fs::path& input, const fs::path& output, const char* missing) {
+        const CommandRun r = run(args);
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find(input.string() + ": " + missing), std::string::npos) << args << "\n" << r.output;
+        EXPECT_FALSE(fs::exists(output)) << args;
+    };
+    for (const fs::path& mesh : meshes) {
+        const fs::path cgs = dir_ / "x.cgs", cvox = dir_ / "x.cvox", png = dir_ / "x.png";
+        expectRefused("pack " + mesh.string() + " -o " + cgs.string(), mesh, cgs, "no triangles");
+        expectRefused("voxelize " + mesh.string() + " -o " + cvox.string(), mesh, cvox, "no triangles");
+        expectRefused("render " + mesh.string() + " --out " + png.string(), mesh, png, "no triangles");
+    }
+    const fs::path gltf = dir_ / "lines.gltf";
+    {
+        cuberille::testing::GltfBuilder b;
+        const int mesh = b.push("meshes", {{"primitives", {{{"attributes", {{"POSITION", b.positions({{0, 0, 0}, {1, 0, 0}})}}},
+                                                            {"mode", 1}}}}});
+        b.json()["scenes"] = {{{"nodes", {b.push("nodes", {{"mesh", mesh}})}}}};
+        b.json()["scene"] = 0;
+        b.write(gltf);
+    }
+    expectRefused("render " + gltf.string() + " --out " + (dir_ / "l.png").string(), gltf, dir_ / "l.png", "no triangles");
+    expectRefused("voxelize " + gltf.string() + " -o " + (dir_ / "l.cvox").string(), gltf, dir_ / "l.cvox", "no triangles");
+    const fs::path tri = write("empty.tri", "# nothing but a comment\n");
+    expectRefused("render " + tri.string() + " --out " + (dir_ / "t.exr").string(), tri, dir_ / "t.exr", "no triangles");
+    // A volume with nothing at or above the iso value.
+    const fs::path raw = write("low.raw", std::string(125, '\x02'));
+    expectRefused("isosurface " + raw.string() + " --dims 5 5 5 --type u8 --iso 8 -o " + (dir_ / "i.cvox").string(), raw,
+                  dir_ / "i.cvox", "no voxels");
+    // A voxel model of no blocks (no command writes one any more; an older file may be one).
+    const fs::path empty = dir_ / "empty.cvox";
+    {
+        cuberille::voxel::VoxelModel model;
+        model.grid.resolution = 8;
+        model.blockSize = 8;
+        std::ofstream out(empty, std::ios::binary);
+        cuberille::voxel::writeCvox(model, out);
+    }
+    expectRefused("render " + empty.string() + " --out " + (dir_ / "e.png").string(), empty, dir_ / "e.png", "no voxels");
+    expectRefused("fly " + empty.string() + " --frames 2 --out-dir " + (dir_ / "flight").string(), empty,
+                  dir_ / "flight" / "final.png", "no voxels");
+}
+
+// One classifier of file kinds serves every command: each input and output extension is
+// recognised in upper and mixed case as in lower case (scene/file_names.h).
+TEST_F(Cli, EveryCommandTakesEveryFileKindInAnyCase) {
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                            "0 0 0\n1 0 0\n1 1 0\n0 1 1\n3 0 1 2\n3 0 2 3\n";
+    auto gzip = [&](const fs::path& path, const std::string& bytes) {
+        gzFile f = gzopen(path.string().c_str(), "wb");
+        gzwrite(f, bytes.data(), unsigned(bytes.size()));
+        gzclose(f);
+        return path;
+    };
+    for (const auto& [prefix, upper] : {std::pair<std::string, bool>{"mixed", false}, {"upper", true}}) {
+        auto ext = [&](std::string e) {  // ".ply.gz" -> ".PLY.GZ" or ".Ply.Gz"
+            for (size_t i = 0; i < e.size(); ++i)
+                if (upper || (i > 0 && e[i - 1] == '.')) e[i] = char(std::toupper(static_cast<unsigned char>(e[i])));
+            return e;
+        };
+        const std::string n = prefix + "-";
+        const fs::path tri = write(n + "s" + ext(".tri"), "1 1 30 2 5 20 1\n");
+        const fs::path plyFile = write(n + "m" + ext(".ply"), ply);
+        const fs::path plyGz = gzip(dir_ / (n + "z" + ext(".ply.gz")), ply);
+        const fs::path obj = write(n + "m" + ext(".obj"), kTetrahedronObj);
+        const fs::path gltf = dir_ / (n + "slide" + ext(".gltf"));
+        cuberille::testing::writeSlidingCubeGltf(gltf);
+        const fs::path glb = write(n + "g" + ext(".glb"), triangleGlb());
+        const fs::path png = dir_ / (n + "o" + ext(".png")), exr = dir_ / (n + "o" + ext(".exr"));
+        const fs::path cgs = dir_ / (n + "s" + ext(".cgs")), cvox = dir_ / (n + "v" + ext(".cvox"));
+        const std::vector<std::string> commands = {
+            "render " + tri.string() + " --width 32 --height 24 --out " + exr.string(),
+            "render " + tri.string() + " --width 32 --height 24 --out " + png.string(),
+            "render " + plyFile.string() + " --width 32 --height 24 --out " + png.string(),
+            "render " + plyGz.string() + " --width 32 --height 24 --out " + png.string(),
+            "render " + obj.string() + " --width 32 --height 24 --out " + png.string(),
+            "render " + glb.string() + " --width 32 --height 24 --out " + png.string(),
+            "render " + gltf.string() + " --camera-index 0 --animate 2 --width 32 --height 24 --out " + png.string(),
+            "render " + obj.string() + " --turntable 2 --width 32 --height 24 --out " + png.string(),
+            "pack " + plyGz.string() + " -o " + cgs.string(),
+            "info " + cgs.string(),
+            "voxelize " + cgs.string() + " --resolution 16 -o " + cvox.string(),
+            "voxelize " + gltf.string() + " --resolution 16 -o " + cvox.string(),
+            "voxelize " + obj.string() + " --resolution 16 -o " + cvox.string(),
+            "info " + cvox.string(),
+            "render " + cvox.string() + " --width 32 --height 24 --out " + png.string(),
+            "fly " + cvox.string() + " --frames 2 --width 32 --height 24 --out-dir " + (dir_ / (n + "flight")).string(),
+            "explain " + tri.string() + " --out-dir " + (dir_ / (n + "stages")).string() + " --quiet",
+        };
+        for (const std::string& c : commands) {
+            const bool quietable = !c.starts_with("explain") && !c.starts_with("info");
+            const CommandRun r = run(c + (quietable ? " --quiet" : ""));
+            EXPECT_EQ(r.exitCode, 0) << c << "\n" << r.output;
+        }
+        EXPECT_TRUE(fs::exists(png)) << png;
+        EXPECT_TRUE(fs::exists(exr)) << exr;
     }
 }

@@ -21,6 +21,7 @@
 #include "tests/voxel/voxel_test_support.h"
 #include "lod/lod_pyramid.h"
 #include "voxel/cvox_file.h"
+#include "tests/temp_paths.h"
 
 namespace cuberille::testing {
 namespace {
@@ -72,7 +73,7 @@ void compareWithGolden(const std::string& name, const raster::Image& image) {
         differing += differs;
     }
     if (differing) {
-        const fs::path dir = fs::current_path() / "golden_failures";
+        const fs::path dir = fs::path(CUBERILLE_BUILD_DIR) / "golden_failures";
         fs::create_directories(dir);
         apps::writeImageAtomically(dir / (name + ".actual.exr"), image);
         apps::writeImageAtomically(dir / (name + ".diff.png"), diff);
@@ -220,7 +221,7 @@ fs::path writeGoldenGltf(const fs::path& dir) {
 }
 
 TEST(Golden, ProceduralGltfThroughItsCamera) {
-    const fs::path dir = fs::temp_directory_path() / "cuberille-golden-gltf";
+    const fs::path dir = cuberille::testing::uniqueTempPath("golden-gltf");
     apps::RenderOptions o;
     o.scene = writeGoldenGltf(dir).string();
     o.width = 160;

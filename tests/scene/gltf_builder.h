@@ -113,4 +113,30 @@ private:
     std::string bytes_;
 };
 
+// An animated glTF made in code: a floor, a cube sliding along x under the scene's light, and a
+// row of cubes far to the side that the camera never sees.
+inline void writeSlidingCubeGltf(const std::filesystem::path& path) {
+    GltfBuilder b;
+    std::vector<glm::vec3> cube;
+    for (int c = 0; c < 8; ++c) cube.push_back({(c & 1) ? 0.5f : -0.5f, (c & 2) ? 0.5f : -0.5f, (c & 4) ? 0.5f : -0.5f});
+    const std::vector<uint16_t> cubeIndices = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                               2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+    const int cubeMesh = b.push("meshes", {{"primitives", {{{"attributes", {{"POSITION", b.positions(cube)}}},
+                                                            {"indices", b.indices(cubeIndices)}}}}});
+    const int floorMesh = b.push(
+        "meshes", {{"primitives", {{{"attributes", {{"POSITION", b.positions({{-6, 0, -6}, {6, 0, -6}, {6, 0, 6}, {-6, 0, 6}})}}},
+                                    {"indices", b.indices({0, 2, 1, 0, 3, 2})}}}}});
+    std::vector<int> roots = {b.push("nodes", {{"mesh", floorMesh}}), b.push("nodes", {{"mesh", cubeMesh}, {"translation", {-2, 1, 0}}})};
+    for (int i = 0; i < 20; ++i) roots.push_back(b.push("nodes", {{"mesh", cubeMesh}, {"translation", {40 + 3 * i, 1, 0}}}));
+    const int camera = b.push("cameras", {{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}, {"zfar", 100}}}});
+    roots.push_back(b.push("nodes", {{"camera", camera}, {"translation", {0, 4, 10}}, {"rotation", {-0.1305262f, 0, 0, 0.9914449f}}}));
+    const int times = b.floats({0.0f, 1.0f}, 1, true);
+    const int moves = b.vec3s({{-2, 1, 0}, {2, 1, 0}});
+    b.push("animations", {{"samplers", {{{"input", times}, {"output", moves}}}},
+                          {"channels", {{{"sampler", 0}, {"target", {{"node", 1}, {"path", "translation"}}}}}}});
+    b.json()["scenes"] = {{{"nodes", roots}}};
+    b.json()["scene"] = 0;
+    b.write(path);
+}
+
 }  // namespace cuberille::testing

@@ -12,6 +12,7 @@
 #include "scene/gltf_loader.h"
 #include "scene/input_error.h"
 #include "tests/scene/gltf_builder.h"
+#include "tests/temp_paths.h"
 
 namespace cuberille::scene {
 namespace {
@@ -93,7 +94,7 @@ void replaceOnce(std::string& text, const std::string& from, const std::string& 
 }
 
 fs::path write(const std::string& name, const std::string& text) {
-    const fs::path p = fs::temp_directory_path() / name;
+    const fs::path p = cuberille::testing::uniqueTempPath(name);
     std::ofstream(p) << text;
     return p;
 }
@@ -172,7 +173,7 @@ std::string texturedGltf(const fs::path& dir, const std::string& materialJson) {
 }
 
 TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
-    const fs::path dir = fs::temp_directory_path() / "cuberille-gltf-texture";
+    const fs::path dir = cuberille::testing::uniqueTempPath("gltf-texture");
     const std::string text = texturedGltf(dir,
         R"("baseColorFactor": [0.5, 0.25, 1, 1], "baseColorTexture": {"index": 0}})");
     std::ofstream(dir / "t.gltf") << text;
@@ -192,7 +193,7 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
 }
 
 TEST(GltfLoader, MaterialFactorsTextureSlotsAndTextureTransform) {
-    const fs::path dir = fs::temp_directory_path() / "cuberille-gltf-material";
+    const fs::path dir = cuberille::testing::uniqueTempPath("gltf-material");
     std::string text = texturedGltf(dir, R"("metallicFactor": 0.25, "roughnessFactor": 0.75},
       "normalTexture": {"index": 0, "scale": 0.5},
       "emissiveFactor": [1, 0.5, 0],

@@ -8,6 +8,7 @@
 
 #include "scene/input_error.h"
 #include "scene/obj_loader.h"
+#include "tests/temp_paths.h"
 
 namespace cuberille::scene {
 namespace {
@@ -34,7 +35,7 @@ TEST(ObjLoader, FaceFormsNegativeIndicesAndFans) {
 }
 
 TEST(ObjLoader, MaterialsFromMtlSplitMeshesInOrderOfFirstUse) {
-    const fs::path dir = fs::temp_directory_path() / "cuberille-obj-test";
+    const fs::path dir = cuberille::testing::uniqueTempPath("obj-test");
     fs::create_directories(dir);
     std::ofstream(dir / "m.mtl") << "newmtl red\nKd 1 0 0\nnewmtl grey\nKd 0.5 0.5 0.5\n";
     const auto meshes = parse("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
@@ -69,7 +70,7 @@ TEST(ObjLoader, ErrorsNameTheLine) {
     EXPECT_EQ(errorOf("v 0 0\n"), "t.obj:1: a vertex needs x y z (and optionally r g b)");
     EXPECT_EQ(errorOf("v 0 0 x\n"), "t.obj:1: 'x' is not a finite number");
     EXPECT_EQ(errorOf("v 0 0 0\nf 1 0 1\n"), "t.obj:2: '0' is not a valid vertex index");
-    EXPECT_EQ(errorOf("v 0 0 0\n"), "t.obj: no faces");
+    EXPECT_EQ(errorOf("v 0 0 0\n"), "t.obj: no triangles (no face lines)");
 }
 
 }  // namespace

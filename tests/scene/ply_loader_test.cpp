@@ -1,5 +1,6 @@
-// PLY: the three encodings give the same mesh; polygons become fans; unknown elements and
-// properties are skipped; every truncation and corrupt count is a clear InputError.
+// PLY: the three encodings give the same mesh; polygons become fans; triangle strips give the
+// triangles of the same mesh's face list; unknown elements and properties are skipped; every
+// truncation and corrupt count is a clear InputError.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,8 @@
 
 #include "scene/input_error.h"
 #include "scene/ply_loader.h"
+#include "tests/scene/ply_builder.h"
+#include "tests/temp_paths.h"
 
 namespace cuberille::scene {
 namespace {
@@ -84,7 +87,7 @@ TEST(PlyLoader, AsciiAndBothBinaryEndiannessesGiveTheSameMesh) {
 }
 
 TEST(PlyLoader, ReadsGzipCompressedFiles) {
-    const auto path = std::filesystem::temp_directory_path() / "cuberille-test-pyramid.ply.gz";
+    const auto path = cuberille::testing::uniqueTempPath("pyramid.ply.gz");
     const std::string bytes = binaryPly(false);
     gzFile f = gzopen(path.string().c_str(), "wb");
     ASSERT_NE(f, nullptr);
@@ -150,6 +153,85 @@ TEST(PlyLoader, ASecondVertexElementIsRefused) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("twice.ply: element 'vertex': a second vertex element"), std::string::npos)
             << e.what();
+    }
+}
+
+TEST(PlyLoader, EveryStripVariantGivesTheTrianglesOfTheFaceList) {
+    using testing::PlyConnectivity;
+    const testing::PlyGrid grid;
+    for (bool binary : {false, true}) {
+        const Mesh faces = parsePly(grid.ply(PlyConnectivity::FaceList, binary), "faces.ply");
+        ASSERT_EQ(faces.indices.size(), size_t(grid.rows * grid.columns * 6));
+        for (PlyConnectivity kind : {PlyConnectivity::StripsWithRestarts, PlyConnectivity::StripPerInstance,
+                                     PlyConnectivity::StitchedStrip}) {
+            const Mesh strips = parsePly(grid.ply(kind, binary), "strips.ply");
+            // The same triangles, each with the same first vertex and winding, in the same order.
+            EXPECT_EQ(strips.indices, faces.indices) << "variant " << int(kind) << (binary ? " binary" : " ascii");
+            EXPECT_EQ(strips.positions, faces.positions);
+            EXPECT_EQ(strips.normals, faces.normals);
+        }
+    }
+}
+
+TEST(PlyLoader, StripWindingAlternatesAndRestartsResetIt) {
+    // Every triangle of a flat strip faces the same way: its signed area in the plane keeps the
+    // sign of the strip's first triangle, also after a restart at an odd place.
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\n"
+                            "property float z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+                            "0 0 0\n0 1 0\n1 0 0\n1 1 0\n2 0 0\n2 1 0\n"
+                            "10 0 1 2 3 4 -1 2 3 4 5\n";
+    const Mesh m = parsePly(ply, "zigzag.ply");
+    ASSERT_EQ(m.indices.size(), 5u * 3u);  // 3 from the first strip, 2 from the second
+    for (size_t t = 0; t < m.indices.size(); t += 3) {
+        const glm::vec3 a = m.positions[m.indices[t]], b = m.positions[m.indices[t + 1]], c = m.positions[m.indices[t + 2]];
+        const float area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+        EXPECT_LT(area, 0.0f) << "triangle " << t / 3;
+    }
+    const std::vector<uint32_t> expected = {0, 1, 2, 2, 1, 3, 2, 3, 4, 2, 3, 4, 4, 3, 5};
+    EXPECT_EQ(m.indices, expected);
+}
+
+TEST(PlyLoader, StripJoinsWithoutAreaAreDroppedAndBadStripIndicesRefused) {
+    const std::string head = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                             "property float z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+                             "0 0 0\n0 1 0\n1 0 0\n1 1 0\n";
+    EXPECT_EQ(parsePly(head + "6 0 1 1 2 2 3\n", "joins.ply").indices.size(), 0u);  // every triangle repeats a vertex
+    EXPECT_EQ(parsePly(head + "2 -1 -1\n", "empty.ply").indices.size(), 0u);
+    try {
+        parsePly(head + "4 0 1 -2 3\n", "bad.ply");
+        ADD_FAILURE() << "accepted -2 in a strip";
+    } catch (const InputError& e) {
+        EXPECT_STREQ(e.what(), "bad.ply: tristrips 0: vertex index -2 is out of range (4 vertices)");
+    }
+    try {  // -1 restarts strips only; in a face it is an index out of range
+        parsePly("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n0 1 0\n1 0 0\n3 0 -1 2\n",
+                 "face.ply");
+        ADD_FAILURE() << "accepted -1 in a face";
+    } catch (const InputError& e) {
+        EXPECT_STREQ(e.what(), "face.ply: face 0: vertex index -1 is out of range (3 vertices)");
+    }
+}
+
+TEST(PlyLoader, AListLongerThanAMillionIsReadWhenTheFileHoldsIt) {
+    // One tristrips instance holds a whole scan's strips: 1.2M indices of a strip over 4 vertices.
+    std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                      "property float z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+    const float corners[4][3] = {{0, 0, 0}, {0, 1, 0}, {1, 0, 0}, {1, 1, 0}};
+    ply.append(reinterpret_cast<const char*>(corners), sizeof corners);
+    const int32_t count = 1200000;
+    ply.append(reinterpret_cast<const char*>(&count), 4);
+    for (int32_t i = 0; i < count; ++i) {
+        const int32_t v = i % 4 == 3 ? -1 : i % 4;  // 0 1 2 -1: one triangle a group
+        ply.append(reinterpret_cast<const char*>(&v), 4);
+    }
+    EXPECT_EQ(parsePly(ply, "long.ply").indices.size(), size_t(count / 4) * 3);
+    std::string cut = ply.substr(0, ply.size() - 4);
+    try {
+        parsePly(cut, "cut.ply");
+        ADD_FAILURE() << "accepted a list longer than the file";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("cannot fit"), std::string::npos) << e.what();
     }
 }
 
