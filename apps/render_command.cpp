@@ -383,8 +383,10 @@ RenderResult renderSupersampled(const RenderOptions& o) {
 
 RenderResult renderScene(const RenderOptions& o) {
     if (o.supersample < 1 || o.supersample > 16) throw scene::InputError("--supersample: must be 1 to 16");
-    if (o.supersample > 1) return renderSupersampled(o);
-    return renderAtScale(o, 1.0f);
+    raster::resetThreadsThatRan();
+    RenderResult r = o.supersample > 1 ? renderSupersampled(o) : renderAtScale(o, 1.0f);
+    r.threadsRan = raster::threadsThatRan();
+    return r;
 }
 
 nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
@@ -397,7 +399,8 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
     j["msaa"] = o.msaa;
     j["supersample"] = o.supersample;
     j["depth"] = o.depth == raster::DepthConvention::Reversed ? "reversed" : "standard";
-    j["threads"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
+    j["threads"] = r.threadsRan;  // that ran: TBB never runs more than the cores, whatever was asked
+    j["threadsRequested"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
     j["view"] = viewName(o.view);
     j["sceneTriangles"] = r.sceneTriangles;
     if (r.voxel) {
@@ -581,7 +584,9 @@ int runTurntable(const RenderOptions& o) {
         r.load = s.loadStats;
         if (culling)  // each frame culls from the whole scene again
             for (size_t m = 0; m < s.meshes.size(); ++m) s.meshes[m].indices = uncut[m].indices;
+        raster::resetThreadsThatRan();
         renderFrame(s, o, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, r);
+        r.threadsRan = raster::threadsThatRan();
         writeSequenceFrame(o, i, r, frames);
     }
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, {{"frames", frames}});
@@ -614,7 +619,9 @@ int runAnimation(const RenderOptions& o) {
             if (shadows) shadows->update(s);
             else shadows.emplace(s, o.shadows, o.bvhUpdate);
         }
+        raster::resetThreadsThatRan();
         renderFrame(s, frame, culling ? &*culling : nullptr, shadows ? &*shadows : nullptr, r);
+        r.threadsRan = raster::threadsThatRan();
         writeSequenceFrame(frame, i, r, frames);
     }
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, {{"frames", frames}});

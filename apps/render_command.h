@@ -60,6 +60,7 @@ struct RenderResult {
     raster::Image image;
     raster::PipelineStats stats;
     size_t sceneTriangles = 0;
+    int threadsRan = 0;  // the most threads that ran one parallel step (raster::threadsThatRan)
     double loadMs = 0;
     scene::LoadStats load;
     std::optional<lod::VoxelFrameStats> voxel;  // voxel models only

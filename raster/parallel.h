@@ -14,51 +14,65 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_scan.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
 
 namespace cuberille::raster {
 
-#if defined(CUBERILLE_PARALLEL_STD_THREADS)
-/// Threads parallelFor uses in its std::thread mode (0 = hardware concurrency).
+/// Threads parallelFor uses when it runs on std::threads (0 = hardware concurrency).
 int stdThreadLimit();
-#endif
+
+/// Whether parallel work runs on exactly the thread limit's std::threads instead of TBB: always
+/// in the ThreadSanitizer build (the `tsan` preset defines CUBERILLE_PARALLEL_STD_THREADS), and
+/// while an ExactThreadScheduling lives.
+bool exactThreadScheduling();
+
+/// The most threads that ran one parallelFor's work items since resetThreadsThatRan(): what
+/// `--stats` reports as the threads a run used (TBB's pool never exceeds the cores, whatever
+/// --threads asks for).
+int threadsThatRan();
+void resetThreadsThatRan();
+void noteThreadsThatRan(int threads);
 
 /// Runs body(i) for i in [0, count), in parallel unless the thread limit is 1.
 ///
-/// Built for ThreadSanitizer (the `tsan` preset defines CUBERILLE_PARALLEL_STD_THREADS), it runs
-/// on plain std::threads taking indices from an atomic counter instead of TBB: Debian's TBB is
-/// not instrumented, so TSan cannot see its synchronisation and would report every hand-off as
-/// a race, drowning out real ones in our code. The work items, and so the results, are the same.
+/// On std::threads (see exactThreadScheduling) each of min(count, limit) threads takes indices
+/// from an atomic counter. The ThreadSanitizer build always runs so: Debian's TBB is not
+/// instrumented, so TSan cannot see its synchronisation and would report every hand-off as a
+/// race, drowning out real ones in our code. The determinism tests run so to oversubscribe: TBB
+/// never runs more workers than cores, so "seven threads" would mean two on this machine. The
+/// work items, and so the results, are the same either way.
 template <class Body>
 void parallelFor(size_t count, Body&& body) {
-#if defined(CUBERILLE_PARALLEL_STD_THREADS)
-    std::atomic<size_t> next{0};
-    auto worker = [&] {
-        for (size_t i = next++; i < count; i = next++) body(i);
-    };
-    std::vector<std::thread> threads;
-    const size_t extra = std::min<size_t>(count, size_t(stdThreadLimit())) - (count > 0);
-    for (size_t t = 0; t < extra; ++t) threads.emplace_back(worker);
-    worker();
-    for (std::thread& t : threads) t.join();
-#else
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t i = r.begin(); i != r.end(); ++i) body(i);
-                      });
-#endif
+    if (exactThreadScheduling()) {
+        std::atomic<size_t> next{0};
+        auto worker = [&] {
+            for (size_t i = next++; i < count; i = next++) body(i);
+        };
+        std::vector<std::thread> threads;
+        const size_t extra = std::min<size_t>(count, size_t(stdThreadLimit())) - (count > 0);
+        for (size_t t = 0; t < extra; ++t) threads.emplace_back(worker);
+        noteThreadsThatRan(int(extra) + 1);
+        worker();
+        for (std::thread& t : threads) t.join();
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1), [&](const tbb::blocked_range<size_t>& r) {
+        noteThreadsThatRan(tbb::this_task_arena::current_thread_index() + 1);
+        for (size_t i = r.begin(); i != r.end(); ++i) body(i);
+    });
 }
 
 /// Runs a() and b(), in parallel unless the thread limit is 1: the fork of a recursive
 /// divide-and-conquer (BVH build, refit) whose halves write disjoint data. In the std::thread
-/// mode (TSan) they run one after the other, for the reason parallelFor avoids TBB there.
+/// mode they run one after the other, for the reason parallelFor avoids TBB there.
 template <class A, class B>
 void parallelInvoke(A&& a, B&& b) {
-#if defined(CUBERILLE_PARALLEL_STD_THREADS)
-    a();
-    b();
-#else
+    if (exactThreadScheduling()) {
+        a();
+        b();
+        return;
+    }
     tbb::parallel_invoke(a, b);
-#endif
 }
 
 /// Sorts [first, last) by less, in parallel. Keys must be unique (or equal elements identical) for
@@ -66,11 +80,11 @@ void parallelInvoke(A&& a, B&& b) {
 /// same reason parallelFor avoids TBB there.
 template <class It, class Less>
 void parallelSort(It first, It last, Less less) {
-#if defined(CUBERILLE_PARALLEL_STD_THREADS)
-    std::sort(first, last, less);
-#else
+    if (exactThreadScheduling()) {
+        std::sort(first, last, less);
+        return;
+    }
     tbb::parallel_sort(first, last, less);
-#endif
 }
 
 /// out[i] = value(0) + ... + value(i) for i in [0, count), in parallel; returns the total. value
@@ -78,11 +92,11 @@ void parallelSort(It first, It last, Less less) {
 template <class T, class Value>
 T parallelInclusiveScan(size_t count, Value&& value, std::vector<T>& out) {
     out.resize(count);
-#if defined(CUBERILLE_PARALLEL_STD_THREADS)
-    T sum{};
-    for (size_t i = 0; i < count; ++i) out[i] = sum += value(i);
-    return sum;
-#else
+    if (exactThreadScheduling()) {
+        T sum{};
+        for (size_t i = 0; i < count; ++i) out[i] = sum += value(i);
+        return sum;
+    }
     return tbb::parallel_scan(
         tbb::blocked_range<size_t>(0, count), T{},
         [&](const tbb::blocked_range<size_t>& r, T sum, bool isFinal) {
@@ -93,7 +107,6 @@ T parallelInclusiveScan(size_t count, Value&& value, std::vector<T>& out) {
             return sum;
         },
         [](T a, T b) { return a + b; });
-#endif
 }
 
 /// Caps the worker threads for its lifetime (0 = all cores). One per process at a time.
@@ -110,5 +123,18 @@ private:
 };
 
 int hardwareThreads();
+
+/// For its lifetime parallel work runs on exactly the thread limit's std::threads, even past
+/// the core count (see parallelFor). For tests that claim a result for any thread count.
+class ExactThreadScheduling {
+public:
+    ExactThreadScheduling();
+    ~ExactThreadScheduling();
+    ExactThreadScheduling(const ExactThreadScheduling&) = delete;
+    ExactThreadScheduling& operator=(const ExactThreadScheduling&) = delete;
+
+private:
+    bool previous_;
+};
 
 }  // namespace cuberille::raster

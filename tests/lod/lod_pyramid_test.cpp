@@ -16,6 +16,7 @@
 #include "tests/voxel/voxel_test_support.h"
 #include "voxel/cvox_file.h"
 #include "voxel/packing.h"
+#include "tests/thread_counts.h"
 
 namespace cuberille {
 namespace {
@@ -51,11 +52,12 @@ TEST(Simplify, SerialAndParallelGiveIdenticalPyramids) {
     ASSERT_EQ(serial.blocks.front().level, 3u);  // 512 -> 256 -> 128 -> 64
     EXPECT_TRUE(sameBlocks(serial.blocks, parallel.blocks));
     // And the same for every thread count.
-    for (int threads : {1, 3}) {
-        raster::ThreadLimit limit(threads);
+    for (const testing::ThreadCount count : testing::kThreadCounts) {
+        const testing::ThreadCountScope scope(count);
         VoxelModel again = base;
         lod::buildLodPyramid(again, {lod::SimplifyMethod::Parallel, 0});
-        EXPECT_TRUE(sameBlocks(again.blocks, parallel.blocks)) << threads << " threads";
+        if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+        EXPECT_TRUE(sameBlocks(again.blocks, parallel.blocks)) << count.threads << " threads";
     }
 }
 

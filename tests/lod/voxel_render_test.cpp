@@ -11,6 +11,7 @@
 #include "raster/parallel.h"
 #include "raster/resolve.h"
 #include "tests/voxel/voxel_test_support.h"
+#include "tests/thread_counts.h"
 
 namespace cuberille {
 namespace {
@@ -250,8 +251,8 @@ TEST(VoxelDeterminism, SameFrameForAnyThreadCount) {
     lod::VoxelScene scene(spherePyramid(256), 30.0f, 20.0f);
     lod::VoxelRenderOptions o;
     o.selection.pixelError = 2.0f;
-    auto render = [&](int threads) {
-        raster::ThreadLimit limit(threads);
+    auto render = [&](testing::ThreadCount count) {
+        const testing::ThreadCountScope scope(count);
         raster::Pipeline p;
         raster::FramebufferDesc d;
         d.widthPixels = 200, d.heightPixels = 150, d.samples = 4;
@@ -260,11 +261,12 @@ TEST(VoxelDeterminism, SameFrameForAnyThreadCount) {
         p.endFrame();
         raster::Image image;
         raster::resolveColor(p.framebuffer(), image);
+        if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
         return image.rgba;
     };
-    const std::vector<float> one = render(1);
-    EXPECT_EQ(one, render(2));
-    EXPECT_EQ(one, render(5));
+    const std::vector<float> one = render(testing::kThreadCounts[0]);
+    EXPECT_EQ(one, render(testing::kThreadCounts[1]));
+    EXPECT_EQ(one, render(testing::kThreadCounts[2]));
 }
 
 }  // namespace

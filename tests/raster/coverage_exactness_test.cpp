@@ -163,13 +163,30 @@ INSTANTIATE_TEST_SUITE_P(SampleCounts, CoverageExactness, ::testing::Values(1, 2
                          [](const auto& info) { return std::to_string(info.param) + "x"; });
 
 TEST(FillRule, SharedEdgeCoveredOnce) {
-    // Two triangles sharing a diagonal through sample points; every sample exactly once.
+    // Two triangles sharing the diagonal y = x through sample points. Each sample must show the
+    // value of the one triangle that owns it, and the samples passed must total one a sample: a
+    // sample covered twice would raise the total unless another were left uncovered, which would
+    // show the background. On the diagonal the first triangle (x > y) owns it: the diagonal is
+    // its left edge (the top-left rule), and the second's right edge.
+    const float a = 0.25f, b = 0.75f;
     scene::TriScene s;
     s.positions = {{0, 0, 0}, {8, 0, 0}, {8, 8, 0}, {0, 0, 0}, {8, 8, 0}, {0, 8, 0}};
-    s.colors = {glm::vec4(1.0f), glm::vec4(1.0f)};
+    s.colors = {glm::vec4(a, a, a, 1.0f), glm::vec4(b, b, b, 1.0f)};
     raster::Pipeline p;
     renderTri(p, s, 8, 8, 16);
     EXPECT_EQ(p.stats().counters.samplesPassed, 8u * 8u * 16u);
+    const auto& sp = raster::standardSamplePattern(16);
+    int onTheDiagonal = 0;
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x)
+            for (int k = 0; k < 16; ++k) {
+                const int sx = x * 16 + 8 + sp.dx[k], sy = y * 16 + 8 + sp.dy[k];  // in 1/16 pixel
+                onTheDiagonal += sx == sy;
+                const float want = sy <= sx ? a : b;
+                ASSERT_EQ(sampleColor(p.framebuffer(), x, y, k), glm::vec4(want, want, want, 1.0f))
+                    << "pixel " << x << "," << y << " sample " << k;
+            }
+    EXPECT_GT(onTheDiagonal, 0) << "samples lie exactly on the shared edge";
 }
 
 TEST(FillRule, TopAndLeftEdgesOwnTheirSamples) {

@@ -219,14 +219,44 @@ TEST(DepthOnlyTarget, RefusesColourWritesAndResolvesToTheClearColour) {
     EXPECT_THROW(p.draw(d), std::invalid_argument);
 }
 
-TEST(DepthOnlyTarget, ThePlaneOfDepthsIsTheDepthViewsGrey) {
-    const RandomDepthScene s(7);
-    raster::Pipeline p;
-    const std::vector<float> plane = depthsOf(s, 4, true, p);
-    raster::Image grey;
-    raster::resolveDepth(p.framebuffer(), grey);
-    for (int y = 0; y < grey.height; ++y)
-        for (int x = 0; x < grey.width; ++x) ASSERT_EQ(grey.pixel(x, y)[0], plane[size_t(y) * grey.width + x]);
+TEST(DepthView, EachPixelIsTheMeanOfItsSampleDepthsReadAsStandardDepth) {
+    // Two window-space rectangles meet on the line x = 8.5 through column 8's centres: of the 4x
+    // samples, (-2,-6)/16 and (-6,2)/16 lie left of it, (6,-2)/16 and (2,6)/16 right. The left
+    // one (depth 0.25) spans every row, the right one (0.75) rows 0-7 only, so pixel (8, y)
+    // holds two samples of each for y < 8 and two of the left and two cleared below. Reversed
+    // depth stores the negated depth as its key; the view reads it back as standard depth,
+    // 1 - the reversed depth, and a cleared sample as 1 (far) in both.
+    for (const auto convention : {raster::DepthConvention::Standard, raster::DepthConvention::Reversed}) {
+        const bool reversed = convention == raster::DepthConvention::Reversed;
+        const float left = 0.25f, right = 0.75f;
+        const std::vector<glm::vec3> positions = {{0, 0, left},  {8.5f, 0, left},  {8.5f, 16, left},
+                                                  {0, 0, left},  {8.5f, 16, left}, {0, 16, left},
+                                                  {8.5f, 0, right}, {16, 0, right}, {16, 8, right},
+                                                  {8.5f, 0, right}, {16, 8, right}, {8.5f, 8, right}};
+        raster::DrawCall d;
+        d.space = raster::PositionSpace::Window;
+        d.positions = positions;
+        d.state.colorWriteMask = 0;
+        raster::FramebufferDesc desc = frame(16, 16, 4);
+        desc.depthConvention = convention;
+        raster::Pipeline p;
+        p.beginFrame(desc);
+        p.draw(d);
+        p.endFrame();
+        raster::Image view;
+        raster::resolveDepth(p.framebuffer(), view);
+        auto seen = [&](float z) { return reversed ? 1.0f - z : z; };  // a stored depth as the view reads it
+        const float far = 1.0f;
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 16; ++x) {
+                const float rightSide = y < 8 ? seen(right) : far;
+                const float expected = x < 8    ? seen(left)
+                                       : x == 8 ? float((2.0 * double(seen(left)) + 2.0 * double(rightSide)) / 4.0)
+                                                : rightSide;
+                ASSERT_EQ(view.pixel(x, y)[0], expected) << x << "," << y << (reversed ? " reversed" : " standard");
+                ASSERT_EQ(view.pixel(x, y)[1], expected);
+            }
+    }
 }
 
 // ---- plain passes: depth and a flat colour at one sample (visibility buffers, shadow maps) -------

@@ -160,8 +160,20 @@ TEST(PunctualLights, RangeCutsThePointLightOffSmoothly) {
     l.range = 8.0f;
     d.state.lighting.lightCount = 1;
     const raster::Image img = render(d).image;
-    EXPECT_GT(at(img, 1, 1).r, 0.0f);
-    EXPECT_EQ(at(img, 12, 12).r, 0.0f) << "beyond the range";
+    // Every pixel against KHR_lights_punctual's window written out in double: at distance r from
+    // the light, (n.l / r²) (clamp(1 - (r/range)^4, 0, 1))², which falls to 0 at the range with a
+    // zero slope. The quad lies at z = 0.5 facing the light, so n.l = 0.5 / r.
+    int lit = 0, cut = 0;
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
+            const double r2 = glm::dot(p, p), window = std::clamp(1.0 - (r2 / 64.0) * (r2 / 64.0), 0.0, 1.0);
+            const double expected = 0.5 / std::sqrt(r2) / r2 * window * window;
+            EXPECT_NEAR(at(img, x, y).r, expected, 2e-6 + 1e-5 * expected) << x << "," << y;
+            lit += expected > 0.0, cut += expected == 0.0;
+        }
+    EXPECT_GT(lit, 20);
+    EXPECT_GT(cut, 20) << "the range falls inside the quad";
 }
 
 TEST(PunctualLights, SpotLightIsDarkOutsideItsOuterConeAndFullInsideItsInnerCone) {

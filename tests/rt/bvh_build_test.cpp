@@ -10,6 +10,7 @@
 #include "raster/parallel.h"
 #include "rt/bvh_build.h"
 #include "tests/rt/rt_test_support.h"
+#include "tests/thread_counts.h"
 
 namespace cuberille::rt {
 namespace {
@@ -88,9 +89,11 @@ TEST(BvhBuild, SameTreeForAnyThreadCount) {
     const OwnedMesh soup = testing::randomSoup(200000, 11, 0.02f);  // past the parallel thresholds
     for (const BvhBuildMethod method : kMethods) {
         Bvh reference;
-        for (const int threads : {1, 2, 7}) {
-            raster::ThreadLimit limit(threads);
+        for (const cuberille::testing::ThreadCount count : cuberille::testing::kThreadCounts) {
+            const int threads = count.threads;
+            const cuberille::testing::ThreadCountScope scope(count);
             const Bvh bvh = buildBvh(soup.view(), {.method = method});
+            if (count.exact) EXPECT_EQ(scope.ran(), threads) << "threads that ran";
             if (threads == 1) {
                 reference = bvh;
                 continue;

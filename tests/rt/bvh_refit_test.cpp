@@ -15,6 +15,7 @@
 #include "rt/lazy_refit.h"
 #include "rt/ray_query.h"
 #include "tests/rt/rt_test_support.h"
+#include "tests/thread_counts.h"
 
 namespace cuberille::rt {
 namespace {
@@ -120,10 +121,12 @@ TEST(BvhRefit, SameBoxesAndDegradationForAnyThreadCount) {
     for (size_t i = 0; i < moved.positions.size(); ++i) moved.positions[i] += 0.1f * glm::sin(7.0f * glm::vec3(rest.positions[i].y, rest.positions[i].z, rest.positions[i].x));
     Bvh reference;
     double referenceDegradation = 0.0;
-    for (const int threads : {1, 2, 7}) {
-        raster::ThreadLimit limit(threads);
+    for (const cuberille::testing::ThreadCount count : cuberille::testing::kThreadCounts) {
+        const int threads = count.threads;
+        const cuberille::testing::ThreadCountScope scope(count);
         Bvh bvh = buildBvh(rest.view());
         const double degradation = refitBvh(bvh, moved.view());
+        if (count.exact) EXPECT_EQ(scope.ran(), threads) << "threads that ran";
         if (threads == 1) {
             reference = bvh;
             referenceDegradation = degradation;

@@ -29,7 +29,14 @@ TEST(ObjLoader, FaceFormsNegativeIndicesAndFans) {
         "f -4/1/1 -3//1 -2/1\n"  // relative indices, mixed forms
     );
     ASSERT_EQ(meshes.size(), 1u);
-    EXPECT_EQ(meshes[0].triangleCount(), 3u);
+    ASSERT_EQ(meshes[0].triangleCount(), 3u);
+    // Which vertices, in which order: the quad as the fan (1 2 3) (1 3 4), then -4 -3 -2 of the
+    // four vertices read so far, which are 1 2 3.
+    const glm::vec3 v1(0, 0, 0), v2(1, 0, 0), v3(1, 1, 0), v4(0, 1, 0);
+    const std::vector<glm::vec3> expected = {v1, v2, v3, v1, v3, v4, v1, v2, v3};
+    std::vector<glm::vec3> corners;
+    for (uint32_t i : meshes[0].indices) corners.push_back(meshes[0].positions[i]);
+    EXPECT_EQ(corners, expected);
     EXPECT_TRUE(meshes[0].colors.empty());
     for (const glm::vec3& n : meshes[0].normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
 }

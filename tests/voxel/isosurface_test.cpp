@@ -7,6 +7,7 @@
 #include "raster/parallel.h"
 #include "voxel/isosurface.h"
 #include "voxel/packing.h"
+#include "tests/thread_counts.h"
 
 namespace cuberille {
 namespace {
@@ -53,9 +54,11 @@ TEST(Isosurface, VoxelsAreInsideSamplesWithAnOutsideNeighbour) {
             const glm::uvec3 p = m.gridPosition(b, v);
             got.insert({int(p.x), int(p.y), int(p.z)});
             // Active faces are exactly the faces towards outside neighbours.
-            const uint8_t faces = voxel::voxelFaceMask(b.voxels[v]);
-            EXPECT_EQ(bool(faces & voxel::kFacePosX), !inside(p.x + 1, p.y, p.z));
-            EXPECT_EQ(bool(faces & voxel::kFaceNegZ), !inside(p.x, p.y, int(p.z) - 1));
+            const int x = int(p.x), y = int(p.y), z = int(p.z);
+            const uint8_t expected = (inside(x + 1, y, z) ? 0 : voxel::kFacePosX) | (inside(x - 1, y, z) ? 0 : voxel::kFaceNegX) |
+                                     (inside(x, y + 1, z) ? 0 : voxel::kFacePosY) | (inside(x, y - 1, z) ? 0 : voxel::kFaceNegY) |
+                                     (inside(x, y, z + 1) ? 0 : voxel::kFacePosZ) | (inside(x, y, z - 1) ? 0 : voxel::kFaceNegZ);
+            ASSERT_EQ(int(voxel::voxelFaceMask(b.voxels[v])), int(expected)) << x << "," << y << "," << z;
             // Normals point outwards, close to the ball's radial direction.
             const glm::dvec3 radial = glm::normalize(glm::dvec3(p) - c);
             EXPECT_GT(glm::dot(glm::dvec3(voxel::unpackNormal1010102(b.normals[v])), radial), 0.97);
@@ -92,16 +95,21 @@ TEST(Isosurface, SampleTypesAgree) {
 TEST(Isosurface, SameVoxelsForAnyThreadCount) {
     const glm::uvec3 dims(130, 70, 66);
     const std::string bytes = ballVolume(dims, glm::dvec3(64.5, 35.2, 33.1), 30.0);
-    auto run = [&](int threads) {
-        raster::ThreadLimit limit(threads);
-        return voxel::extractIsosurface(bytes, {dims, voxel::SampleType::F32}, {0.0});
+    auto run = [&](testing::ThreadCount count) {
+        const testing::ThreadCountScope scope(count);
+        voxel::VoxelModel m = voxel::extractIsosurface(bytes, {dims, voxel::SampleType::F32}, {0.0});
+        if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+        return m;
     };
-    const voxel::VoxelModel one = run(1), many = run(0);
-    ASSERT_EQ(one.blocks.size(), many.blocks.size());
-    for (size_t i = 0; i < one.blocks.size(); ++i) {
-        EXPECT_EQ(one.blocks[i].coord, many.blocks[i].coord);
-        EXPECT_EQ(one.blocks[i].voxels, many.blocks[i].voxels);
-        EXPECT_EQ(one.blocks[i].normals, many.blocks[i].normals);
+    const voxel::VoxelModel one = run(testing::kThreadCounts[0]);
+    for (const testing::ThreadCount count : {testing::kThreadCounts[1], testing::kThreadCounts[2]}) {
+        const voxel::VoxelModel many = run(count);
+        ASSERT_EQ(one.blocks.size(), many.blocks.size());
+        for (size_t i = 0; i < one.blocks.size(); ++i) {
+            EXPECT_EQ(one.blocks[i].coord, many.blocks[i].coord);
+            EXPECT_EQ(one.blocks[i].voxels, many.blocks[i].voxels);
+            EXPECT_EQ(one.blocks[i].normals, many.blocks[i].normals);
+        }
     }
 }
 

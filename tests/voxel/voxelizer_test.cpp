@@ -11,6 +11,7 @@
 #include "tests/voxel/triangle_box_reference.h"
 #include "tests/voxel/voxel_test_support.h"
 #include "voxel/packing.h"
+#include "tests/thread_counts.h"
 
 namespace cuberille {
 namespace {
@@ -266,17 +267,19 @@ TEST(Attributes, ColoursAverageByArea) {
     EXPECT_TRUE(found);
 }
 
-voxel::VoxelModel voxelizeWithThreads(int threads, Separability s) {
+voxel::VoxelModel voxelizeWithThreads(testing::ThreadCount count, Separability s) {
     std::mt19937 rng(3);
     std::vector<Triangle> tris = testing::icosphere(4, glm::dvec3(40.0), 30.0, testing::randomRotation(rng));
     std::vector<glm::vec3> colors;
     for (size_t i = 0; i < tris.size(); ++i) colors.push_back(glm::vec3(float(i % 7) / 6.0f, 0.5f, float(i % 3) / 2.0f));
     const auto view = testing::viewOf(tris, 97, colors);
-    raster::ThreadLimit limit(threads);
+    const testing::ThreadCountScope scope(count);
     voxel::VoxelizeOptions o;
     o.resolution = 128;
     o.separability = s;
-    return voxel::voxelizeMesh(*view, o);
+    voxel::VoxelModel m = voxel::voxelizeMesh(*view, o);
+    if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+    return m;
 }
 
 bool sameModel(const voxel::VoxelModel& a, const voxel::VoxelModel& b) {
@@ -295,10 +298,11 @@ bool sameModel(const voxel::VoxelModel& a, const voxel::VoxelModel& b) {
 
 TEST(Determinism, SameVoxelsForAnyThreadCount) {
     for (Separability s : {Separability::Conservative, Separability::TwentySix}) {
-        const voxel::VoxelModel one = voxelizeWithThreads(1, s);
+        const voxel::VoxelModel one = voxelizeWithThreads(testing::kThreadCounts[0], s);
         ASSERT_GT(one.voxelCount(), 1000u);
         ASSERT_GT(one.blocks.size(), 1u);
-        for (int threads : {2, 4, 0}) EXPECT_TRUE(sameModel(one, voxelizeWithThreads(threads, s))) << threads << " threads";
+        for (const testing::ThreadCount count : {testing::kThreadCounts[1], testing::kThreadCounts[2]})
+            EXPECT_TRUE(sameModel(one, voxelizeWithThreads(count, s))) << count.threads << " threads";
     }
 }
 
