@@ -103,9 +103,11 @@ int32_t snapToSubpixels(float windowCoordinate) {
     const double scaled = double(windowCoordinate) * kSubpixelsPerPixel;
     const double below = std::floor(scaled);
     const double fraction = scaled - below;
-    const bool belowIsOdd = std::fmod(below, 2.0) != 0.0;
-    const bool roundUp = fraction > 0.5 || (fraction == 0.5 && belowIsOdd);
-    return static_cast<int32_t>(roundUp ? below + 1.0 : below);
+    // |v| < 2^31 subpixels here (clipping keeps vertices inside the guard band), so below is an
+    // exact int64.
+    const int64_t belowSubpixels = static_cast<int64_t>(below);
+    const bool roundUp = fraction > 0.5 || (fraction == 0.5 && (belowSubpixels & 1) != 0);
+    return static_cast<int32_t>(belowSubpixels + (roundUp ? 1 : 0));
 }
 
 SetupResult setupTriangle(const WindowVertex& w0, const WindowVertex& w1, const WindowVertex& w2,

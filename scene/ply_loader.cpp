@@ -135,6 +135,40 @@ Header parseHeader(std::string_view bytes, const std::string& file) {
     return h;
 }
 
+// A binary value at p as a double (every PLY type converts to one exactly), its bytes swapped
+// when the file's endianness differs from the machine's.
+double decodeBinary(const char* p, Type t, bool swap) {
+    const int n = sizeOf(t);
+    uint64_t raw = 0;
+    std::memcpy(&raw, p, size_t(n));
+    if (swap) {
+        if (n == 2) raw = __builtin_bswap16(uint16_t(raw));
+        if (n == 4) raw = __builtin_bswap32(uint32_t(raw));
+        if (n == 8) raw = __builtin_bswap64(raw);
+    }
+    unsigned char b[8];
+    std::memcpy(b, &raw, 8);
+    switch (t) {
+        case Type::Int8: return double(int8_t(b[0]));
+        case Type::UInt8: return double(b[0]);
+        case Type::Int16: { int16_t v; std::memcpy(&v, b, 2); return v; }
+        case Type::UInt16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
+        case Type::Int32: { int32_t v; std::memcpy(&v, b, 4); return v; }
+        case Type::UInt32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
+        case Type::Float32: { float v; std::memcpy(&v, b, 4); return v; }
+        case Type::Float64: { double v; std::memcpy(&v, b, 8); return v; }
+    }
+    return 0;
+}
+
+// Where in the body a value is read: an element and an instance, formatted only for a message
+// (a scan has millions of instances; building a string for each cost more than reading them).
+struct Place {
+    const std::string& element;
+    size_t index;
+    std::string str() const { return element + " " + std::to_string(index); }
+};
+
 // Reads the values of one element instance, one property at a time, in either encoding.
 class BodyReader {
 public:
@@ -144,54 +178,40 @@ public:
     size_t offset() const { return pos_; }
     size_t remaining() const { return bytes_.size() - pos_; }
 
-    double read(Type t, const std::string& where) {
+    double read(Type t, const Place& where) {
         if (encoding_ == Encoding::Ascii) return readAscii(where);
         const int n = sizeOf(t);
-        if (remaining() < size_t(n)) fail(file_, where, "unexpected end of file at byte " + std::to_string(pos_));
-        // Gather the value's bytes as an integer of its size, byte-swapped when the file's
-        // endianness differs from the machine's, then reinterpret.
-        const bool swap = (encoding_ == Encoding::BinaryBigEndian) == (std::endian::native == std::endian::little);
-        uint64_t raw = 0;
-        std::memcpy(&raw, bytes_.data() + pos_, n);
-        pos_ += n;
-        if (swap) {
-            if (n == 2) raw = __builtin_bswap16(uint16_t(raw));
-            if (n == 4) raw = __builtin_bswap32(uint32_t(raw));
-            if (n == 8) raw = __builtin_bswap64(raw);
-        }
-        unsigned char b[8];
-        std::memcpy(b, &raw, 8);
-        switch (t) {
-            case Type::Int8: return double(int8_t(b[0]));
-            case Type::UInt8: return double(b[0]);
-            case Type::Int16: { int16_t v; std::memcpy(&v, b, 2); return v; }
-            case Type::UInt16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
-            case Type::Int32: { int32_t v; std::memcpy(&v, b, 4); return v; }
-            case Type::UInt32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
-            case Type::Float32: { float v; std::memcpy(&v, b, 4); return v; }
-            case Type::Float64: { double v; std::memcpy(&v, b, 8); return v; }
-        }
-        return 0;
+        if (remaining() < size_t(n)) fail(file_, where.str(), "unexpected end of file at byte " + std::to_string(pos_));
+        const double v = decodeBinary(bytes_.data() + pos_, t, swapsBytes());
+        pos_ += size_t(n);
+        return v;
     }
 
+    bool swapsBytes() const {
+        return encoding_ != Encoding::Ascii &&
+               (encoding_ == Encoding::BinaryBigEndian) == (std::endian::native == std::endian::little);
+    }
+    const char* position() const { return bytes_.data() + pos_; }
+    void skip(size_t bytes) { pos_ += bytes; }
+
     // ASCII instances end at a newline; checks nothing is left over on the line.
-    void endInstance(const std::string& where) {
+    void endInstance(const Place& where) {
         if (encoding_ != Encoding::Ascii) return;
         while (pos_ < bytes_.size() && isBlank(bytes_[pos_])) ++pos_;
-        if (pos_ < bytes_.size() && bytes_[pos_] != '\n') fail(file_, where, "more values than the header declares");
+        if (pos_ < bytes_.size() && bytes_[pos_] != '\n') fail(file_, where.str(), "more values than the header declares");
         if (pos_ < bytes_.size()) ++pos_;
     }
 
 private:
-    double readAscii(const std::string& where) {
+    double readAscii(const Place& where) {
         while (pos_ < bytes_.size() && isBlank(bytes_[pos_])) ++pos_;
         if (pos_ >= bytes_.size() || bytes_[pos_] == '\n')
-            fail(file_, where, pos_ >= bytes_.size() ? "unexpected end of file" : "fewer values than the header declares");
+            fail(file_, where.str(), pos_ >= bytes_.size() ? "unexpected end of file" : "fewer values than the header declares");
         double v = 0;
         const char* first = bytes_.data() + pos_;
         const char* last = bytes_.data() + bytes_.size();
         auto [end, ec] = std::from_chars(first, last, v);
-        if (ec != std::errc()) fail(file_, where, "not a number at byte " + std::to_string(pos_));
+        if (ec != std::errc()) fail(file_, where.str(), "not a number at byte " + std::to_string(pos_));
         pos_ += size_t(end - first);
         return v;
     }
@@ -249,6 +269,114 @@ int findProperty(const Element& e, std::initializer_list<std::string_view> names
     return -1;
 }
 
+// The property indices parsePly reads from a vertex element (-1: absent).
+struct VertexLayout {
+    int x, y, z, nx, ny, nz, r, g, b;
+    bool hasNormals, hasColors;
+};
+
+void storeVertex(const VertexLayout& l, const Element& e, const double* values, size_t i, Mesh& mesh) {
+    mesh.positions[i] = glm::vec3(values[l.x], values[l.y], values[l.z]);
+    if (l.hasNormals) mesh.normals[i] = glm::vec3(values[l.nx], values[l.ny], values[l.nz]);
+    if (l.hasColors) {
+        const float scale = e.properties[size_t(l.r)].type == Type::UInt8 ? 1.0f / 255.0f : 1.0f;
+        mesh.colors[i] = glm::vec3(srgbToLinear(float(values[l.r]) * scale), srgbToLinear(float(values[l.g]) * scale),
+                                   srgbToLinear(float(values[l.b]) * scale));
+    }
+}
+
+bool finitePosition(const VertexLayout& l, const double* values) {
+    return std::isfinite(float(values[l.x])) && std::isfinite(float(values[l.y])) && std::isfinite(float(values[l.z]));
+}
+
+// Binary fast paths for the layouts scans use: whole instances decoded from the bytes without a
+// call per value or a check per byte. Each takes instances from the reader's position while they
+// are well formed and returns how many it took; the general reader resumes at the first it did
+// not take, and reports its problem with its place.
+
+// An element of scalar properties only (a vertex element): fixed-size instances.
+size_t readFixedInstances(const Element& e, const VertexLayout& l, BodyReader& reader, Mesh& mesh) {
+    size_t instanceBytes = 0;
+    for (const Property& p : e.properties) {
+        if (p.isList) return 0;
+        instanceBytes += size_t(sizeOf(p.type));
+    }
+    const size_t available = std::min(e.count, reader.remaining() / std::max<size_t>(instanceBytes, 1));
+    const bool swap = reader.swapsBytes();
+    std::vector<double> values(e.properties.size());
+    size_t taken = 0;
+    const bool allNativeFloats = !swap && std::all_of(e.properties.begin(), e.properties.end(),
+                                                      [](const Property& p) { return p.type == Type::Float32; });
+    for (; taken < available; ++taken) {
+        const char* p = reader.position();
+        if (allNativeFloats) {  // the common scan layout: floats in the machine's order, no conversion a value
+            for (size_t k = 0; k < values.size(); ++k, p += 4) {
+                float v;
+                std::memcpy(&v, p, 4);
+                values[k] = v;
+            }
+        } else {
+            for (size_t k = 0; k < e.properties.size(); ++k) {
+                values[k] = decodeBinary(p, e.properties[k].type, swap);
+                p += sizeOf(e.properties[k].type);
+            }
+        }
+        if (!finitePosition(l, values.data())) break;
+        storeVertex(l, e, values.data(), taken, mesh);
+        reader.skip(instanceBytes);
+    }
+    return taken;
+}
+
+// An element whose one property is the vertex index list (a face or tristrips element).
+size_t readIndexLists(const Element& e, bool strips, size_t vertexCount, BodyReader& reader, Mesh& mesh) {
+    if (e.properties.size() != 1 || !e.properties[0].isList) return 0;
+    const Property& list = e.properties[0];
+    const size_t countBytes = size_t(sizeOf(list.countType)), indexBytes = size_t(sizeOf(list.type));
+    const bool swap = reader.swapsBytes();
+    const bool signedIndices = list.type == Type::Int32;
+    const bool raw32 = !swap && (signedIndices || list.type == Type::UInt32);
+    // Most scans' faces are triangles of uchar counts and int indices: room for that many.
+    if (!strips) mesh.indices.reserve(mesh.indices.size() + 3 * std::min(e.count, reader.remaining() / (countBytes + 3 * indexBytes)));
+    std::vector<uint32_t> polygon;
+    size_t taken = 0;
+    for (; taken < e.count; ++taken) {
+        if (reader.remaining() < countBytes) break;
+        const double count = list.countType == Type::UInt8 ? double(uint8_t(*reader.position()))
+                                                            : decodeBinary(reader.position(), list.countType, swap);
+        if (!(count >= 0) || count > double((reader.remaining() - countBytes) / indexBytes)) break;
+        const char* p = reader.position() + countBytes;
+        polygon.clear();
+        bool valid = true;
+        if (raw32) {  // 32-bit indices in the machine's order: no conversion a value
+            for (size_t k = 0; k < size_t(count) && valid; ++k, p += 4) {
+                uint32_t v;
+                std::memcpy(&v, p, 4);
+                if (strips && signedIndices && v == uint32_t(-1)) polygon.push_back(kRestartIndex);
+                else if (v < vertexCount && !(signedIndices && v > uint32_t(INT32_MAX))) polygon.push_back(v);
+                else valid = false;
+            }
+        } else {
+            for (size_t k = 0; k < size_t(count) && valid; ++k, p += indexBytes) {
+                const double v = decodeBinary(p, list.type, swap);
+                if (strips && v == kStripRestart) polygon.push_back(kRestartIndex);
+                else if (v >= 0 && v < double(vertexCount) && v == std::floor(v)) polygon.push_back(uint32_t(v));
+                else valid = false;
+            }
+        }
+        if (!valid) break;
+        if (strips) appendStrips(polygon, mesh.indices);
+        else if (polygon.size() == 3) {
+            mesh.indices.push_back(polygon[0]);
+            mesh.indices.push_back(polygon[1]);
+            mesh.indices.push_back(polygon[2]);
+        }
+        else appendFan(polygon, mesh.indices);
+        reader.skip(countBytes + size_t(count) * indexBytes);
+    }
+    return taken;
+}
+
 }  // namespace
 
 Mesh parsePly(std::string_view bytes, const std::string& file) {
@@ -279,10 +407,14 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
         }
         if ((isFace || isStrips) && list < 0) fail(file, "element '" + e.name + "'", "no vertex_indices list");
         if ((isFace || isStrips) && !sawVertices) fail(file, "element '" + e.name + "'", e.name + " before vertices");
+        const VertexLayout layout{x, y, z, nx, ny, nz, r, g, b, hasNormals, hasColors};
+        size_t first = 0;  // instances a fast path took
+        if (h.encoding != Encoding::Ascii && isVertex) first = readFixedInstances(e, layout, reader, mesh);
+        if (h.encoding != Encoding::Ascii && (isFace || isStrips)) first = readIndexLists(e, isStrips, vertexCount, reader, mesh);
         std::vector<double> values(e.properties.size());  // this instance's scalar properties
         std::vector<uint32_t> polygon;
-        for (size_t i = 0; i < e.count; ++i) {
-            const std::string where = e.name + " " + std::to_string(i);
+        for (size_t i = first; i < e.count; ++i) {
+            const Place where{e.name, i};
             for (size_t p = 0; p < e.properties.size(); ++p) {
                 const Property& prop = e.properties[p];
                 if (!prop.isList) {
@@ -296,7 +428,7 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
                 const size_t fitting = h.encoding == Encoding::Ascii ? (reader.remaining() + 1) / 2
                                                                      : reader.remaining() / size_t(sizeOf(prop.type));
                 if (!(countValue >= 0) || countValue > double(fitting))
-                    fail(file, where, "list length " + formatValue(countValue) + " cannot fit in the " +
+                    fail(file, where.str(), "list length " + formatValue(countValue) + " cannot fit in the " +
                                           std::to_string(reader.remaining()) + " bytes left");
                 const size_t count = size_t(countValue);
                 const bool isIndices = (isFace || isStrips) && int(p) == list;
@@ -309,7 +441,7 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
                         continue;
                     }
                     if (!(v >= 0) || v >= double(vertexCount) || v != std::floor(v))
-                        fail(file, where, "vertex index " + formatValue(v) + " is out of range (" +
+                        fail(file, where.str(), "vertex index " + formatValue(v) + " is out of range (" +
                                               std::to_string(vertexCount) + " vertices)");
                     polygon.push_back(uint32_t(v));
                 }
@@ -318,16 +450,8 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
             }
             reader.endInstance(where);
             if (!isVertex) continue;
-            const glm::vec3 pos(values[x], values[y], values[z]);
-            if (!std::isfinite(pos.x) || !std::isfinite(pos.y) || !std::isfinite(pos.z))
-                fail(file, where, "position is not finite");
-            mesh.positions[i] = pos;
-            if (hasNormals) mesh.normals[i] = glm::vec3(values[nx], values[ny], values[nz]);
-            if (hasColors) {
-                const float scale = e.properties[r].type == Type::UInt8 ? 1.0f / 255.0f : 1.0f;
-                mesh.colors[i] = glm::vec3(srgbToLinear(float(values[r]) * scale), srgbToLinear(float(values[g]) * scale),
-                                           srgbToLinear(float(values[b]) * scale));
-            }
+            if (!finitePosition(layout, values.data())) fail(file, where.str(), "position is not finite");
+            storeVertex(layout, e, values.data(), i, mesh);
         }
     }
     if (!sawVertices) fail(file, "header", "no vertex element");
@@ -340,6 +464,7 @@ std::string readFileBytes(const std::filesystem::path& path) {
     if (lowerExtension(path) == ".gz") {
         gzFile f = gzopen(name.c_str(), "rb");
         if (!f) throw InputError(name + ": cannot open file");
+        gzbuffer(f, 1 << 18);  // zlib's 8 KiB default reads a large scan in many small reads
         std::string out;
         char buffer[1 << 16];
         int n;
@@ -352,11 +477,16 @@ std::string readFileBytes(const std::filesystem::path& path) {
         if (failed) throw InputError(name + ": corrupt gzip data (" + why + ")");
         return out;
     }
-    std::ifstream in(path, std::ios::binary);
+    // One read of the whole file into a string of its size (a stream copy through a stringbuf
+    // cost as much again as the read).
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw InputError(name + ": cannot open file");
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
-    return buffer.str();
+    const std::streamoff size = in.tellg();
+    if (size < 0) throw InputError(name + ": cannot read file");
+    std::string bytes(size_t(size), '\0');
+    in.seekg(0);
+    if (!in.read(bytes.data(), size)) throw InputError(name + ": cannot read file");
+    return bytes;
 }
 
 Mesh loadPly(const std::filesystem::path& path) { return parsePly(readFileBytes(path), path.string()); }

@@ -114,8 +114,8 @@ TEST_P(HierarchicalDepth, NeverChangesTheImageWithReversedDepth) {
 INSTANTIATE_TEST_SUITE_P(SampleCounts, HierarchicalDepth, ::testing::Values(1, 2, 4, 8, 16),
                          [](const auto& info) { return std::to_string(info.param) + "x"; });
 
-// Ordinary ranges: both conventions draw the same surfaces; they may differ only where two
-// surfaces meet within a rounding of each other (interpenetrating triangles).
+// Ordinary ranges: both conventions draw the same surfaces. They could differ only where two
+// surfaces meet within a rounding of each other; these scenes have no such place.
 TEST(ReversedDepth, DrawsWhatStandardDepthDrawsOnOrdinaryScenes) {
     size_t differing = 0, pixels = 0;
     for (uint32_t seed = 1; seed <= 20; ++seed) {
@@ -127,7 +127,9 @@ TEST(ReversedDepth, DrawsWhatStandardDepthDrawsOnOrdinaryScenes) {
             differing += !std::equal(a.rgba.begin() + i, a.rgba.begin() + i + 4, b.rgba.begin() + i);
         }
     }
-    EXPECT_LT(double(differing), 0.002 * double(pixels)) << differing << " of " << pixels;
+    // Measured: none of the 300,000 pixels (0.2% were allowed): where these scenes' triangles
+    // meet, their depths are far enough apart for both conventions to order them alike.
+    EXPECT_EQ(differing, 0u) << differing << " of " << pixels;
 }
 
 // Near 1e-4 and far 1e7: at 100 units standard depth sits within a few ULPs of 1 and two

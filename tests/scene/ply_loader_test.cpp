@@ -97,8 +97,13 @@ TEST(PlyLoader, ReadsGzipCompressedFiles) {
     std::filesystem::remove(path);
 }
 
+std::string layoutPly(bool bigEndian, const std::string& positionType, bool normals, bool colors,
+                      const std::string& countType, const std::string& indexType);
+
 TEST(PlyLoader, EveryTruncationIsAnInputErrorNamingTheFile) {
-    for (const std::string& full : {binaryPly(false), binaryPly(true), asciiPly()}) {
+    // The pyramid, and a layout every fast path of the binary reader takes.
+    for (const std::string& full : {binaryPly(false), binaryPly(true), asciiPly(),
+                                    layoutPly(false, "float", false, false, "uchar", "int")}) {
         const size_t body = full.find("end_header\n") + 11;
         for (size_t length = 0; length < full.size(); ++length) {
             // ASCII may legally end after the last face line's digits; every binary cut may not.
@@ -154,6 +159,65 @@ TEST(PlyLoader, ASecondVertexElementIsRefused) {
         EXPECT_NE(std::string(e.what()).find("twice.ply: element 'vertex': a second vertex element"), std::string::npos)
             << e.what();
     }
+}
+
+// A binary PLY of the given vertex and index types, in either byte order: a 5x5 grid of
+// vertices at multiples of 1/8 (exact in every type) and its 32 triangles, with a quad and a
+// pentagon among them, and a strip when `strips`.
+std::string layoutPly(bool bigEndian, const std::string& positionType, bool normals, bool colors,
+                      const std::string& countType, const std::string& indexType) {
+    std::string s = "ply\nformat " + std::string(bigEndian ? "binary_big_endian" : "binary_little_endian") + " 1.0\n";
+    s += "element vertex 25\nproperty " + positionType + " x\nproperty " + positionType + " y\nproperty " + positionType + " z\n";
+    if (normals) s += "property float nx\nproperty float ny\nproperty float nz\n";
+    if (colors) s += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    s += "element face 3\nproperty list " + countType + " " + indexType + " vertex_indices\n";
+    s += "element tristrips 1\nproperty list " + countType + " " + indexType + " vertex_indices\nend_header\n";
+    auto value = [&](const std::string& type, double v) {
+        if (type == "float") put(s, float(v), bigEndian);
+        else if (type == "double") put(s, v, bigEndian);
+        else if (type == "uchar") put(s, uint8_t(v), bigEndian);
+        else if (type == "ushort") put(s, uint16_t(v), bigEndian);
+        else if (type == "int") put(s, int32_t(v), bigEndian);
+        else put(s, uint32_t(v), bigEndian);
+    };
+    for (int i = 0; i < 25; ++i) {
+        for (double v : {(i % 5) / 8.0, (i / 5) / 8.0, ((i * 7) % 3) / 8.0}) value(positionType, v);
+        if (normals) for (double v : {0.0, 0.0, 1.0}) value("float", v);
+        if (colors) for (double v : {double(i * 10), 128.0, 255.0 - i}) value("uchar", v);
+    }
+    const std::vector<std::vector<double>> faces = {{0, 1, 6}, {1, 2, 7, 6}, {2, 3, 8, 13, 12}};
+    for (const auto& f : faces) {
+        value(countType, double(f.size()));
+        for (double v : f) value(indexType, v);
+    }
+    std::vector<double> strip = {5, 10, 6, 11, 7, 12};
+    if (indexType == "int") strip.insert(strip.end(), {-1, 15, 20, 16, 21});
+    value(countType, double(strip.size()));
+    for (double v : strip) value(indexType, v);
+    return s;
+}
+
+TEST(PlyLoader, TheFastAndTheGeneralReaderGiveTheSameMeshForEveryLayout) {
+    // Little-endian files take the binary fast paths where their layout allows (native floats,
+    // 32-bit indices, uchar counts); big-endian ones always the general reader.
+    int layouts = 0;
+    for (const char* positionType : {"float", "double"})
+        for (bool normals : {false, true})
+            for (bool colors : {false, true})
+                for (const char* countType : {"uchar", "int"})
+                    for (const char* indexType : {"int", "uint", "ushort"}) {
+                        const Mesh fast = parsePly(layoutPly(false, positionType, normals, colors, countType, indexType), "le.ply");
+                        const Mesh general = parsePly(layoutPly(true, positionType, normals, colors, countType, indexType), "be.ply");
+                        const std::string layout = std::string(positionType) + (normals ? " normals" : "") +
+                                                   (colors ? " colours" : "") + " " + countType + " " + indexType;
+                        EXPECT_EQ(fast.positions, general.positions) << layout;
+                        EXPECT_EQ(fast.normals, general.normals) << layout;
+                        EXPECT_EQ(fast.colors, general.colors) << layout;
+                        EXPECT_EQ(fast.indices, general.indices) << layout;
+                        EXPECT_EQ(fast.triangleCount(), size_t(1 + 2 + 3 + (std::string(indexType) == "int" ? 4 + 2 : 4))) << layout;
+                        ++layouts;
+                    }
+    EXPECT_EQ(layouts, 48);
 }
 
 TEST(PlyLoader, EveryStripVariantGivesTheTrianglesOfTheFaceList) {
