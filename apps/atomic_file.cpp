@@ -4,6 +4,8 @@
 
 #include <stdexcept>
 
+#include "scene/input_error.h"
+
 namespace cuberille::apps {
 
 AtomicOutputFile::AtomicOutputFile(std::filesystem::path path) : path_(std::move(path)) {
@@ -29,6 +31,19 @@ void AtomicOutputFile::commit() {
     std::filesystem::rename(temp_, path_, ec);
     if (ec) throw std::runtime_error(path_.string() + ": cannot rename the finished file into place: " + ec.message());
     committed_ = true;
+}
+
+void requireOutputPath(const std::filesystem::path& path, const std::string& option) {
+    namespace fs = std::filesystem;
+    if (path.empty()) return;
+    std::error_code ec;
+    if (fs::is_directory(path, ec))
+        throw scene::InputError(option + " " + path.string() + ": is a folder; name a file in it");
+    const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+    if (!fs::exists(folder, ec))
+        throw scene::InputError(option + " " + path.string() + ": the folder " + folder.string() + " does not exist");
+    if (!fs::is_directory(folder, ec))
+        throw scene::InputError(option + " " + path.string() + ": " + folder.string() + " is not a folder");
 }
 
 void writeJsonAtomically(const std::filesystem::path& path, const nlohmann::json& json) {

@@ -28,6 +28,11 @@ private:
     bool committed_ = false;
 };
 
+/// Refuses, before any work, an output path that could only fail at the end: one that names an
+/// existing folder, or whose folder does not exist (a run writes all its outputs or none).
+/// `option` names the option in the message (`--out`). Throws scene::InputError (exit code 2).
+void requireOutputPath(const std::filesystem::path& path, const std::string& option);
+
 /// `--stats` files: the JSON, indented, written atomically.
 void writeJsonAtomically(const std::filesystem::path& path, const nlohmann::json& json);
 

@@ -296,6 +296,11 @@ scene::TriScene sceneFor(const ExplainOptions& o) {
         return scene::loadTriScene(o.scene);
     }
     if (o.triangle.empty()) throw scene::InputError("explain: give a .tri scene or --triangle \"x0 y0 x1 y1 x2 y2\"");
+    std::istringstream words(o.triangle);
+    int numbers = 0;
+    for (std::string word; words >> word;) ++numbers;
+    if (numbers != 6)
+        throw scene::InputError("--triangle: expected 6 numbers (x0 y0 x1 y1 x2 y2), found " + std::to_string(numbers));
     return scene::parseTriScene(o.triangle + " 1\n", "--triangle");
 }
 

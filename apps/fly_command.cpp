@@ -39,6 +39,8 @@ void validate(const FlyOptions& o) {
     if (!(o.pixelError >= 0.0f && std::isfinite(o.pixelError))) throw InputError("--pixel-error: must be 0 or more");
     if (o.settleFrames < 0) throw InputError("--settle-frames: must be 0 or more");
     if (!o.plotPath.empty()) imageFormatFor(o.plotPath);
+    requireOutputPath(o.plotPath, "--plot");
+    requireOutputPath(o.statsPath, "--stats");
     if (o.path != "orbit" && o.path != "zoom" && !std::filesystem::exists(o.path))
         throw InputError("--path: '" + o.path + "' is not orbit, zoom or an existing keyframe file");
 }

@@ -52,7 +52,13 @@ void writeImageAtomically(const std::filesystem::path& path, const raster::Image
         std::filesystem::remove(temp, ignored);
         throw std::runtime_error(path.string() + ": cannot write image: " + out->geterror());
     }
-    std::filesystem::rename(temp, path);
+    std::error_code ec;
+    std::filesystem::rename(temp, path, ec);
+    if (ec) {
+        std::error_code ignored;
+        std::filesystem::remove(temp, ignored);
+        throw std::runtime_error(path.string() + ": cannot rename the finished image into place: " + ec.message());
+    }
 }
 
 raster::Image readImage(const std::filesystem::path& path) {

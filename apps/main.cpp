@@ -1,7 +1,10 @@
 // The `cuberille` command-line tool. Exit codes (DESIGN.md): 0 success, 1 failure while
 // working, 2 bad usage or bad input.
 
+#include <algorithm>
 #include <cstdio>
+#include <string>
+#include <vector>
 #include <exception>
 
 #include <CLI/CLI.hpp>
@@ -61,9 +64,11 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
                        "glTF: pose the first animation at this time, in seconds (node transforms)")
         ->capture_default_str();
     render->add_option("--turntable", o.turntable,
-                       "Write N frames turning around the scene (OUT_000.png, OUT_001.png, ...)");
+                       "Write N frames turning around the scene (OUT_000.png, OUT_001.png, ...)")
+        ->check(CLI::Range(1, 3600));
     render->add_option("--animate", o.animate,
-                       "glTF: write N frames of the first animation from --time, --fps apart (OUT_000.png, ...)");
+                       "glTF: write N frames of the first animation from --time, --fps apart (OUT_000.png, ...)")
+        ->check(CLI::Range(1, 3600));
     render->add_option("--fps", o.fps, "With --animate: frames a second of animation time")->capture_default_str();
     render->add_option("--supersample", o.supersample,
                        "Render N x N times the pixels and box-filter down: N² samples per pixel on a grid (1..16)")
@@ -240,11 +245,71 @@ void addFlyCommand(CLI::App& app, cuberille::apps::FlyOptions& o) {
     fly->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 
+// Typos: the name among `names` nearest to `typed` by edit distance (Levenshtein), or "" when
+// none is within a third of its length (so `rendr` suggests `render`, `xyz` nothing).
+std::string closestName(const std::string& typed, const std::vector<std::string>& names) {
+    std::string best;
+    size_t bestDistance = std::max<size_t>(1, typed.size() / 3) + 1;
+    for (const std::string& name : names) {
+        std::vector<size_t> row(name.size() + 1);
+        for (size_t j = 0; j <= name.size(); ++j) row[j] = j;
+        for (size_t i = 1; i <= typed.size(); ++i) {
+            size_t diagonal = row[0];
+            row[0] = i;
+            for (size_t j = 1; j <= name.size(); ++j) {
+                const size_t above = row[j];
+                row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (typed[i - 1] == name[j - 1] ? 0 : 1)});
+                diagonal = above;
+            }
+        }
+        if (row[name.size()] < bestDistance) bestDistance = row[name.size()], best = name;
+    }
+    return best;
+}
+
+std::string didYouMean(const std::string& typed, const std::vector<std::string>& names) {
+    const std::string near = closestName(typed, names);
+    return near.empty() ? "" : "; did you mean '" + near + "'?";
+}
+
+// A first word that is no subcommand: named, with the nearest one and the list (CLI11 alone says
+// "A subcommand is required").
+bool reportUnknownSubcommand(const CLI::App& app, int argc, char** argv) {
+    if (argc < 2 || argv[1][0] == '-') return false;
+    std::vector<std::string> names;
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) names.push_back(sub->get_name());
+    const std::string typed = argv[1];
+    if (std::find(names.begin(), names.end(), typed) != names.end()) return false;
+    std::string all;
+    for (const std::string& n : names) all += (all.empty() ? "" : ", ") + n;
+    std::fprintf(stderr, "cuberille: '%s' is not a command%s (commands: %s)\n", typed.c_str(),
+                 didYouMean(typed, names).c_str(), all.c_str());
+    return true;
+}
+
+// Options the chosen subcommand does not have, each with the nearest one it has.
+void reportUnknownOptions(CLI::App& app, int argc, char** argv) {
+    const std::vector<CLI::App*> chosen = app.get_subcommands();
+    if (chosen.empty()) return;
+    std::vector<std::string> names;
+    for (const CLI::Option* option : chosen.front()->get_options())
+        for (const std::string& n : option->get_lnames()) names.push_back("--" + n);
+    for (int i = 2; i < argc; ++i) {
+        const std::string word = argv[i];
+        if (word.rfind("--", 0) != 0) continue;
+        const std::string name = word.substr(0, word.find('='));
+        if (std::find(names.begin(), names.end(), name) == names.end())
+            std::fprintf(stderr, "cuberille %s: unknown option %s%s\n", chosen.front()->get_name().c_str(), name.c_str(),
+                         didYouMean(name, names).c_str());
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{"cuberille: a CPU renderer modelled on the GPU rasterization pipeline", "cuberille"};
     app.require_subcommand(1);
+    app.set_version_flag("--version", std::string("cuberille ") + CUBERILLE_VERSION);
     cuberille::apps::RenderOptions renderOptions;
     RenderNames renderNames;
     addRenderCommand(app, renderOptions, renderNames);
@@ -263,11 +328,18 @@ int main(int argc, char** argv) {
     cuberille::apps::AccuracyOptions accuracyOptions;
     addAccuracyCommand(app, accuracyOptions);
 
+    if (reportUnknownSubcommand(app, argc, argv)) return kExitBadInput;
     try {
         app.parse(argc, argv);
+    } catch (const CLI::ExtrasError& e) {
+        app.exit(e);
+        reportUnknownOptions(app, argc, argv);
+        return kExitBadInput;
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
         app.exit(e);

@@ -48,6 +48,9 @@ void validate(const RenderOptions& o) {
     if (o.animate > 0 && !scene::isGltfKind(kind))
         throw InputError("--animate: only for glTF files (.gltf, .glb), not " + o.scene);
     if (o.animate > 0 && o.turntable > 0) throw InputError("--animate and --turntable: one or the other");
+    // An option a scene cannot use is refused, not silently ignored: only glTF animates.
+    if (o.timeSeconds != 0.0f && !scene::isGltfKind(kind))
+        throw InputError("--time: only glTF files (.gltf, .glb) have animations, not " + o.scene);
     if (!(o.fps > 0.0f && o.fps <= 1000.0f)) throw InputError("--fps: must be in (0, 1000]");
 }
 
@@ -165,8 +168,10 @@ scene::Scene loadScene(const RenderOptions& o) {
                                      [&](const std::string& w) {
                                          if (!o.quiet) std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str());
                                      });
-    throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz, .obj, .gltf "
-                            "or .glb file, or a built-in scene name");
+    std::string builtIn;
+    for (const std::string& name : scene::proceduralSceneNames()) builtIn += (builtIn.empty() ? "" : ", ") + name;
+    throw scene::InputError("'" + o.scene + "' is not a scene: expected a .tri, .ply, .ply.gz, .obj, .gltf, .glb or .cvox "
+                            "file, or a built-in scene (" + builtIn + ")");
 }
 
 // Built-in or mesh-file scenes: everything but .tri, with the accuracy knobs that change the
@@ -542,6 +547,10 @@ int runAnimation(const RenderOptions& o);
 int runRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png or .exr)");
     imageFormatFor(o.out);  // reject a bad extension before any work
+    requireOutputPath(o.out, "--out");
+    requireOutputPath(o.statsPath, "--stats");
+    if (o.supersample > 1 && (o.turntable > 0 || o.animate > 0))
+        throw scene::InputError("--supersample: not with --turntable or --animate (each frame would be rendered without it)");
     if (o.turntable > 0 && isVoxelFile(o)) throw scene::InputError("--turntable: not for voxel models yet");
     if (o.turntable > 0) return runTurntable(o);
     if (o.animate > 0) return runAnimation(o);

@@ -97,6 +97,8 @@ voxel::Separability parseSeparability(const std::string& name) {
 
 int runPackCommand(const PackOptions& o) {
     requireKind(o.out, scene::FileKind::GeometryStream, ".cgs", "the geometry stream");
+    requireOutputPath(o.out, "-o");
+    requireOutputPath(o.statsPath, "--stats");
     if (o.chunkTriangles == 0) throw scene::InputError("--chunk-triangles must be at least 1");
     const double t0 = raster::nowMs();
     // A geometry stream is re-written with its own chunks; other files are cut at the asked size.
@@ -126,6 +128,9 @@ int runPackCommand(const PackOptions& o) {
 
 int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
     requireKind(o.out, scene::FileKind::VoxelModel, ".cvox", "the voxel model");
+    requireOutputPath(o.out, "-o");
+    requireOutputPath(o.exportVoxels, "--export-voxels");
+    requireOutputPath(o.statsPath, "--stats");
     if (!voxel::isValidResolution(o.resolution))
         throw scene::InputError("--resolution " + std::to_string(o.resolution) + ": expected a power of two from " +
                                 std::to_string(voxel::kMinResolution) + " to " + std::to_string(voxel::kMaxResolution));
@@ -198,6 +203,9 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
 
 int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
     requireKind(o.out, scene::FileKind::VoxelModel, ".cvox", "the voxel model");
+    requireOutputPath(o.out, "-o");
+    requireOutputPath(o.exportVoxels, "--export-voxels");
+    requireOutputPath(o.statsPath, "--stats");
     voxel::VolumeDesc d;
     d.dims = {o.dims[0], o.dims[1], o.dims[2]};
     if (d.dims.x == 0 || d.dims.y == 0 || d.dims.z == 0) throw scene::InputError("--dims: every dimension must be at least 1");

@@ -389,7 +389,8 @@ TEST_F(Cli, ExplainWritesEveryStageAndRefusesBadInputWithExitTwo) {
     EXPECT_EQ(run("explain " + tri.string() + " --triangle-index 1 --out-dir " + (dir_ / "two").string()).exitCode, 0);
     const std::pair<std::string, std::string> bad[] = {
         {"explain --out-dir " + (dir_ / "a").string(), "--triangle"},
-        {"explain --triangle \"0 0 1 0\" --out-dir " + (dir_ / "b").string(), "--triangle:1"},
+        {"explain --triangle \"0 0 1 0\" --out-dir " + (dir_ / "b").string(), "--triangle: expected 6 numbers"},
+        {"explain --triangle \"0 0 1 0 x 1\" --out-dir " + (dir_ / "b").string(), "--triangle:1"},
         {"explain " + tri.string() + " --triangle-index 2 --out-dir " + (dir_ / "c").string(), "--triangle-index"},
         {"explain --triangle \"0 0 500 0 0 500\" --out-dir " + (dir_ / "d").string(), "at most"},
         {"explain --triangle \"0 0 5 0 0 5\" --scale 2 --out-dir " + (dir_ / "e").string(), "--scale"},
@@ -819,4 +820,78 @@ TEST_F(Cli, EveryCommandTakesEveryFileKindInAnyCase) {
         EXPECT_TRUE(fs::exists(png)) << png;
         EXPECT_TRUE(fs::exists(exr)) << exr;
     }
+}
+
+// A mistyped command or option is named with the nearest valid one; a scene that is none lists
+// what is; --version answers.
+TEST_F(Cli, MessagesNameTheNearestCommandOptionOrScene) {
+    CommandRun r = run("--version");
+    EXPECT_EQ(r.exitCode, 0);
+    EXPECT_EQ(r.output.rfind("cuberille ", 0), 0u) << r.output;
+    r = run("frobnicate");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("'frobnicate' is not a command"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("accuracy"), std::string::npos) << "every command listed: " << r.output;
+    r = run("rendr demo");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("did you mean 'render'?"), std::string::npos) << r.output;
+    r = run("render demo --msaaa 4 --out " + (dir_ / "x.png").string());
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("unknown option --msaaa; did you mean '--msaa'?"), std::string::npos) << r.output;
+    r = run("render dem --out " + (dir_ / "x.png").string());
+    EXPECT_EQ(r.exitCode, 2);
+    for (const char* named : {".cvox", "demo", "field", "subpixel", "fill"})
+        EXPECT_NE(r.output.find(named), std::string::npos) << named << " missing from: " << r.output;
+    r = run("explain --triangle \"1 2 3\" --out-dir " + (dir_ / "stages").string());
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("expected 6 numbers (x0 y0 x1 y1 x2 y2), found 3"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+// A run writes all its outputs or none: a path that could only fail at the end (a folder, a
+// missing folder) is refused with exit code 2 before any work, and nothing is left behind.
+TEST_F(Cli, OutputPathsAreCheckedBeforeAnyWork) {
+    fs::create_directories(dir_ / "folder.png");
+    const fs::path missing = dir_ / "missing" / "x.png", image = dir_ / "image.png";
+    const fs::path obj = write("tet.obj", kTetrahedronObj);
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"render demo --width 32 --height 24 --out " + (dir_ / "folder.png").string(), "is a folder"},
+        {"render demo --width 32 --height 24 --out " + missing.string(), "does not exist"},
+        {"render demo --width 32 --height 24 --out " + image.string() + " --stats " + (dir_ / "missing" / "s.json").string(),
+         "--stats"},
+        {"render demo --width 32 --height 24 --turntable 2 --out " + missing.string(), "does not exist"},
+        {"pack " + obj.string() + " -o " + (dir_ / "missing" / "t.cgs").string(), "does not exist"},
+        {"voxelize " + obj.string() + " -o " + (dir_ / "t.cvox").string() + " --stats " + (dir_ / "folder.png").string(),
+         "is a folder"},
+        {"fly " + (dir_ / "t.cvox").string() + " --stats " + (dir_ / "missing" / "f.csv").string(), "does not exist"},
+    };
+    for (const auto& [args, problem] : cases) {
+        const CommandRun r = run(args);
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find(problem), std::string::npos) << args << "\n" << r.output;
+    }
+    EXPECT_FALSE(fs::exists(image)) << "the image was written although --stats could not be";
+    EXPECT_FALSE(fs::exists(dir_ / "t.cvox"));
+    for (const auto& e : fs::recursive_directory_iterator(dir_))
+        EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << "left behind: " << e.path();
+}
+
+// An option that would do nothing in its combination is refused rather than ignored.
+TEST_F(Cli, OptionsThatWouldDoNothingAreRefused) {
+    const fs::path ply = write("tri.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                          "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                          "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    const fs::path out = dir_ / "x.png";
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"render demo --turntable 0 --out " + out.string(), "--turntable"},
+        {"render " + ply.string() + " --time 1.5 --out " + out.string(), "--time: only glTF"},
+        {"render demo --supersample 2 --turntable 2 --out " + out.string(), "--supersample: not with --turntable"},
+    };
+    for (const auto& [args, problem] : cases) {
+        const CommandRun r = run(args);
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find(problem), std::string::npos) << args << "\n" << r.output;
+    }
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(dir_ / "x_000.png"));
 }
