@@ -33,6 +33,8 @@ void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int&
 /// The render options parsed from names after CLI11 has read them.
 struct RenderNames {
     std::string view = "color", shadows = "none", textureFilter = "file", depth = "standard", bvhUpdate = "refit";
+    std::string eye, target, up, upAxis = "y";
+    float fovDegrees = 0.0f;
 };
 
 void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNames& names) {
@@ -60,6 +62,12 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
         ->capture_default_str();
     render->add_option("--camera-index", o.cameraIndex,
                        "Use the file's N-th camera (glTF, in node order) instead of framing the model");
+    render->add_option("--eye", names.eye, "Place the camera at X,Y,Z (world units) instead of framing the model");
+    render->add_option("--target", names.target, "With --eye: the point X,Y,Z looked at (default: the model's centre)");
+    render->add_option("--up", names.up, "With --eye: the up direction X,Y,Z (default: 0,1,0)");
+    render->add_option("--fov", names.fovDegrees, "With --eye: vertical field of view, degrees (default: the framing one's)");
+    render->add_option("--up-axis", names.upAxis, "Mesh files: the file's up axis, y or z (z-up scans are turned to y-up)")
+        ->capture_default_str();
     render->add_option("--time", o.timeSeconds,
                        "glTF: pose the first animation at this time, in seconds (node transforms)")
         ->capture_default_str();
@@ -353,6 +361,20 @@ int main(int argc, char** argv) {
             renderOptions.textureFilter = cuberille::apps::parseTextureFilter(renderNames.textureFilter);
             renderOptions.depth = cuberille::apps::parseDepthConvention(renderNames.depth);
             renderOptions.bvhUpdate = cuberille::apps::parseBvhUpdate(renderNames.bvhUpdate);
+            if (renderNames.upAxis != "y" && renderNames.upAxis != "z")
+                throw cuberille::scene::InputError("--up-axis " + renderNames.upAxis + ": expected y or z");
+            renderOptions.zUp = renderNames.upAxis == "z";
+            const bool placed = !renderNames.eye.empty();
+            if (!placed && (!renderNames.target.empty() || !renderNames.up.empty() || renderNames.fovDegrees != 0.0f))
+                throw cuberille::scene::InputError("--target, --up and --fov: only with --eye");
+            if (placed) {
+                cuberille::scene::CameraPlacement p;
+                p.eye = cuberille::apps::parseVector3(renderNames.eye, "--eye");
+                if (!renderNames.target.empty()) p.target = cuberille::apps::parseVector3(renderNames.target, "--target");
+                if (!renderNames.up.empty()) p.up = cuberille::apps::parseVector3(renderNames.up, "--up");
+                p.verticalFovDegrees = renderNames.fovDegrees;
+                renderOptions.placement = p;
+            }
             return cuberille::apps::runRenderCommand(renderOptions);
         }
         if (app.got_subcommand("pack")) return cuberille::apps::runPackCommand(packOptions);

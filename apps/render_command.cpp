@@ -2,6 +2,7 @@
 
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -48,6 +49,17 @@ void validate(const RenderOptions& o) {
     if (o.animate > 0 && !scene::isGltfKind(kind))
         throw InputError("--animate: only for glTF files (.gltf, .glb), not " + o.scene);
     if (o.animate > 0 && o.turntable > 0) throw InputError("--animate and --turntable: one or the other");
+    if (o.placement && !threeD) throw InputError("--eye: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + o.scene);
+    if (o.placement && o.cameraIndex >= 0) throw InputError("--eye and --camera-index: one camera or the other");
+    if (o.placement && !(o.placement->verticalFovDegrees >= 0.0f && o.placement->verticalFovDegrees < 180.0f))
+        throw InputError("--fov: degrees in (0, 180)");
+    if (o.placement) {
+        const glm::vec3 forward = o.placement->target.value_or(glm::vec3(0.0f)) - o.placement->eye;
+        const glm::vec3 up = o.placement->up.value_or(glm::vec3(0.0f, 1.0f, 0.0f));
+        if (o.placement->target && !(glm::length(forward) > 0.0f)) throw InputError("--target: must differ from --eye");
+        if (!(glm::length(up) > 0.0f)) throw InputError("--up: must not be zero");
+    }
+    if (o.zUp && !scene::isModelFile(o.scene)) throw InputError("--up-axis: only for mesh files (PLY, OBJ, glTF), not " + o.scene);
     // An option a scene cannot use is refused, not silently ignored: only glTF animates.
     if (o.timeSeconds != 0.0f && !scene::isGltfKind(kind))
         throw InputError("--time: only glTF files (.gltf, .glb) have animations, not " + o.scene);
@@ -111,6 +123,23 @@ void validateFrameOptions(int width, int height, int msaa, int threads) {
     if (threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
 }
 
+glm::vec3 parseVector3(const std::string& text, const std::string& option) {
+    glm::vec3 v(0.0f);
+    size_t start = 0;
+    for (int k = 0; k < 3; ++k) {
+        const size_t end = k < 2 ? text.find(',', start) : text.size();
+        if (end == std::string::npos) break;
+        const std::string part = text.substr(start, end - start);
+        const char* first = part.data();
+        const auto [last, ec] = std::from_chars(first, first + part.size(), v[k]);
+        if (ec != std::errc() || last != first + part.size() || !std::isfinite(v[k]))
+            throw scene::InputError(option + " " + text + ": expected three numbers X,Y,Z");
+        if (k == 2) return v;
+        start = end + 1;
+    }
+    throw scene::InputError(option + " " + text + ": expected three numbers X,Y,Z");
+}
+
 View parseView(const std::string& name) {
     if (name == "color") return View::Color;
     if (name == "depth") return View::Depth;
@@ -162,9 +191,16 @@ bool isVoxelFile(const RenderOptions& o) { return scene::fileKindOf(o.scene) == 
 void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which);
 
 scene::Scene loadScene(const RenderOptions& o) {
-    if (scene::isProceduralScene(o.scene)) return scene::makeProceduralScene(o.scene, o.detail);
+    if (scene::isProceduralScene(o.scene)) {
+        scene::Scene s = scene::makeProceduralScene(o.scene, o.detail);
+        if (o.placement) {
+            const scene::Bounds b = scene::boundsOf(s.meshes);
+            s.camera = scene::placeCamera(*o.placement, s.camera, b.min, b.max);
+        }
+        return s;
+    }
     if (scene::isModelFile(o.scene))
-        return scene::loadModelScene(o.scene, {o.azimuth, o.elevation, o.cameraIndex, o.timeSeconds},
+        return scene::loadModelScene(o.scene, {o.azimuth, o.elevation, o.cameraIndex, o.timeSeconds, o.zUp, o.placement},
                                      [&](const std::string& w) {
                                          if (!o.quiet) std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str());
                                      });

@@ -15,6 +15,7 @@
 #include "apps/scene_shadows.h"
 #include "lod/voxel_scene.h"
 #include "rt/shadows.h"
+#include "scene/camera.h"
 #include "scene/load_stats.h"
 
 namespace cuberille::apps {
@@ -35,6 +36,8 @@ struct RenderOptions {
     float azimuth = 30.0f;    // degrees, for mesh files (which carry no camera)
     float elevation = 20.0f;  // degrees
     int cameraIndex = -1;     // a camera of the file (glTF), instead of framing the model
+    std::optional<scene::CameraPlacement> placement;  // --eye, --target, --up, --fov: a camera placed by hand
+    bool zUp = false;         // --up-axis z: mesh files whose up is +z are turned to +y on load
     float timeSeconds = 0.0f; // glTF animation time
     int turntable = 0;        // > 0: that many frames around the scene, OUT_000.ext ...
     int animate = 0;          // glTF, > 0: that many frames of the animation from --time, OUT_000.ext ...
@@ -70,6 +73,8 @@ struct RenderResult {
 };
 
 View parseView(const std::string& name);  // throws scene::InputError
+/// "X,Y,Z" (three finite numbers) as a vector; throws scene::InputError naming the option.
+glm::vec3 parseVector3(const std::string& text, const std::string& option);
 TextureFilterOverride parseTextureFilter(const std::string& name);  // throws scene::InputError
 const char* textureFilterName(TextureFilterOverride filter);
 raster::DepthConvention parseDepthConvention(const std::string& name);  // throws scene::InputError

@@ -33,6 +33,23 @@ glm::mat4 Camera::clipFromView(float aspect) const {
     return m;
 }
 
+Camera placeCamera(const CameraPlacement& p, const Camera& framing, const glm::vec3& boundsMin,
+                   const glm::vec3& boundsMax) {
+    Camera c = framing;
+    c.position = p.eye;
+    c.target = p.target.value_or(framing.target);
+    c.up = p.up.value_or(glm::vec3(0.0f, 1.0f, 0.0f));
+    if (p.verticalFovDegrees > 0.0f) c.verticalFovDegrees = p.verticalFovDegrees;
+    // Planes around the bounding sphere as seen from the eye, as frameBounds places them; from
+    // inside the sphere, the near plane at a thousandth of the far one.
+    const glm::vec3 centre = 0.5f * (boundsMin + boundsMax);
+    const float radius = std::max(0.5f * glm::length(boundsMax - boundsMin), 1e-6f);
+    const float distance = glm::length(centre - p.eye);
+    c.farPlane = distance + 1.5f * radius;
+    c.nearPlane = std::max(distance - 1.5f * radius, c.farPlane * 1e-3f);
+    return c;
+}
+
 Camera frameBounds(const glm::vec3& boundsMin, const glm::vec3& boundsMax, float azimuthDegrees,
                    float elevationDegrees, float verticalFovDegrees) {
     Camera c;

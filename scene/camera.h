@@ -2,6 +2,8 @@
 // A pinhole camera producing Direct3D/Vulkan clip space (depth 0..1, NDC y up; the viewport
 // flips y). World space is right-handed with y up.
 
+#include <optional>
+
 #include <glm/glm.hpp>
 
 namespace cuberille::scene {
@@ -23,6 +25,17 @@ struct Camera {
     glm::mat4 clipFromView(float aspect) const;
     glm::mat4 clipFromWorld(float aspect) const { return clipFromView(aspect) * viewFromWorld(); }
 };
+
+/// A camera placed by hand (`render --eye --target --up --fov`): the eye is required, the rest
+/// default to the framing camera's target, +y and its field of view. The near and far planes
+/// hug the bounds as seen from the eye.
+struct CameraPlacement {
+    glm::vec3 eye{0.0f};
+    std::optional<glm::vec3> target, up;
+    float verticalFovDegrees = 0.0f;  // 0: the framing camera's
+};
+Camera placeCamera(const CameraPlacement& placement, const Camera& framing, const glm::vec3& boundsMin,
+                   const glm::vec3& boundsMax);
 
 /// A camera that frames a bounding box (its bounding sphere fills the vertical field of view),
 /// looking at its centre from the given azimuth (degrees about +y, 0 = from +z) and elevation

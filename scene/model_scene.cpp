@@ -9,6 +9,23 @@
 #include "scene/ply_loader.h"
 
 namespace cuberille::scene {
+namespace {
+
+// A quarter turn about x taking +z to +y: (x, y, z) -> (x, z, -y), for positions, normals and
+// tangents alike (a rotation keeps the tangents' handedness).
+void turnZUpToYUp(Mesh& m) {
+    auto turn = [](glm::vec3& v) { v = glm::vec3(v.x, v.z, -v.y); };
+    for (glm::vec3& p : m.positions) turn(p);
+    for (glm::vec3& n : m.normals) turn(n);
+    for (glm::vec4& t : m.tangents) {
+        glm::vec3 v(t);
+        turn(v);
+        t = glm::vec4(v, t.w);
+    }
+}
+
+}  // namespace
+
 bool isModelFile(const std::filesystem::path& path) { return isMeshKind(fileKindOf(path)); }
 
 Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions& view, const WarningSink& warn) {
@@ -33,6 +50,8 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
         throw InputError(path.string() + ": no triangles to draw" +
                          (isGltfKind(kind) ? " (no mesh of its scene has a primitive of triangles)"
                               : " (no faces)"));
+    if (view.zUp)
+        for (Mesh& m : s.meshes) turnZUpToYUp(m);
     const Bounds b = boundsOf(s.meshes);
     if (view.cameraIndex >= 0) {
         if (view.cameraIndex >= int(cameras.size()))
@@ -42,6 +61,7 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     } else {
         s.camera = frameBounds(b.min, b.max, view.azimuthDegrees, view.elevationDegrees);
     }
+    if (view.placement) s.camera = placeCamera(*view.placement, s.camera, b.min, b.max);
     const glm::vec3 toCamera = glm::normalize(s.camera.position - s.camera.target);
     // Without lights of its own a model is lit from above the camera (a key light that follows
     // the view, so every side of a turntable is readable).

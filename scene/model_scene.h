@@ -4,6 +4,7 @@
 // promise a consistent winding.
 
 #include <filesystem>
+#include <optional>
 
 #include "scene/input_error.h"
 #include "scene/scene.h"
@@ -15,6 +16,8 @@ struct ModelSceneOptions {
     float elevationDegrees = 20.0f;
     int cameraIndex = -1;      // a camera of the file (glTF) instead of framing the bounds
     float timeSeconds = 0.0f;  // glTF: the pose of the first animation at this time
+    bool zUp = false;          // the file's up is +z (many scans and CAD files): turned to +y on load
+    std::optional<CameraPlacement> placement;  // a camera placed by hand instead of the framing one
 };
 
 bool isModelFile(const std::filesystem::path& path);

@@ -895,3 +895,53 @@ TEST_F(Cli, OptionsThatWouldDoNothingAreRefused) {
     EXPECT_FALSE(fs::exists(out));
     EXPECT_FALSE(fs::exists(dir_ / "x_000.png"));
 }
+
+// A camera the user places: --eye looks at the model (or away from it with --target), and a
+// z-up file stands up with --up-axis z.
+TEST_F(Cli, APlacedCameraSeesWhatItLooksAtAndZUpFilesStandUp) {
+    const fs::path tet = write("tet.obj", kTetrahedronObj);
+    auto samplesPassed = [&](const std::string& args) {
+        const fs::path stats = dir_ / "s.json";
+        const CommandRun r = run("render " + args + " --width 64 --height 48 --out " + (dir_ / "x.png").string() +
+                                 " --stats " + stats.string() + " --quiet");
+        EXPECT_EQ(r.exitCode, 0) << args << "\n" << r.output;
+        std::ifstream in(stats);
+        return nlohmann::json::parse(in)["stages"]["depth"]["samplesPassed"].get<uint64_t>();
+    };
+    EXPECT_GT(samplesPassed(tet.string() + " --eye 0.3,0.3,3"), 100u);
+    EXPECT_EQ(samplesPassed(tet.string() + " --eye 0.3,0.3,3 --target 0.3,0.3,10"), 0u) << "looking away";
+    EXPECT_GT(samplesPassed(tet.string() + " --eye 3,0.3,0.3 --target 0,0.3,0.3 --up 0,0,1 --fov 20"), 100u);
+
+    // A post 2 long along z, as a z-up scan stores it: seen from the front (azimuth 0, elevation
+    // 0), it lies pointing at the camera unless turned up, when it stands tall.
+    const fs::path post = write("post.obj", "v -0.1 -0.1 0\nv 0.1 -0.1 0\nv 0.1 0.1 0\nv -0.1 0.1 0\n"
+                                            "v -0.1 -0.1 2\nv 0.1 -0.1 2\nv 0.1 0.1 2\nv -0.1 0.1 2\n"
+                                            "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+                                            "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n");
+    auto extent = [&](const std::string& extra) {  // covered columns and rows
+        const fs::path out = dir_ / "post.exr";
+        const CommandRun r = run("render " + post.string() + " --azimuth 0 --elevation 0 --width 64 --height 64 --out " +
+                                 out.string() + extra + " --quiet");
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        const cuberille::raster::Image im = cuberille::apps::readImage(out);
+        int minX = im.width, maxX = -1, minY = im.height, maxY = -1;
+        for (int y = 0; y < im.height; ++y)
+            for (int x = 0; x < im.width; ++x)
+                if (std::abs(im.pixel(x, y)[0] - 0.05f) > 1e-3f)
+                    minX = std::min(minX, x), maxX = std::max(maxX, x), minY = std::min(minY, y), maxY = std::max(maxY, y);
+        return std::make_pair(maxX - minX + 1, maxY - minY + 1);
+    };
+    const auto lying = extent(""), standing = extent(" --up-axis z");
+    EXPECT_LE(lying.second, lying.first + 2) << "seen end-on: about as tall as wide";
+    EXPECT_GT(standing.second, 4 * standing.first) << "stood up: tall and narrow";
+
+    const std::vector<std::string> refused = {
+        tet.string() + " --target 0,0,0", tet.string() + " --eye 1,2", tet.string() + " --eye 0,0,3 --target 0,0,3",
+        tet.string() + " --up-axis x", write("s.tri", "1 1 9 1 1 9 1\n").string() + " --eye 0,0,3",
+        tet.string() + " --eye 0,0,3 --fov 200"};
+    for (const std::string& args : refused) {
+        const CommandRun r = run("render " + args + " --out " + (dir_ / "r.png").string());
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "r.png"));
+}
