@@ -477,16 +477,26 @@ std::string readFileBytes(const std::filesystem::path& path) {
         if (failed) throw InputError(name + ": corrupt gzip data (" + why + ")");
         return out;
     }
-    // One read of the whole file into a string of its size (a stream copy through a stringbuf
-    // cost as much again as the read).
+    // A folder opens as a stream on Linux and reports a nonsense size (found by fuzz_obj: an
+    // `mtllib` name that is empty up to a NUL names the OBJ's folder).
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw InputError(name + ": is a folder, not a file");
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw InputError(name + ": cannot open file");
-    const std::streamoff size = in.tellg();
-    if (size < 0) throw InputError(name + ": cannot read file");
-    std::string bytes(size_t(size), '\0');
+    // A regular file: one read into a string of its size (a stream copy through a stringbuf cost
+    // as much again as the read). Anything else (a pipe) is streamed.
+    if (std::filesystem::is_regular_file(path, ec)) {
+        const std::streamoff size = in.tellg();
+        if (size < 0) throw InputError(name + ": cannot read file");
+        std::string bytes(size_t(size), '\0');
+        in.seekg(0);
+        if (!in.read(bytes.data(), size)) throw InputError(name + ": cannot read file");
+        return bytes;
+    }
     in.seekg(0);
-    if (!in.read(bytes.data(), size)) throw InputError(name + ": cannot read file");
-    return bytes;
+    std::ostringstream buffer;
+    buffer << in.rdbuf();
+    return buffer.str();
 }
 
 Mesh loadPly(const std::filesystem::path& path) { return parsePly(readFileBytes(path), path.string()); }

@@ -64,6 +64,21 @@ TEST(ObjLoader, MissingMtlWarnsAndFallsBack) {
     EXPECT_NE(warnings[0].find("nowhere.mtl"), std::string::npos);
 }
 
+TEST(ObjLoader, AnMtlNamingAFolderWarnsAndFallsBack) {
+    // Found by fuzz_obj: an `mtllib` name cut short by a NUL names the OBJ's own folder, which
+    // the reader once took for a file of a nonsense size and failed to allocate.
+    const fs::path dir = cuberille::testing::uniqueTempPath("obj-mtl-folder");
+    fs::create_directories(dir / "materials.mtl");
+    for (const std::string mtllib : {std::string("mtllib materials.mtl\n"), std::string("mtllib \0\0fuzz.mtl\n", 18)}) {
+        std::vector<std::string> warnings;
+        const auto meshes = parse(mtllib + "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl x\nf 1 2 3\n", &warnings, dir);
+        ASSERT_EQ(meshes.size(), 1u);
+        EXPECT_EQ(meshes[0].color, glm::vec3(0.8f));
+        EXPECT_EQ(warnings.size(), 1u);
+    }
+    fs::remove_all(dir);
+}
+
 TEST(ObjLoader, ErrorsNameTheLine) {
     auto errorOf = [](const std::string& text) -> std::string {
         try {
