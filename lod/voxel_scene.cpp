@@ -172,11 +172,11 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     // the model's size (docs/streaming.md, memory). Where the flushes fall does not change the
     // image (raster/pipeline.h).
     for (size_t first = 0, count = 0; first < expand.size(); first += count) {
-        size_t voxels = 0;
+        size_t chunkVoxels = 0;
         for (count = 0; first + count < expand.size() && count < kBlocksPerExpansionChunk &&
-                        (count == 0 || voxels < kVoxelsPerExpansionChunk);
+                        (count == 0 || chunkVoxels < kVoxelsPerExpansionChunk);
              ++count)
-            voxels += source.voxels(expand[first + count].block).voxels.size();
+            chunkVoxels += source.voxels(expand[first + count].block).voxels.size();
         if (faces_.size() < count) faces_.resize(count);
         t0 = raster::nowMs();
         raster::parallelFor(count, [&](size_t i) {

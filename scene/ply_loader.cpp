@@ -236,9 +236,26 @@ size_t minimumInstanceBytes(const Element& e, Encoding encoding) {
 constexpr double kStripRestart = -1.0;
 constexpr uint32_t kRestartIndex = UINT32_MAX;
 
+// One index of a face or strip list into the gathered polygon: a vertex, or in a strip a
+// restart. False for anything else, which the caller reports (or leaves to the general reader).
+bool gatherIndex(double v, bool strips, size_t vertexCount, std::vector<uint32_t>& polygon) {
+    if (strips && v == kStripRestart) polygon.push_back(kRestartIndex);
+    else if (v >= 0 && v < double(vertexCount) && v == std::floor(v)) polygon.push_back(uint32_t(v));
+    else return false;
+    return true;
+}
+
+void appendTriangle(std::vector<uint32_t>& indices, uint32_t a, uint32_t b, uint32_t c) {
+    // Three push_backs: an insert of an initializer list costs a memmove a triangle, a fifth of
+    // reading a scan's faces.
+    indices.push_back(a);
+    indices.push_back(b);
+    indices.push_back(c);
+}
+
 // A polygon of n vertices as the fan (v0, v[k-1], v[k]), its winding kept.
 void appendFan(const std::vector<uint32_t>& polygon, std::vector<uint32_t>& indices) {
-    for (size_t k = 2; k < polygon.size(); ++k) indices.insert(indices.end(), {polygon[0], polygon[k - 1], polygon[k]});
+    for (size_t k = 2; k < polygon.size(); ++k) appendTriangle(indices, polygon[0], polygon[k - 1], polygon[k]);
 }
 
 // Strips separated by restarts. Triangle i of a strip is (s[i], s[i+1], s[i+2]), with its first
@@ -258,7 +275,7 @@ void appendStrips(const std::vector<uint32_t>& strips, std::vector<uint32_t>& in
         const uint32_t c = strips[k];
         if ((i - 2) % 2 == 1) std::swap(a, b);
         if (a == b || b == c || a == c) continue;
-        indices.insert(indices.end(), {a, b, c});
+        appendTriangle(indices, a, b, c);
     }
 }
 
@@ -357,20 +374,11 @@ size_t readIndexLists(const Element& e, bool strips, size_t vertexCount, BodyRea
                 else valid = false;
             }
         } else {
-            for (size_t k = 0; k < size_t(count) && valid; ++k, p += indexBytes) {
-                const double v = decodeBinary(p, list.type, swap);
-                if (strips && v == kStripRestart) polygon.push_back(kRestartIndex);
-                else if (v >= 0 && v < double(vertexCount) && v == std::floor(v)) polygon.push_back(uint32_t(v));
-                else valid = false;
-            }
+            for (size_t k = 0; k < size_t(count) && valid; ++k, p += indexBytes)
+                valid = gatherIndex(decodeBinary(p, list.type, swap), strips, vertexCount, polygon);
         }
         if (!valid) break;
         if (strips) appendStrips(polygon, mesh.indices);
-        else if (polygon.size() == 3) {
-            mesh.indices.push_back(polygon[0]);
-            mesh.indices.push_back(polygon[1]);
-            mesh.indices.push_back(polygon[2]);
-        }
         else appendFan(polygon, mesh.indices);
         reader.skip(countBytes + size_t(count) * indexBytes);
     }
@@ -435,15 +443,9 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
                 if (isIndices) polygon.clear();
                 for (size_t k = 0; k < count; ++k) {
                     const double v = reader.read(prop.type, where);
-                    if (!isIndices) continue;
-                    if (isStrips && v == kStripRestart) {
-                        polygon.push_back(kRestartIndex);
-                        continue;
-                    }
-                    if (!(v >= 0) || v >= double(vertexCount) || v != std::floor(v))
+                    if (isIndices && !gatherIndex(v, isStrips, vertexCount, polygon))
                         fail(file, where.str(), "vertex index " + formatValue(v) + " is out of range (" +
                                               std::to_string(vertexCount) + " vertices)");
-                    polygon.push_back(uint32_t(v));
                 }
                 if (isIndices && isFace) appendFan(polygon, mesh.indices);
                 if (isIndices && isStrips) appendStrips(polygon, mesh.indices);

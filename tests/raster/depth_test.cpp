@@ -155,9 +155,7 @@ TEST(ReversedDepth, KeepsApartSurfacesStandardDepthMerges) {
         raster::FramebufferDesc desc = frame(32, 32, 1);
         desc.depthConvention = convention;
         raster::Pipeline p;
-        p.beginFrame(desc);
-        p.draw(d);
-        p.endFrame();
+        drawFrame(p, desc, d);
         raster::Image img;
         raster::resolveColor(p.framebuffer(), img);
         return glm::vec4(img.pixel(16, 16)[0], img.pixel(16, 16)[1], img.pixel(16, 16)[2], 1.0f);
@@ -183,9 +181,7 @@ std::vector<float> depthsOf(const RandomDepthScene& s, int samples, bool colorAt
     d.state.colorWriteMask = colorWrites ? raster::kWriteAll : 0;
     raster::FramebufferDesc desc = frame(150, 100, samples);
     desc.colorAttachment = colorAttachment;
-    p.beginFrame(desc);
-    p.draw(d);
-    p.endFrame();
+    drawFrame(p, desc, d);
     std::vector<float> depth;
     raster::resolveDepthPlane(p.framebuffer(), depth);
     return depth;
@@ -242,9 +238,7 @@ TEST(DepthView, EachPixelIsTheMeanOfItsSampleDepthsReadAsStandardDepth) {
         raster::FramebufferDesc desc = frame(16, 16, 4);
         desc.depthConvention = convention;
         raster::Pipeline p;
-        p.beginFrame(desc);
-        p.draw(d);
-        p.endFrame();
+        drawFrame(p, desc, d);
         raster::Image view;
         raster::resolveDepth(p.framebuffer(), view);
         auto seen = [&](float z) { return reversed ? 1.0f - z : z; };  // a stored depth as the view reads it
@@ -297,9 +291,7 @@ PassResult drawPlain(const RandomDepthScene& s, bool colour, bool general) {
     desc.colorAttachment = colour;
     desc.recordOverdraw = general;
     raster::Pipeline p;
-    p.beginFrame(desc);
-    p.draw(d);
-    p.endFrame();
+    drawFrame(p, desc, d);
     PassResult r;
     raster::resolveDepthPlane(p.framebuffer(), r.depth);
     r.counters = p.stats().counters;
@@ -339,9 +331,7 @@ TEST(Setup, TrianglesBetweenSampleCentresAreDroppedBeforeBinning) {
         d.positions = positions;
         d.state.depthTest = false;
         raster::Pipeline p;
-        p.beginFrame(frame(8, 8, 1));
-        p.draw(d);
-        p.endFrame();
+        drawFrame(p, frame(8, 8, 1), d);
         return p.stats().counters;
     };
     const raster::StageCounters missing = drawOne({{3.1f, 3.1f, 0.5f}, {3.8f, 3.1f, 0.5f}, {3.1f, 3.8f, 0.5f}});
@@ -399,9 +389,7 @@ TEST(Setup, AThinSliverSnappedAsAGpuSnapsKeepsItsSamples) {
     d.state.constantColor = glm::vec4(1.0f);
     d.state.shading = raster::ShadingModel::ConstantColor;
     raster::Pipeline p;
-    p.beginFrame(frame(256, 192, 4));
-    p.draw(d);
-    p.endFrame();
+    drawFrame(p, frame(256, 192, 4), d);
     EXPECT_EQ(p.stats().counters.trianglesDegenerate, 0u);
     EXPECT_EQ(p.stats().counters.trianglesSetUp, 1u);
     EXPECT_EQ(sampleColor(p.framebuffer(), 85, 64, 2), glm::vec4(1.0f));

@@ -27,13 +27,18 @@ inline raster::FramebufferDesc frame(int width, int height, int samples) {
     return d;
 }
 
+/// One frame of one draw: begin, draw, end.
+inline void drawFrame(raster::Pipeline& p, const raster::FramebufferDesc& desc, const raster::DrawCall& draw) {
+    p.beginFrame(desc);
+    p.draw(draw);
+    p.endFrame();
+}
+
 inline void renderTri(raster::Pipeline& p, const scene::TriScene& s, int width, int height,
                       int samples, bool recordOverdraw = false) {
     raster::FramebufferDesc d = frame(width, height, samples);
     d.recordOverdraw = recordOverdraw;
-    p.beginFrame(d);
-    p.draw(s.drawCall());
-    p.endFrame();
+    drawFrame(p, d, s.drawCall());
 }
 
 }  // namespace cuberille::testing
