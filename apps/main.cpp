@@ -14,6 +14,7 @@
 #include "apps/fly_command.h"
 #include "apps/render_command.h"
 #include "apps/voxel_commands.h"
+#include "raster/instruction_set.h"
 #include "scene/input_error.h"
 #include "scene/procedural.h"
 
@@ -354,6 +355,12 @@ int main(int argc, char** argv) {
         return kExitBadInput;
     }
 
+    try {
+        cuberille::raster::useInstructionSetFromEnvironment();
+    } catch (const std::invalid_argument& e) {
+        std::fprintf(stderr, "cuberille: %s\n", e.what());
+        return kExitBadInput;
+    }
     try {
         if (app.got_subcommand("render")) {
             renderOptions.view = cuberille::apps::parseView(renderNames.view);

@@ -15,6 +15,7 @@
 #include "raster/parallel.h"
 #include "raster/pipeline.h"
 #include "raster/sample_pattern.h"
+#include "raster/instruction_set.h"
 #include "raster/texture.h"
 #include "scene/input_error.h"
 #include "scene/model_scene.h"
@@ -442,6 +443,7 @@ nlohmann::json statsToJson(const RenderOptions& o, const RenderResult& r) {
     j["depth"] = o.depth == raster::DepthConvention::Reversed ? "reversed" : "standard";
     j["threads"] = r.threadsRan;  // that ran: TBB never runs more than the cores, whatever was asked
     j["threadsRequested"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
+    j["instructionSet"] = raster::activeInstructionSet();  // of the back end; the image is the same on each
     j["view"] = viewName(o.view);
     j["sceneTriangles"] = r.sceneTriangles;
     if (r.voxel) {

@@ -25,6 +25,7 @@
 
 #include "bench/bench_support.h"
 #include "bench/llvmpipe_peer.h"
+#include "raster/instruction_set.h"
 #include "raster/parallel.h"
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
@@ -173,7 +174,11 @@ int main(int argc, char** argv) {
     app.add_option("--scenes", scenes, "Comma-separated built-in scenes or model files (.gltf .glb .ply .obj)");
     app.add_flag("--effects", effects, "Also print what each shading effect costs (field geometry)");
     app.add_option("--msaa", msaaList, "Comma-separated sample counts");
+    std::string instructionSet = "best";
+    app.add_option("--simd", instructionSet, "Cuberille's instruction set: best, or one of the names in the header line (also CUBERILLE_SIMD)");
     CLI11_PARSE(app, argc, argv);
+    raster::useInstructionSetFromEnvironment();
+    if (app.count("--simd")) raster::useInstructionSet(instructionSet);
 
     const int effectiveThreads = threads > 0 ? threads : raster::hardwareThreads();
     // llvmpipe reads its thread count once, when the first context is created.
@@ -187,8 +192,10 @@ int main(int argc, char** argv) {
     mallopt(M_MMAP_THRESHOLD, 256 << 20);
     mallopt(M_TRIM_THRESHOLD, 512 << 20);
 
-    std::printf("# %dx%d, %d thread%s, median of %d warm frames\n", width, height,
-                effectiveThreads, effectiveThreads > 1 ? "s" : "", frames);
+    std::string sets;
+    for (const std::string& name : raster::availableInstructionSets()) sets += (sets.empty() ? "" : ", ") + name;
+    std::printf("# %dx%d, %d thread%s, median of %d warm frames; Cuberille on %s (this CPU runs %s)\n", width, height,
+                effectiveThreads, effectiveThreads > 1 ? "s" : "", frames, raster::activeInstructionSet().c_str(), sets.c_str());
     std::printf("%-9s %4s %10s | %8s %8s %8s %8s %10s | %10s | %7s\n", "scene", "msaa", "triangles",
                 "vertex", "front", "back", "resolve", "cuberille", "llvmpipe", "ratio");
     for (const std::string& entry : bench::splitList(scenes)) {

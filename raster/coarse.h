@@ -27,7 +27,7 @@ struct SampleBox {
     int64_t loX, hiX, loY, hiY;
 };
 
-inline SampleBox sampleBoxOf(const PixelRect& r, const SamplePattern& sp) {
+[[gnu::always_inline]] inline SampleBox sampleBoxOf(const PixelRect& r, const SamplePattern& sp) {
     auto position = [&](int32_t pixel, int offset) {
         return int64_t{pixel} * kSubpixelsPerPixel + kPixelCentreSubpixels +
                offset * kSampleOffsetUnitSubpixels;
@@ -36,7 +36,7 @@ inline SampleBox sampleBoxOf(const PixelRect& r, const SamplePattern& sp) {
             position(r.maxY, sp.maxDy)};
 }
 
-inline BlockClass classifySampleBox(const TriangleSetup& t, const SampleBox& b) {
+[[gnu::always_inline]] inline BlockClass classifySampleBox(const TriangleSetup& t, const SampleBox& b) {
     bool full = true;
     for (int k = 0; k < 3; ++k) {
         const int64_t a = t.edgeA[k], c = t.edgeB[k];

@@ -26,7 +26,7 @@ struct SampleSubpixelOffsets {
 };
 
 template <int S>
-void computeSampleSubpixelOffsets(const SamplePattern& sp, SampleSubpixelOffsets<S>& out) {
+[[gnu::always_inline]] inline void computeSampleSubpixelOffsets(const SamplePattern& sp, SampleSubpixelOffsets<S>& out) {
     for (int s = 0; s < S; ++s) {
         out.x[s] = sp.dx[s] * kSampleOffsetUnitSubpixels;
         out.y[s] = sp.dy[s] * kSampleOffsetUnitSubpixels;
@@ -34,7 +34,7 @@ void computeSampleSubpixelOffsets(const SamplePattern& sp, SampleSubpixelOffsets
 }
 
 template <int S>
-inline void sampleDepths(const TriangleSetup& t, int32_t pixelX, int32_t pixelY,
+[[gnu::always_inline]] inline void sampleDepths(const TriangleSetup& t, int32_t pixelX, int32_t pixelY,
                          const SampleSubpixelOffsets<S>& o, float out[S]) {
     const int32_t cx = pixelX * kSubpixelsPerPixel + kPixelCentreSubpixels - t.originXSubpixels;
     const int32_t cy = pixelY * kSubpixelsPerPixel + kPixelCentreSubpixels - t.originYSubpixels;
@@ -49,7 +49,7 @@ inline void sampleDepths(const TriangleSetup& t, int32_t pixelX, int32_t pixelY,
 /// [loX, hiX] x [loY, hiY] (subpixels). The key plane's minimum over the box sits at the corner
 /// picked by its gradient's signs; the margin covers the float rounding of sampleDepths()
 /// (three roundings of terms no larger than `magnitude`, far below 1e-6 of it).
-inline float minSampleDepthOverBox(const TriangleSetup& t, int64_t loX, int64_t hiX, int64_t loY,
+[[gnu::always_inline]] inline float minSampleDepthOverBox(const TriangleSetup& t, int64_t loX, int64_t hiX, int64_t loY,
                                    int64_t hiY) {
     const double sign = t.depthKeySign;
     const double gx = sign * t.depthPerSubpixelX, gy = sign * t.depthPerSubpixelY;
@@ -62,7 +62,7 @@ inline float minSampleDepthOverBox(const TriangleSetup& t, int64_t loX, int64_t 
 
 /// Samples of `covered` whose depth is less than the stored depth.
 template <int S>
-inline uint32_t depthTestLess(uint32_t covered, const float depth[S], const float* stored) {
+[[gnu::always_inline]] inline uint32_t depthTestLess(uint32_t covered, const float depth[S], const float* stored) {
     uint32_t pass = 0;
     for (int s = 0; s < S; ++s) pass |= uint32_t(depth[s] < stored[s]) << s;
     return pass & covered;

@@ -11,7 +11,7 @@
 namespace cuberille::raster {
 
 template <int S>
-inline void mergeColor(glm::vec4* samples, uint32_t pass, const glm::vec4& color,
+[[gnu::always_inline]] inline void mergeColor(glm::vec4* samples, uint32_t pass, const glm::vec4& color,
                        uint8_t writeMask) {
     if (writeMask == kWriteAll) {
         for (int s = 0; s < S; ++s)
@@ -28,7 +28,7 @@ inline void mergeColor(glm::vec4* samples, uint32_t pass, const glm::vec4& color
 /// Over-blending (AlphaMode::Blend): rgb = src.rgb * src.a + dst.rgb * (1 - src.a),
 /// a = src.a + dst.a * (1 - src.a), per passing sample, under the write mask.
 template <int S>
-inline void blendColor(glm::vec4* samples, uint32_t pass, const glm::vec4& src, uint8_t writeMask) {
+[[gnu::always_inline]] inline void blendColor(glm::vec4* samples, uint32_t pass, const glm::vec4& src, uint8_t writeMask) {
     const float keep = 1.0f - src.a;
     for (int s = 0; s < S; ++s) {
         if (!(pass & (1u << s))) continue;
@@ -41,7 +41,7 @@ inline void blendColor(glm::vec4* samples, uint32_t pass, const glm::vec4& src, 
 }
 
 template <int S>
-inline void mergeDepth(float* samples, uint32_t pass, const float depth[S]) {
+[[gnu::always_inline]] inline void mergeDepth(float* samples, uint32_t pass, const float depth[S]) {
     for (int s = 0; s < S; ++s)
         if (pass & (1u << s)) samples[s] = depth[s];
 }

@@ -11,7 +11,22 @@
 #include "raster/output_merge.h"
 #include "raster/shade.h"
 
+// The back end is compiled once per instruction set (raster/instruction_set.h): Highway's
+// foreach_target.h includes this file again for each target, and HWY_BEFORE_NAMESPACE puts
+// that copy's functions under the target's `#pragma GCC target`, in a namespace of its own
+// (HWY_NAMESPACE), so no copy's code can stand in for another's. The headers above are
+// included once, outside any target: what the loops below inline from them is compiled for
+// the loop's target, and anything not inlined stays baseline code. So the per-pixel functions
+// of coarse.h, fine.h, depth.h and output_merge.h are always_inline, and each shading model's
+// shade() is compiled into this copy by shadeQueue() below.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "raster/tile_raster.cpp"
+#include <hwy/foreach_target.h>  // must come before highway.h
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
 namespace cuberille::raster {
+namespace HWY_NAMESPACE {
 namespace {
 
 /// Triangles whose clamped pixel bounds hold at most this many pixels skip the coarse stage:
@@ -36,6 +51,15 @@ struct TileTarget {
     uint64_t* occlusion;  // null when the draw has no slot
     StageCounters* counters;
 };
+
+/// The shade stage of one queue, compiled for this copy's instruction set: flatten inlines
+/// the shading model's passes (shade.h) into it. One copy per model and target, shared by
+/// every sample count; a shading model is too large to inline into each of them.
+template <class Shader>
+[[gnu::noinline, gnu::flatten]] void shadeQueue(const Shader& shader, const TriangleSetup& t, const float* varyings,
+                                                ShadeQueue& queue, StageCounters& counters) {
+    shader.shade(t, varyings, queue, counters);
+}
 
 template <int S, class Shader>
 class TriangleRaster {
@@ -326,7 +350,7 @@ private:
         if (queue_.count == 0) return;
         const DrawState& state = *target_.state;
         StageCounters& counters = *target_.counters;
-        shader_.shade(t_, varyings_, queue_, counters);
+        shadeQueue(shader_, t_, varyings_, queue_, counters);
         counters.pixelsShaded += queue_.count;
         if (state.alphaMode == AlphaMode::Mask) counters.pixelsAlphaTested += queue_.count;
         for (int i = 0; i < queue_.count; ++i) {
@@ -410,8 +434,8 @@ void dispatchShader(const TriangleBatch& batch, int tile, const SamplePattern& s
 
 }  // namespace
 
-void rasterizeBatchInTile(const TriangleBatch& batch, const DrawState& state, int tile,
-                          Framebuffer& fb, TileCounters& out) {
+void rasterizeBatchInTileOnTarget(const TriangleBatch& batch, const DrawState& state, int tile,
+                                  Framebuffer& fb, TileCounters& out) {
     if (batch.tileOffsets[tile] == batch.tileOffsets[tile + 1]) return;
     fb.touchTile(tile);
     if (state.occlusionSlot >= 0 && out.occlusionSamplesPassed.size() <= size_t(state.occlusionSlot))
@@ -443,4 +467,19 @@ void rasterizeBatchInTile(const TriangleBatch& batch, const DrawState& state, in
     }
 }
 
+}  // namespace HWY_NAMESPACE
 }  // namespace cuberille::raster
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace cuberille::raster {
+
+HWY_EXPORT(rasterizeBatchInTileOnTarget);
+
+void rasterizeBatchInTile(const TriangleBatch& batch, const DrawState& state, int tile,
+                          Framebuffer& fb, TileCounters& out) {
+    HWY_DYNAMIC_DISPATCH(rasterizeBatchInTileOnTarget)(batch, state, tile, fb, out);
+}
+
+}  // namespace cuberille::raster
+#endif  // HWY_ONCE
