@@ -1,6 +1,7 @@
 #pragma once
-// Image files through OpenImageIO. PNG (and other 8-bit formats) get sRGB-encoded RGB; EXR gets
-// the linear float RGBA values unchanged. Writes go to a temporary name in the same folder and
+// Image files: PNG through libspng in the process (sRGB-encoded 8-bit RGB), EXR and other
+// formats through the OpenImageIO module loaded on first use (apps/oiio_module.h); EXR gets the
+// linear float RGBA values unchanged. Writes go to a temporary name in the same folder and
 // are renamed into place, so a failure never leaves a torn file or clobbers a good one.
 
 #include <cstdint>
@@ -19,7 +20,7 @@ ImageFormat imageFormatFor(const std::filesystem::path& path);
 /// Throws std::runtime_error naming the file on failure (exit code 1).
 void writeImageAtomically(const std::filesystem::path& path, const raster::Image& image);
 
-/// Reads any image OpenImageIO reads as float RGBA (8-bit formats decoded from sRGB to
+/// Reads a PNG, or any image OpenImageIO reads, as float RGBA (8-bit formats decoded from sRGB to
 /// linear is NOT applied: values are the file's, scaled to [0, 1]).
 raster::Image readImage(const std::filesystem::path& path);
 

@@ -94,6 +94,8 @@ struct LlvmpipePeer::Impl {
 
 bool LlvmpipePeer::available() { return true; }
 
+const std::vector<unsigned char>& LlvmpipePeer::pixels() const { return impl_->buffer; }
+
 LlvmpipePeer::LlvmpipePeer(int width, int height, int msaa) : impl_(std::make_unique<Impl>()) {
     Impl& m = *impl_;
     m.width = width, m.height = height, m.msaa = msaa;

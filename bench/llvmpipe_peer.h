@@ -21,6 +21,8 @@ public:
     /// Renders one frame and waits for it (glFinish); returns milliseconds.
     double renderFrame(const scene::Scene& scene);
     static bool available();
+    /// The last frame's resolved pixels: RGBA 8-bit, bottom row first (OpenGL's order).
+    const std::vector<unsigned char>& pixels() const;
 
 private:
     struct Impl;

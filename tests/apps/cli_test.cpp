@@ -70,6 +70,35 @@ TEST_F(Cli, RendersTriSceneToExrAndPng) {
     }
 }
 
+// Start-up pays only for what the run uses (apps/oiio_module.h): the dynamic loader's own
+// record (LD_DEBUG=files) of a PNG render names no OpenImageIO library, and that of an EXR
+// render does, which is the check that the record can show it.
+TEST_F(Cli, APngRenderNeverLoadsOpenImageIoAndAnExrRenderDoes) {
+    const fs::path scene = write("ok.tri", "1 1 30 2 5 20 1\n");
+    for (const char* ext : {".png", ".exr"}) {
+        const fs::path out = dir_ / (std::string("ok") + ext);
+        const fs::path records = dir_ / (std::string("loader") + ext);
+        fs::create_directories(records);
+        // One record per process (the shell popen starts, and the program), in `records`.
+        setenv("LD_DEBUG", "files", 1);
+        setenv("LD_DEBUG_OUTPUT", (records / "ld").c_str(), 1);
+        const CommandRun r = run("render " + scene.string() + " --width 32 --height 24 --out " + out.string());
+        unsetenv("LD_DEBUG");
+        unsetenv("LD_DEBUG_OUTPUT");
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        std::string record;
+        for (const auto& file : fs::directory_iterator(records)) {
+            std::ifstream in(file.path());
+            record.append(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        }
+        EXPECT_NE(record.find(std::string("initialize program: ") + CUBERILLE_BINARY), std::string::npos)
+            << "no loader record of the program";
+        const bool loaded = record.find("libOpenImageIO.so") != std::string::npos;
+        EXPECT_EQ(loaded, std::string(ext) == ".exr") << ext;
+        EXPECT_TRUE(fs::exists(out)) << ext;
+    }
+}
+
 TEST_F(Cli, MalformedTriGivesExitTwoWithFileAndLineAndWritesNothing) {
     const fs::path scene = write("bad.tri", "1 1 30 2 5 20 1\n1 2 3\n");
     const fs::path out = dir_ / "bad.exr";

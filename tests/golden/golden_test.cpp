@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <OpenImageIO/imageio.h>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
@@ -13,6 +12,7 @@
 
 #include "apps/explain_command.h"
 #include "apps/image_io.h"
+#include "apps/png_file.h"
 #include "apps/render_command.h"
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
@@ -148,10 +148,7 @@ fs::path writeGoldenGltf(const fs::path& dir) {
             const uint8_t v = (x + y) % 2 ? 230 : 110;
             checker.insert(checker.end(), {v, uint8_t(v * 0.9f), uint8_t(v * 0.7f), uint8_t((x / 2 + y / 2) % 2 ? 255 : 0)});
         }
-    auto png = OIIO::ImageOutput::create((dir / "checker.png").string());
-    const OIIO::ImageSpec spec(8, 8, 4, OIIO::TypeDesc::UINT8);
-    EXPECT_TRUE(png && png->open((dir / "checker.png").string(), spec) &&
-                png->write_image(OIIO::TypeDesc::UINT8, checker.data()) && png->close());
+    apps::writePng8(dir / "checker.png", 8, 8, 4, checker);
 
     GltfBuilder b;
     auto& j = b.json();

@@ -4,7 +4,12 @@
 
 #include <bit>
 
+#include <cmath>
+#include <limits>
+#include <vector>
+
 #include "raster/resolve.h"
+#include "raster/srgb.h"
 #include "tests/raster/test_support.h"
 
 namespace cuberille::testing {
@@ -39,6 +44,54 @@ TEST(Resolve, UntouchedTilesResolveToClearColor) {
     raster::Image img;
     raster::resolveColor(p.framebuffer(), img);
     EXPECT_EQ(img.pixel(150, 70)[2], 0.75f);
+}
+
+}  // namespace
+}  // namespace cuberille::testing
+
+namespace cuberille::testing {
+namespace {
+
+/// The reference encoder, straight from IEC 61966-2-1 in double: the number of codes whose
+/// decision threshold (the decoded midpoint between two codes, rounded to float as the encoder
+/// rounds it) is at or below the value.
+int referenceSrgb8(float linear) {
+    static const std::vector<float> thresholds = [] {
+        std::vector<float> t;
+        for (int c = 0; c < 255; ++c) {
+            const double encoded = (c + 0.5) / 255.0;
+            t.push_back(float(encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4)));
+        }
+        return t;
+    }();
+    int count = 0;
+    for (const float t : thresholds) count += t <= linear;
+    return count;
+}
+
+TEST(Srgb, EncodingCountsTheThresholdsBelowEachValue) {
+    // Every code's threshold and the floats around it, where a lookup shortcut would slip.
+    for (int c = 0; c < 255; ++c) {
+        const double encoded = (c + 0.5) / 255.0;
+        const float t = float(encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4));
+        uint32_t bits = std::bit_cast<uint32_t>(t);
+        for (uint32_t b = bits - 4; b <= bits + 4; ++b) {
+            const float v = std::bit_cast<float>(b);
+            ASSERT_EQ(int(raster::encodeSrgb8(v)), referenceSrgb8(v)) << v;
+        }
+    }
+    // A stride through every float in [0, 1] (one in 4099: ~260k values, every octave).
+    for (uint32_t b = 0; b <= std::bit_cast<uint32_t>(1.0f); b += 4099) {
+        const float v = std::bit_cast<float>(b);
+        ASSERT_EQ(int(raster::encodeSrgb8(v)), referenceSrgb8(v)) << v;
+    }
+    EXPECT_EQ(raster::encodeSrgb8(-0.5f), 0);
+    EXPECT_EQ(raster::encodeSrgb8(std::nanf("")), 0);
+    EXPECT_EQ(raster::encodeSrgb8(1.0f), 255);
+    EXPECT_EQ(raster::encodeSrgb8(3.0f), 255);
+    EXPECT_EQ(raster::encodeSrgb8(std::numeric_limits<float>::infinity()), 255);
+    // Decoding then encoding every code gives the code back.
+    for (int c = 0; c < 256; ++c) EXPECT_EQ(int(raster::encodeSrgb8(raster::decodeSrgb8(uint8_t(c)))), c);
 }
 
 }  // namespace
