@@ -5,9 +5,13 @@ PRESET ?= release
 BUILD_DIR := build/$(PRESET)
 JOBS ?= $(shell nproc)
 
-.PHONY: all setup configure build demo test bench golden pipeline-docs cli-docs sanitize asan asan-gcc tsan fuzz format clean
+.PHONY: all setup configure build examples demo test bench golden pipeline-docs cli-docs sanitize asan asan-gcc tsan fuzz format clean
 
-all: build
+all: build examples
+
+# The README's example inputs (examples/README.md), made from formulas; not checked in.
+examples: setup
+	@python3 examples/make_examples.py
 
 setup:
 	@./.ci/install-deps
