@@ -32,6 +32,20 @@ def write_tri(path):
         f.write("70 100 126 90 100 126 0.1 0.3 1\n")
 
 
+def wrapped_grid_faces(rows, columns, outward_when_j_turns_left):
+    """Two triangles per cell of a grid of vertices (row i, column j at i * columns + j) that
+    wraps in both directions, wound so their front faces point out of the surface."""
+    faces = []
+    for i in range(rows):
+        for j in range(columns):
+            a = i * columns + j
+            b = ((i + 1) % rows) * columns + j
+            c = ((i + 1) % rows) * columns + (j + 1) % columns
+            d = i * columns + (j + 1) % columns
+            faces += [(a, d, c), (a, c, b)] if outward_when_j_turns_left else [(a, b, c), (a, c, d)]
+    return faces
+
+
 def torus(major=1.0, minor=0.35, rings=48, sides=48):
     vertices, normals, faces = [], [], []
     for i in range(rings):
@@ -42,14 +56,7 @@ def torus(major=1.0, minor=0.35, rings=48, sides=48):
             vertices.append((math.cos(u) * (major + minor * math.cos(v)), minor * math.sin(v),
                              math.sin(u) * (major + minor * math.cos(v))))
             normals.append(n)
-    for i in range(rings):
-        for j in range(sides):
-            a = i * sides + j
-            b = ((i + 1) % rings) * sides + j
-            c = ((i + 1) % rings) * sides + (j + 1) % sides
-            d = i * sides + (j + 1) % sides
-            faces += [(a, d, c), (a, c, b)]
-    return vertices, normals, faces
+    return vertices, normals, wrapped_grid_faces(rings, sides, outward_when_j_turns_left=True)
 
 
 def ply_bytes(vertices, normals, faces):
@@ -86,14 +93,7 @@ def knot(p=3, q=2, segments=192, sides=16, radius=0.18):
         for j in range(sides):
             a = 2 * math.pi * j / sides
             vertices.append(tuple(c[k] + radius * (math.cos(a) * side[k] + math.sin(a) * normal[k]) for k in range(3)))
-    for i in range(segments):
-        for j in range(sides):
-            a = i * sides + j
-            b = ((i + 1) % segments) * sides + j
-            c = ((i + 1) % segments) * sides + (j + 1) % sides
-            d = i * sides + (j + 1) % sides
-            faces += [(a, b, c), (a, c, d)]
-    return vertices, faces
+    return vertices, wrapped_grid_faces(segments, sides, outward_when_j_turns_left=False)
 
 
 def write_obj(path, vertices, faces):
