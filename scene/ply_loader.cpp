@@ -10,7 +10,9 @@
 #include <sstream>
 #include <vector>
 
-#include <zlib.h>
+#include <memory>
+
+#include <libdeflate.h>
 
 #include "scene/input_error.h"
 #include "scene/text_parsing.h"
@@ -461,24 +463,69 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
     return mesh;
 }
 
-std::string readFileBytes(const std::filesystem::path& path) {
-    const std::string name = path.string();
-    if (lowerExtension(path) == ".gz") {
-        gzFile f = gzopen(name.c_str(), "rb");
-        if (!f) throw InputError(name + ": cannot open file");
-        gzbuffer(f, 1 << 18);  // zlib's 8 KiB default reads a large scan in many small reads
-        std::string out;
-        char buffer[1 << 16];
-        int n;
-        while ((n = gzread(f, buffer, sizeof buffer)) > 0) out.append(buffer, size_t(n));
-        int error = Z_OK;
-        const char* message = gzerror(f, &error);
-        const bool failed = n < 0 || (error != Z_OK && error != Z_STREAM_END);
-        const std::string why = failed ? message : "";
-        gzclose(f);
-        if (failed) throw InputError(name + ": corrupt gzip data (" + why + ")");
-        return out;
+namespace {
+
+bool startsGzipMember(const std::string& bytes, size_t at) {
+    return bytes.size() - at >= 2 && uint8_t(bytes[at]) == 0x1f && uint8_t(bytes[at + 1]) == 0x8b;
+}
+
+/// A gzip file's bytes inflated in memory by libdeflate, about twice zlib's streaming speed
+/// (the Stanford dragon's 31 MB PLY: 82 ms through gzread). As gzip and zlib read them:
+/// members one after another, anything after the last member that is not one ignored, and a
+/// file that is not gzip at all taken as it is. A member's output buffer starts at the size its
+/// trailer gives for the file's last member (exact for the usual one-member file; the trailer
+/// holds the size mod 2^32) and doubles while it is too small.
+constexpr size_t kMostDeflateExpansion = 1032;
+
+std::string inflateGzip(const std::string& name, const std::string& compressed) {
+    if (!startsGzipMember(compressed, 0)) return compressed;
+    std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor*)> inflater(
+        libdeflate_alloc_decompressor(), libdeflate_free_decompressor);
+    if (!inflater) throw std::bad_alloc();
+    uint32_t lastMemberSize = 0;
+    if (compressed.size() >= 4) std::memcpy(&lastMemberSize, compressed.data() + compressed.size() - 4, 4);  // little-endian
+    std::string out;
+    size_t at = 0;
+    while (at < compressed.size() && (at == 0 || startsGzipMember(compressed, at))) {
+        // DEFLATE expands at most 1032:1 (a 258-byte match in under two bits), so a member
+        // wanting more room than that is damaged: libdeflate cannot tell a cut stream from a
+        // short buffer, and would otherwise be fed ever larger ones. The same bound keeps a
+        // trailer that is not a size (trailing bytes, damage) from sizing the first buffer.
+        const size_t mostPossible = (compressed.size() - at) * kMostDeflateExpansion + (size_t(1) << 16);
+        size_t room = std::min(std::max<size_t>(lastMemberSize, size_t(1) << 16), mostPossible);
+        for (;;) {
+            const size_t before = out.size();
+            out.resize(before + room);
+            size_t used = 0, produced = 0;
+            const libdeflate_result result = libdeflate_gzip_decompress_ex(
+                inflater.get(), compressed.data() + at, compressed.size() - at, out.data() + before, room, &used, &produced);
+            if (result == LIBDEFLATE_INSUFFICIENT_SPACE && room < mostPossible) {
+                out.resize(before);
+                room = std::min(room * 2, mostPossible);
+                continue;
+            }
+            if (result != LIBDEFLATE_SUCCESS) throw InputError(name + ": corrupt gzip data (at compressed byte " + std::to_string(at) + ")");
+            out.resize(before + produced);
+            at += used;
+            break;
+        }
     }
+    return out;
+}
+
+std::string readPlainFileBytes(const std::filesystem::path& path);
+
+}  // namespace
+
+std::string readFileBytes(const std::filesystem::path& path) {
+    if (lowerExtension(path) == ".gz") return inflateGzip(path.string(), readPlainFileBytes(path));
+    return readPlainFileBytes(path);
+}
+
+namespace {
+
+std::string readPlainFileBytes(const std::filesystem::path& path) {
+    const std::string name = path.string();
     // A folder opens as a stream on Linux and reports a nonsense size (found by fuzz_obj: an
     // `mtllib` name that is empty up to a NUL names the OBJ's folder).
     std::error_code ec;
@@ -500,6 +547,8 @@ std::string readFileBytes(const std::filesystem::path& path) {
     buffer << in.rdbuf();
     return buffer.str();
 }
+
+}  // namespace
 
 Mesh loadPly(const std::filesystem::path& path) { return parsePly(readFileBytes(path), path.string()); }
 

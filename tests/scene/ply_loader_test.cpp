@@ -7,6 +7,8 @@
 #include <bit>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <optional>
 
 #include <zlib.h>
 
@@ -95,6 +97,67 @@ TEST(PlyLoader, ReadsGzipCompressedFiles) {
     gzclose(f);
     expectPyramid(loadPly(path));
     std::filesystem::remove(path);
+}
+
+/// gzip's bytes for `data`, as one member, compressed by zlib.
+std::string gzipMember(const std::string& data) {
+    z_stream z{};
+    deflateInit2(&z, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY);  // +16: a gzip wrapper
+    std::string out(deflateBound(&z, uLong(data.size())) + 64, '\0');
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
+    z.avail_in = uInt(data.size());
+    z.next_out = reinterpret_cast<Bytef*>(out.data());
+    z.avail_out = uInt(out.size());
+    deflate(&z, Z_FINISH);
+    out.resize(z.total_out);
+    deflateEnd(&z);
+    return out;
+}
+
+/// What zlib's gzread makes of a file (the slow, sure reference), or nothing when it fails.
+std::optional<std::string> zlibReads(const std::filesystem::path& path) {
+    gzFile f = gzopen(path.string().c_str(), "rb");
+    std::string out;
+    char buffer[4096];
+    int n;
+    while ((n = gzread(f, buffer, sizeof buffer)) > 0) out.append(buffer, size_t(n));
+    int error = Z_OK;
+    gzerror(f, &error);
+    gzclose(f);
+    if (n < 0 || (error != Z_OK && error != Z_STREAM_END)) return std::nullopt;
+    return out;
+}
+
+// Every shape a .gz file takes, read as zlib reads it: one member, several (the last smaller
+// than the first, so its size trailer undersizes the first's buffer; one empty), a file of more
+// than 64 KiB, trailing bytes that are not a member, bytes that are not gzip at all, and damage
+// (a cut, a flipped byte) that both must refuse — here with an InputError naming the file.
+TEST(PlyLoader, GzipFilesReadAsZlibReadsThem) {
+    std::string large;
+    for (uint32_t i = 0; i < 300000; ++i) large += char('a' + (i * 7919u) % 26u);
+    const std::string a = "first member, " + large, b = "second", c;
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"one", gzipMember(a)},
+        {"three", gzipMember(a) + gzipMember(c) + gzipMember(b)},
+        {"trailing", gzipMember(b) + "not a member"},
+        {"plain", "ply\nformat ascii 1.0\n"},
+        {"cut", gzipMember(a).substr(0, 2000)},
+        {"flipped", [&] { std::string g = gzipMember(a); g[g.size() / 2] ^= 0x5a; return g; }()},
+    };
+    for (const auto& [name, bytes] : files) {
+        const auto path = cuberille::testing::uniqueTempPath(name + ".ply.gz");
+        std::ofstream(path, std::ios::binary) << bytes;
+        const std::optional<std::string> expected = zlibReads(path);
+        try {
+            const std::string got = readFileBytes(path);
+            ASSERT_TRUE(expected.has_value()) << name << ": zlib refuses it, we read " << got.size() << " bytes";
+            EXPECT_EQ(got, *expected) << name;
+        } catch (const InputError& e) {
+            EXPECT_FALSE(expected.has_value()) << name << ": " << e.what();
+            EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+        }
+        std::filesystem::remove(path);
+    }
 }
 
 std::string layoutPly(bool bigEndian, const std::string& positionType, bool normals, bool colors,
