@@ -541,12 +541,16 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
     const int samplesPerPixel = o.msaa * o.supersample * o.supersample;
     std::printf("wrote %s (%dx%d, %d sample%s%s, view %s)\n", file.c_str(), o.width, o.height, samplesPerPixel,
                 samplesPerPixel > 1 ? "s" : "", o.supersample > 1 ? " by supersampling" : "", viewName(o.view));
-    std::printf("  %zu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms a frame "
-                "(vertex %.1f, front end %.1f, back end %.1f, resolve %.1f)\n",
+    // Times that add up: the drawn frame's stages plus what ran between them (flush
+    // orchestration, clears), then the resolve into the image, which runs after the frame.
+    const raster::StageTimes& t = r.stats.times;
+    const double other = std::max(0.0, t.frameMs - t.vertexMs - t.frontEndMs - t.backEndMs);
+    std::printf("  %zu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms = frame %.1f "
+                "(vertex %.1f, front end %.1f, back end %.1f, other %.1f) + resolve %.1f\n",
                 r.sceneTriangles, (unsigned long long)c.trianglesSetUp,
                 (unsigned long long)(c.trianglesCulled + c.trianglesClipRejected),
-                (unsigned long long)c.trianglesClipped, r.stats.times.frameMs, r.stats.times.vertexMs,
-                r.stats.times.frontEndMs, r.stats.times.backEndMs, r.stats.times.resolveMs);
+                (unsigned long long)c.trianglesClipped, t.frameMs + t.resolveMs, t.frameMs, t.vertexMs,
+                t.frontEndMs, t.backEndMs, other, t.resolveMs);
     std::printf("  blocks: %llu full, %llu partial, %llu hidden by hierarchical Z; %llu samples passed "
                 "depth, %llu pixels shaded\n",
                 (unsigned long long)c.blocksFull, (unsigned long long)c.blocksPartial,

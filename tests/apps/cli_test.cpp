@@ -99,6 +99,26 @@ TEST_F(Cli, APngRenderNeverLoadsOpenImageIoAndAnExrRenderDoes) {
     }
 }
 
+// The summary's times add up: the total is the frame plus the resolve, the frame its stages
+// plus the rest, each to the printed rounding (0.05 ms a term).
+TEST_F(Cli, TheSummaryTimesAddUp) {
+    for (const char* scene : {"demo", "fill"}) {
+        const CommandRun r = run(std::string("render ") + scene + " --width 320 --height 180 --out " + (dir_ / "s.png").string());
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        double total, frame, vertex, front, back, other, resolve;
+        const size_t at = r.output.find(" ms = frame ");
+        ASSERT_NE(at, std::string::npos) << r.output;
+        const size_t start = r.output.rfind(' ', at - 1) + 1;
+        ASSERT_EQ(std::sscanf(r.output.c_str() + start,
+                              "%lf ms = frame %lf (vertex %lf, front end %lf, back end %lf, other %lf) + resolve %lf",
+                              &total, &frame, &vertex, &front, &back, &other, &resolve), 7)
+            << r.output;
+        EXPECT_NEAR(total, frame + resolve, 0.1 + 1e-9) << r.output;
+        EXPECT_NEAR(frame, vertex + front + back + other, 0.25 + 1e-9) << r.output;
+        EXPECT_GT(back, 0.0) << r.output;
+    }
+}
+
 TEST_F(Cli, MalformedTriGivesExitTwoWithFileAndLineAndWritesNothing) {
     const fs::path scene = write("bad.tri", "1 1 30 2 5 20 1\n1 2 3\n");
     const fs::path out = dir_ / "bad.exr";
