@@ -545,9 +545,15 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
     // orchestration, clears), then the resolve into the image, which runs after the frame.
     const raster::StageTimes& t = r.stats.times;
     const double other = std::max(0.0, t.frameMs - t.vertexMs - t.frontEndMs - t.backEndMs);
-    std::printf("  %zu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms = frame %.1f "
+    // A voxel model's frame draws the faces and source triangles its blocks chose, not the
+    // model's source triangle count.
+    if (r.voxel)
+        std::printf("  %llu voxel faces and %llu source triangles drawn,", (unsigned long long)r.voxel->facesEmitted,
+                    (unsigned long long)r.voxel->hybridTriangles);
+    std::printf(" %s%llu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms = frame %.1f "
                 "(vertex %.1f, front end %.1f, back end %.1f, other %.1f) + resolve %.1f\n",
-                r.sceneTriangles, (unsigned long long)c.trianglesSetUp,
+                r.voxel ? "" : " ", (unsigned long long)(r.voxel ? c.trianglesIn : r.sceneTriangles),
+                (unsigned long long)c.trianglesSetUp,
                 (unsigned long long)(c.trianglesCulled + c.trianglesClipRejected),
                 (unsigned long long)c.trianglesClipped, t.frameMs + t.resolveMs, t.frameMs, t.vertexMs,
                 t.frontEndMs, t.backEndMs, other, t.resolveMs);

@@ -119,6 +119,28 @@ TEST_F(Cli, TheSummaryTimesAddUp) {
     }
 }
 
+// A voxel model's summary counts what its frame drew: faces (two triangles each) and source
+// triangles, which together are the triangles that entered the pipeline.
+TEST_F(Cli, AVoxelModelsSummaryCountsTheFacesAndTrianglesItDrew) {
+    std::string raw(16 * 16 * 16, '\0');
+    for (int z = 4; z < 12; ++z)
+        for (int y = 4; y < 12; ++y)
+            for (int x = 4; x < 12; ++x) raw[(z * 16 + y) * 16 + x] = char(200);
+    std::ofstream(dir_ / "cube.raw", std::ios::binary) << raw;
+    const fs::path cvox = dir_ / "cube.cvox";
+    ASSERT_EQ(run("isosurface " + (dir_ / "cube.raw").string() + " --dims 16 16 16 --type u8 --iso 100 -o " + cvox.string()).exitCode, 0);
+    const CommandRun r = run("render " + cvox.string() + " --width 160 --height 120 --out " + (dir_ / "c.png").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    unsigned long long faces = 0, sources = 0, in = 0;
+    const size_t at = r.output.find(" voxel faces and ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    ASSERT_EQ(std::sscanf(r.output.c_str() + r.output.rfind(' ', at - 1) + 1,
+                          "%llu voxel faces and %llu source triangles drawn, %llu triangles in", &faces, &sources, &in), 3)
+        << r.output;
+    EXPECT_GT(faces, 0u);
+    EXPECT_EQ(in, 2 * faces + sources) << r.output;
+}
+
 TEST_F(Cli, MalformedTriGivesExitTwoWithFileAndLineAndWritesNothing) {
     const fs::path scene = write("bad.tri", "1 1 30 2 5 20 1\n1 2 3\n");
     const fs::path out = dir_ / "bad.exr";
