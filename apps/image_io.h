@@ -12,13 +12,24 @@
 
 namespace cuberille::apps {
 
-enum class ImageFormat { Png, Exr };
+enum class ImageFormat { Png, Exr, Jpeg };
 
-/// The format for a path's extension; throws scene::InputError for others.
+/// How an image is written. An image with alpha holds premultiplied colour (what the resolve
+/// of a transparent background gives): EXR keeps it so (EXR's convention); PNG gets straight
+/// colour and an alpha channel; JPEG has no alpha and refuses it.
+struct ImageWriteOptions {
+    bool alpha = false;
+    int pngBits = 8;  // 8 or 16
+    int jpegQuality = 92;
+};
+
+/// The format for a path's extension (.png, .exr, .jpg, .jpeg); throws scene::InputError for
+/// others.
 ImageFormat imageFormatFor(const std::filesystem::path& path);
 
 /// Throws std::runtime_error naming the file on failure (exit code 1).
-void writeImageAtomically(const std::filesystem::path& path, const raster::Image& image);
+void writeImageAtomically(const std::filesystem::path& path, const raster::Image& image,
+                          const ImageWriteOptions& options = {});
 
 /// Reads a PNG, or any image OpenImageIO reads, as float RGBA (8-bit formats decoded from sRGB to
 /// linear is NOT applied: values are the file's, scaled to [0, 1]).

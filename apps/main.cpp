@@ -34,7 +34,7 @@ void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int&
 /// The render options parsed from names after CLI11 has read them.
 struct RenderNames {
     std::string view = "color", shadows = "none", textureFilter = "file", depth = "standard", bvhUpdate = "refit";
-    std::string eye, target, up, upAxis = "y";
+    std::string eye, target, up, upAxis = "y", background;
     float fovDegrees = 0.0f;
 };
 
@@ -47,7 +47,11 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
                        "A .tri, .ply, .ply.gz, .obj, .gltf, .glb or .cvox file, or a built-in scene:" + scenes)
         ->required();
     addFrameOptions(render, o.width, o.height, o.msaa, o.threads);
-    render->add_option("--out", o.out, "Output image, .png or .exr")->required();
+    render->add_option("--out", o.out, "Output image: .png (sRGB, 8 or 16 bits, alpha with a transparent --background), .exr (linear float RGBA) or .jpg")->required();
+    render->add_option("--background", names.background,
+                       "R,G,B[,A]: the background as display (sRGB) values and opacity in [0, 1], instead of the scene's; "
+                       "an opacity below 1 writes alpha (PNG with straight alpha, EXR premultiplied)");
+    render->add_option("--png-bits", o.pngBits, "Bits per PNG channel: 8 or 16")->capture_default_str();
     render->add_option("--stats", o.statsPath, "Write per-stage counters and timings as JSON");
     render->add_option("--view", names.view, "What to show: color, depth, tiles (coarse block "
                                        "classes), overdraw (depth-passing samples), lod (voxel models: "
@@ -371,6 +375,7 @@ int main(int argc, char** argv) {
             if (renderNames.upAxis != "y" && renderNames.upAxis != "z")
                 throw cuberille::scene::InputError("--up-axis " + renderNames.upAxis + ": expected y or z");
             renderOptions.zUp = renderNames.upAxis == "z";
+            if (!renderNames.background.empty()) renderOptions.background = cuberille::apps::parseBackground(renderNames.background);
             const bool placed = !renderNames.eye.empty();
             if (!placed && (!renderNames.target.empty() || !renderNames.up.empty() || renderNames.fovDegrees != 0.0f))
                 throw cuberille::scene::InputError("--target, --up and --fov: only with --eye");

@@ -36,7 +36,18 @@ std::string readImage(const std::string& path, raster::Image& image) {
     return {};
 }
 
-const OiioModule kModule{OiioModule::kInterfaceVersion, writeExr, readImage, drawFramePlot};
+std::string writeJpeg(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb, int quality) {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) return "cannot create a JPEG writer: " + OIIO::geterror();
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("Compression", "jpeg:" + std::to_string(quality));
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    bool ok = out->open(path, spec) && out->write_image(OIIO::TypeDesc::UINT8, rgb.data());
+    ok = out->close() && ok;
+    return ok ? std::string() : out->geterror();
+}
+
+const OiioModule kModule{OiioModule::kInterfaceVersion, writeExr, readImage, writeJpeg, drawFramePlot};
 
 }  // namespace
 }  // namespace cuberille::apps

@@ -36,8 +36,10 @@ std::string failure(const std::filesystem::path& path, const char* what, int err
 
 }  // namespace
 
-void writePng8(const std::filesystem::path& path, int width, int height, int channels, const std::vector<uint8_t>& pixels) {
-    if (channels != 3 && channels != 4) throw std::invalid_argument("writePng8: 3 or 4 channels");
+void writePng(const std::filesystem::path& path, int width, int height, int channels, int bits,
+              const std::vector<uint8_t>& pixels) {
+    if (channels != 3 && channels != 4) throw std::invalid_argument("writePng: 3 or 4 channels");
+    if (bits != 8 && bits != 16) throw std::invalid_argument("writePng: 8 or 16 bits");
     File file(std::fopen(path.c_str(), "wb"));
     if (!file) throw std::runtime_error(path.string() + ": cannot open for writing");
     Context ctx(spng_ctx_new(SPNG_CTX_ENCODER));
@@ -45,7 +47,7 @@ void writePng8(const std::filesystem::path& path, int width, int height, int cha
     spng_ihdr ihdr{};
     ihdr.width = uint32_t(width);
     ihdr.height = uint32_t(height);
-    ihdr.bit_depth = 8;
+    ihdr.bit_depth = uint8_t(bits);
     ihdr.color_type = channels == 4 ? SPNG_COLOR_TYPE_TRUECOLOR_ALPHA : SPNG_COLOR_TYPE_TRUECOLOR;
     int error = spng_set_png_file(ctx.get(), file.get());
     if (!error) error = spng_set_ihdr(ctx.get(), &ihdr);

@@ -16,6 +16,7 @@
 #include "raster/pipeline.h"
 #include "raster/sample_pattern.h"
 #include "raster/instruction_set.h"
+#include "raster/srgb.h"
 #include "raster/texture.h"
 #include "scene/input_error.h"
 #include "scene/model_scene.h"
@@ -122,6 +123,39 @@ void validateFrameOptions(int width, int height, int msaa, int threads) {
     if (!raster::isSupportedSampleCount(msaa))
         throw InputError("--msaa: " + std::to_string(msaa) + " is not 1, 2, 4, 8 or 16");
     if (threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
+}
+
+glm::vec4 clearColorFor(const glm::vec4& display) {
+    const float a = display.a;
+    return {float(raster::decodeSrgb(display.r)) * a, float(raster::decodeSrgb(display.g)) * a,
+            float(raster::decodeSrgb(display.b)) * a, a};
+}
+
+ImageWriteOptions imageWriteOptions(const RenderOptions& o) {
+    ImageWriteOptions w;
+    w.alpha = o.background && o.background->a < 1.0f;
+    w.pngBits = o.pngBits;
+    return w;
+}
+
+glm::vec4 parseBackground(const std::string& text) {
+    const std::string problem = "--background " + text + ": expected R,G,B or R,G,B,A, each in [0, 1]";
+    std::vector<std::string> parts;
+    for (size_t start = 0;;) {
+        const size_t end = std::min(text.find(',', start), text.size());
+        parts.push_back(text.substr(start, end - start));
+        if (end == text.size()) break;
+        start = end + 1;
+    }
+    if (parts.size() != 3 && parts.size() != 4) throw scene::InputError(problem);
+    glm::vec4 v(0.0f, 0.0f, 0.0f, 1.0f);
+    for (size_t k = 0; k < parts.size(); ++k) {
+        const char* first = parts[k].data();
+        const auto [last, ec] = std::from_chars(first, first + parts[k].size(), v[int(k)]);
+        if (ec != std::errc() || last != first + parts[k].size() || !(v[int(k)] >= 0.0f && v[int(k)] <= 1.0f))
+            throw scene::InputError(problem);
+    }
+    return v;
 }
 
 glm::vec3 parseVector3(const std::string& text, const std::string& option) {
@@ -251,9 +285,9 @@ void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
 // One frame: submit(pipeline) records the draws, whose arrays stay alive until endFrame
 // (Pipeline::draw's contract), then the view is resolved.
 template <class Submit>
-void renderFrame(const RenderOptions& o, glm::vec4 background, Submit&& submit, RenderResult& result) {
+void renderFrame(const RenderOptions& o, glm::vec4 sceneBackground, Submit&& submit, RenderResult& result) {
     raster::Pipeline pipeline;
-    pipeline.beginFrame(frameDesc(o, background));
+    pipeline.beginFrame(frameDesc(o, o.background ? clearColorFor(*o.background) : sceneBackground));
     submit(pipeline);
     pipeline.endFrame();
     result.stats = pipeline.stats();
@@ -594,7 +628,12 @@ int runAnimation(const RenderOptions& o);
 
 int runRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png or .exr)");
-    imageFormatFor(o.out);  // reject a bad extension before any work
+    // Refuse what cannot be written before any work: a bad extension, alpha in a JPEG.
+    if (imageFormatFor(o.out) == ImageFormat::Jpeg && imageWriteOptions(o).alpha)
+        throw scene::InputError("--background: an opacity below 1 needs a .png or .exr output (JPEG has no alpha)");
+    if (o.pngBits != 8 && o.pngBits != 16) throw scene::InputError("--png-bits: 8 or 16");
+    if (o.pngBits != 8 && imageFormatFor(o.out) != ImageFormat::Png)
+        throw scene::InputError("--png-bits: only for .png outputs");
     requireOutputPath(o.out, "--out");
     requireOutputPath(o.statsPath, "--stats");
     if (o.supersample > 1 && (o.turntable > 0 || o.animate > 0))
@@ -603,7 +642,7 @@ int runRenderCommand(const RenderOptions& o) {
     if (o.turntable > 0) return runTurntable(o);
     if (o.animate > 0) return runAnimation(o);
     const RenderResult r = renderScene(o);
-    writeImageAtomically(o.out, r.image);
+    writeImageAtomically(o.out, r.image, imageWriteOptions(o));
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, statsToJson(o, r));
     if (!o.quiet) printSummary(o, o.out, r);
     return 0;
@@ -612,7 +651,7 @@ int runRenderCommand(const RenderOptions& o) {
 // Frame `index` of a sequence: OUT_00i.ext, its stats kept for {"frames": [...]}, its summary.
 void writeSequenceFrame(const RenderOptions& o, int index, const RenderResult& r, nlohmann::json& frames) {
     const std::filesystem::path file = frameFileName(o.out, index);
-    writeImageAtomically(file, r.image);
+    writeImageAtomically(file, r.image, imageWriteOptions(o));
     if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
     if (!o.quiet) printSummary(o, file, r);
 }

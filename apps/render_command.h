@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "apps/image_io.h"
 #include "raster/framebuffer.h"
 #include "raster/resolve.h"
 #include "raster/stats.h"
@@ -57,7 +58,20 @@ struct RenderOptions {
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;
+    /// --background R,G,B[,A]: display (sRGB) values and opacity in [0, 1], instead of the
+    /// scene's own; an opacity below 1 writes the image's alpha (PNG with alpha, EXR).
+    std::optional<glm::vec4> background;
+    int pngBits = 8;  // --png-bits 8|16
 };
+
+/// The framebuffer's clear colour for a --background: linear and premultiplied by its opacity.
+glm::vec4 clearColorFor(const glm::vec4& displayBackground);
+
+/// How a render's images are written: alpha when the background is not opaque, --png-bits.
+ImageWriteOptions imageWriteOptions(const RenderOptions& o);
+
+/// R,G,B or R,G,B,A, each in [0, 1]; throws scene::InputError naming the option.
+glm::vec4 parseBackground(const std::string& text);
 
 struct RenderResult {
     raster::Image image;

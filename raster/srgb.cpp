@@ -82,6 +82,16 @@ uint8_t encodeSrgb8(float linear) {
     return uint8_t(count);
 }
 
+uint16_t encodeSrgb16(float linear) {
+    if (!(linear > 0.0f)) return 0;
+    if (linear >= 1.0f) return 65535;
+    const double l = linear;
+    const double encoded = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+    return uint16_t(std::lround(std::clamp(encoded, 0.0, 1.0) * 65535.0));
+}
+
+double decodeSrgb(double encoded) { return decodeExactly(encoded); }
+
 float decodeSrgb8(uint8_t encoded) { return decoded()[encoded]; }
 
 }  // namespace cuberille::raster

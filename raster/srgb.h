@@ -12,6 +12,13 @@ namespace cuberille::raster {
 /// Linear [0, 1] to 8-bit sRGB, round to nearest; below 0 (and NaN) gives 0, above 1 gives 255.
 uint8_t encodeSrgb8(float linear);
 
+/// Linear [0, 1] to 16-bit sRGB, round to nearest, from the transfer function in double
+/// (16-bit files: PNG at --png-bits 16); below 0 (and NaN) gives 0, above 1 gives 65535.
+uint16_t encodeSrgb16(float linear);
+
+/// A display (sRGB-encoded) value in [0, 1] to linear, in double: colours a user types.
+double decodeSrgb(double encoded);
+
 /// 8-bit sRGB to linear [0, 1].
 float decodeSrgb8(uint8_t encoded);
 

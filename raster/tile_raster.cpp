@@ -495,11 +495,18 @@ private:
         shadeQueue(shader_, t_, varyings_, queue_, counters);
         counters.pixelsShaded += queue_.count;
         if (state.alphaMode == AlphaMode::Mask) counters.pixelsAlphaTested += queue_.count;
+        // The alpha written is coverage: an opaque surface writes 1 whatever its colour's alpha
+        // (glTF: OPAQUE ignores it), a masked one 1 where it survives the test; only blending
+        // composes alpha (blendColor). So a transparent background resolves to each pixel's
+        // covered fraction. Flat colours (.tri, visibility buffers) are written as given.
+        constexpr bool kSurface = !std::is_same_v<Shader, ConstantColorShader>;
         for (int i = 0; i < queue_.count; ++i) {
-            const glm::vec4 color(queue_.red[i], queue_.green[i], queue_.blue[i], queue_.alpha[i]);
+            glm::vec4 color(queue_.red[i], queue_.green[i], queue_.blue[i], queue_.alpha[i]);
             const uint32_t first = queue_.firstSample[i], pass = queue_.passMask[i];
+            if (kSurface && state.alphaMode == AlphaMode::Opaque) color.a = 1.0f;
             if (state.alphaMode == AlphaMode::Mask) {
                 if (!(color.a >= state.alphaCutoff)) continue;  // discarded (NaN too)
+                if (kSurface) color.a = 1.0f;
                 const int pixel = int(first) / S;
                 const int32_t x = target_.originX + pixel % kTileSizePixels, y = target_.originY + pixel / kTileSizePixels;
                 float depth[S] = {};

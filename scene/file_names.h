@@ -21,6 +21,7 @@ enum class FileKind {
     GeometryStream,  // .cgs
     Png,             // .png
     Exr,             // .exr
+    Jpeg,            // .jpg, .jpeg
     Unknown,
 };
 
@@ -43,7 +44,8 @@ inline FileKind fileKindOf(const std::filesystem::path& path) {
         {".tri", FileKind::TriangleList}, {".ply", FileKind::Ply},    {".ply.gz", FileKind::Ply},
         {".obj", FileKind::Obj},          {".gltf", FileKind::Gltf},  {".glb", FileKind::Glb},
         {".cvox", FileKind::VoxelModel},  {".cgs", FileKind::GeometryStream},
-        {".png", FileKind::Png},          {".exr", FileKind::Exr}};
+        {".png", FileKind::Png},          {".exr", FileKind::Exr},    {".jpg", FileKind::Jpeg},
+        {".jpeg", FileKind::Jpeg}};
     for (const auto& [suffix, kind] : kSuffixes)
         if (fileNameEndsWith(path, suffix)) return kind;
     return FileKind::Unknown;

@@ -141,6 +141,84 @@ TEST_F(Cli, AVoxelModelsSummaryCountsTheFacesAndTrianglesItDrew) {
     EXPECT_EQ(in, 2 * faces + sources) << r.output;
 }
 
+// A square of two triangles, facing +z, framed by the default camera with room around it.
+const char* kSquarePly =
+    "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+    "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+    "-1 -1 0\n1 -1 0\n1 1 0\n-1 1 0\n3 0 1 2\n3 0 2 3\n";
+
+// A transparent --background: alpha is each pixel's covered fraction (1, 0 and the 4-sample
+// steps between on the edges), EXR keeps premultiplied colour (the same bits as over opaque
+// black), and PNG stores straight colour beside its alpha.
+TEST_F(Cli, ATransparentBackgroundWritesCoverageAsAlpha) {
+    const fs::path ply = write("square.ply", kSquarePly);
+    const std::string common = "render " + ply.string() + " --width 96 --height 64 --msaa 4 --azimuth 10 --elevation 10 ";
+    ASSERT_EQ(run(common + "--background 0.5,0.5,0.5,0 --out " + (dir_ / "clear.exr").string()).exitCode, 0);
+    ASSERT_EQ(run(common + "--background 0.5,0.5,0.5,0 --out " + (dir_ / "clear.png").string()).exitCode, 0);
+    ASSERT_EQ(run(common + "--background 0,0,0 --out " + (dir_ / "black.exr").string()).exitCode, 0);
+    ASSERT_EQ(run(common + "--background 0,0,0 --out " + (dir_ / "black.png").string()).exitCode, 0);
+    const auto clear = cuberille::apps::readImage(dir_ / "clear.exr"), black = cuberille::apps::readImage(dir_ / "black.exr");
+    const auto clearPng = cuberille::apps::readImage(dir_ / "clear.png"), blackPng = cuberille::apps::readImage(dir_ / "black.png");
+    ASSERT_EQ(clear.rgba.size(), black.rgba.size());
+    int inside = 0, outside = 0, edge = 0;
+    for (size_t i = 0; i < clear.rgba.size() / 4; ++i) {
+        const float a = clear.rgba[i * 4 + 3];
+        EXPECT_TRUE(a == 0.0f || a == 0.25f || a == 0.5f || a == 0.75f || a == 1.0f) << a;
+        (a == 1.0f ? inside : a == 0.0f ? outside : edge)++;
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(clear.rgba[i * 4 + c], black.rgba[i * 4 + c]) << i;
+        EXPECT_EQ(black.rgba[i * 4 + 3], 1.0f);
+        EXPECT_EQ(clearPng.rgba[i * 4 + 3], std::round(a * 255.0f) / 255.0f) << i;
+        if (a == 1.0f)
+            for (int c = 0; c < 3; ++c) EXPECT_EQ(clearPng.rgba[i * 4 + c], blackPng.rgba[i * 4 + c]) << i;
+    }
+    EXPECT_GT(inside, 100);
+    EXPECT_GT(outside, 100);
+    EXPECT_GT(edge, 10);
+}
+
+// A 16-bit PNG holds what the 8-bit one rounds: each channel within half an 8-bit step (plus
+// half a 16-bit one) of the 8-bit file's.
+TEST_F(Cli, SixteenBitPngsKeepWhatEightBitsRound) {
+    const fs::path ply = write("square.ply", kSquarePly);
+    const std::string common = "render " + ply.string() + " --width 96 --height 64 --msaa 4 --background 0.2,0.4,0.8 ";
+    ASSERT_EQ(run(common + "--png-bits 16 --out " + (dir_ / "wide.png").string()).exitCode, 0);
+    ASSERT_EQ(run(common + "--out " + (dir_ / "narrow.png").string()).exitCode, 0);
+    const auto wide = cuberille::apps::readImage(dir_ / "wide.png"), narrow = cuberille::apps::readImage(dir_ / "narrow.png");
+    ASSERT_EQ(wide.rgba.size(), narrow.rgba.size());
+    size_t between = 0;
+    for (size_t i = 0; i < wide.rgba.size(); ++i) {
+        EXPECT_LE(std::abs(wide.rgba[i] * 255.0f - narrow.rgba[i] * 255.0f), 0.5f + 255.0f / 65535.0f) << i;
+        between += std::abs(wide.rgba[i] * 255.0f - std::round(wide.rgba[i] * 255.0f)) > 0.01f;
+    }
+    EXPECT_GT(between, 0u) << "no value between two 8-bit steps: the file is not 16-bit";
+}
+
+// JPEG (through the OpenImageIO module): the PNG's image within JPEG's loss at quality 92.
+TEST_F(Cli, JpegOutputIsThePngsImageWithinItsCompression) {
+    const fs::path ply = write("square.ply", kSquarePly);
+    const std::string common = "render " + ply.string() + " --width 96 --height 64 --msaa 4 ";
+    ASSERT_EQ(run(common + "--out " + (dir_ / "a.jpg").string()).exitCode, 0);
+    ASSERT_EQ(run(common + "--out " + (dir_ / "a.png").string()).exitCode, 0);
+    const auto jpeg = cuberille::apps::readImage(dir_ / "a.jpg"), png = cuberille::apps::readImage(dir_ / "a.png");
+    ASSERT_EQ(jpeg.rgba.size(), png.rgba.size());
+    double sum = 0;
+    for (size_t i = 0; i < png.rgba.size(); ++i) sum += std::abs(jpeg.rgba[i] - png.rgba[i]);
+    EXPECT_LT(sum / double(png.rgba.size()), 0.01);  // measured 0.002-0.004
+}
+
+TEST_F(Cli, OutputOptionsAFileCannotHoldAreRefusedBeforeAnyWork) {
+    const fs::path ply = write("square.ply", kSquarePly);
+    for (const std::string& options : {std::string("--background 1,1,1,0 --out ") + (dir_ / "x.jpg").string(),
+                                       std::string("--png-bits 12 --out ") + (dir_ / "x.png").string(),
+                                       std::string("--png-bits 16 --out ") + (dir_ / "x.exr").string(),
+                                       std::string("--background 2,0,0 --out ") + (dir_ / "x.png").string(),
+                                       std::string("--background 1,1 --out ") + (dir_ / "x.png").string()}) {
+        const CommandRun r = run("render " + ply.string() + " --width 32 --height 32 " + options);
+        EXPECT_EQ(r.exitCode, 2) << options << "\n" << r.output;
+    }
+    for (const char* name : {"x.jpg", "x.png", "x.exr"}) EXPECT_FALSE(fs::exists(dir_ / name)) << name;
+}
+
 TEST_F(Cli, MalformedTriGivesExitTwoWithFileAndLineAndWritesNothing) {
     const fs::path scene = write("bad.tri", "1 1 30 2 5 20 1\n1 2 3\n");
     const fs::path out = dir_ / "bad.exr";

@@ -129,8 +129,30 @@ TEST(AlphaModes, MaskDiscardsBelowTheCutoffWithoutWritingDepth) {
         p.draw(behind);
         p.endFrame();
         // A discarded front quad leaves no depth behind: the back quad then passes everywhere.
-        EXPECT_EQ(sampleColor(p.framebuffer(), 4, 4, 0), frontVisible ? glm::vec4(1, 0, 0, alpha) : glm::vec4(0, 1, 0, 1));
+        // A surviving masked sample writes alpha 1: the alpha channel holds coverage.
+        EXPECT_EQ(sampleColor(p.framebuffer(), 4, 4, 0), frontVisible ? glm::vec4(1, 0, 0, 1) : glm::vec4(0, 1, 0, 1));
         EXPECT_EQ(p.stats().occlusionSamplesPassed[0], frontVisible ? 0u : 8u * 8u * 4u);
+    }
+}
+
+// glTF's OPAQUE ignores the colour's alpha: a surface drawn opaque writes alpha 1 whatever its
+// material's alpha, in every shading model, so a transparent background resolves to coverage.
+// A flat colour (ConstantColor: .tri scenes, visibility buffers) is written as given.
+TEST(AlphaModes, OpaqueSurfacesWriteCoverageAsAlpha) {
+    std::vector<glm::vec3> quad;
+    addQuad(quad, 0, 0, 8, 8, 0.5f);
+    for (const raster::ShadingModel model : {raster::ShadingModel::Unlit, raster::ShadingModel::Lambert,
+                                             raster::ShadingModel::MetallicRoughness, raster::ShadingModel::ConstantColor}) {
+        raster::Pipeline p;
+        raster::FramebufferDesc desc = frame(8, 8, 4);
+        desc.clearColor = glm::vec4(0.0f);
+        p.beginFrame(desc);
+        raster::DrawCall d = windowDraw(quad, glm::vec4(1, 0, 0, 0.3f));
+        d.state.shading = model;
+        p.draw(d);
+        p.endFrame();
+        const float expected = model == raster::ShadingModel::ConstantColor ? 0.3f : 1.0f;
+        for (int s = 0; s < 4; ++s) EXPECT_EQ(sampleColor(p.framebuffer(), 4, 4, s).a, expected) << int(model);
     }
 }
 
