@@ -271,6 +271,7 @@ std::vector<std::string> renderArgs(const AccuracyOptions& o, const std::vector<
         a.insert(a.end(), {"--azimuth", formatNumber(o.azimuth), "--elevation", formatNumber(o.elevation)});
     if (o.cameraIndex >= 0) a.insert(a.end(), {"--camera-index", std::to_string(o.cameraIndex)});
     if (o.timeSeconds != 0.0f) a.insert(a.end(), {"--time", formatNumber(o.timeSeconds)});
+    if (!o.animation.empty()) a.insert(a.end(), {"--animation", o.animation});
     a.insert(a.end(), knobs.begin(), knobs.end());
     a.insert(a.end(), {"--out", image.string(), "--stats", stats.string(), "--quiet"});
     return a;

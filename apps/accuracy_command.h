@@ -29,6 +29,7 @@ struct AccuracyOptions {
     float azimuth = 30.0f, elevation = 20.0f;
     int cameraIndex = -1;
     float timeSeconds = 0.0f;
+    std::string animation;  // --animation, passed to every render
     bool soft = false;    // soft shadows in every shadowed setting and the truth
     std::filesystem::path executable;  // the cuberille binary; empty: this process's own
     bool quiet = false;

@@ -73,8 +73,10 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
     render->add_option("--fov", names.fovDegrees, "With --eye: vertical field of view, degrees (default: the framing one's)");
     render->add_option("--up-axis", names.upAxis, "Mesh files: the file's up axis, y or z (z-up scans are turned to y-up)")
         ->capture_default_str();
+    render->add_option("--animation", o.animation,
+                       "glTF: the animation --time, --animate and --turntable pose, by name or index (default: the first)");
     render->add_option("--time", o.timeSeconds,
-                       "glTF: pose the first animation at this time, in seconds (node transforms)")
+                       "glTF: pose the animation (--animation; the first by default) at this time, in seconds")
         ->capture_default_str();
     render->add_option("--turntable", o.turntable,
                        "Write N frames turning around the scene (OUT_000.png, OUT_001.png, ...)")
@@ -160,7 +162,8 @@ void addAccuracyCommand(CLI::App& app, cuberille::apps::AccuracyOptions& o) {
     a->add_option("--azimuth", o.azimuth, "Camera azimuth for mesh files and voxel models, degrees")->capture_default_str();
     a->add_option("--elevation", o.elevation, "Camera elevation, degrees")->capture_default_str();
     a->add_option("--camera-index", o.cameraIndex, "Use the file's N-th camera (glTF)");
-    a->add_option("--time", o.timeSeconds, "glTF: the first animation's pose at this time, in seconds")->capture_default_str();
+    a->add_option("--time", o.timeSeconds, "glTF: the animation's pose at this time, in seconds")->capture_default_str();
+    a->add_option("--animation", o.animation, "glTF: the animation posed, by name or index (default: the first)");
     a->add_flag("--soft", o.soft, "Soft shadows in every shadowed setting and the truth");
     a->add_flag("--quiet", o.quiet, "Print nothing on success");
 }

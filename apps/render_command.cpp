@@ -66,6 +66,8 @@ void validate(const RenderOptions& o) {
     if (o.timeSeconds != 0.0f && !scene::isGltfKind(kind))
         throw InputError("--time: only glTF files (.gltf, .glb) have animations, not " + o.scene);
     if (!(o.fps > 0.0f && o.fps <= 1000.0f)) throw InputError("--fps: must be in (0, 1000]");
+    if (!o.animation.empty() && !scene::isGltfKind(kind))
+        throw InputError("--animation: only glTF files (.gltf, .glb) have animations, not " + o.scene);
 }
 
 raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) {
@@ -235,7 +237,7 @@ scene::Scene loadScene(const RenderOptions& o) {
         return s;
     }
     if (scene::isModelFile(o.scene))
-        return scene::loadModelScene(o.scene, {o.azimuth, o.elevation, o.cameraIndex, o.timeSeconds, o.zUp, o.placement},
+        return scene::loadModelScene(o.scene, {o.azimuth, o.elevation, o.cameraIndex, o.timeSeconds, o.zUp, o.placement, o.animation},
                                      [&](const std::string& w) {
                                          if (!o.quiet) std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str());
                                      });

@@ -1,5 +1,6 @@
 #include "scene/gltf_loader.h"
 
+#include <charconv>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -24,8 +25,9 @@ constexpr int kMaxNodeDepth = 256;
 
 class GltfReader {
 public:
-    GltfReader(const tinygltf::Model& model, const std::string& file, const WarningSink& warn, float timeSeconds)
-        : model_(model), file_(file), warn_(warn), timeSeconds_(timeSeconds) {}
+    GltfReader(const tinygltf::Model& model, const std::string& file, const WarningSink& warn, float timeSeconds,
+               const std::string& animation)
+        : model_(model), file_(file), warn_(warn), timeSeconds_(timeSeconds), animation_(chooseAnimation(animation)) {}
 
     GltfScene read() {
         warnAboutUnsupported();
@@ -66,7 +68,9 @@ private:
     }
 
     void warnAboutUnsupported() {
-        if (model_.animations.size() > 1) warnOnce("only the first of " + std::to_string(model_.animations.size()) + " animations is played");
+        if (model_.animations.size() > 1 && animation_ == 0 && !animationChosen_)
+            warnOnce("plays the first of " + std::to_string(model_.animations.size()) + " animations (" + animationNames() +
+                     "); --animation NAME|INDEX chooses another");
         for (const auto& ext : model_.extensionsUsed)
             if (ext != "KHR_lights_punctual" && ext != "KHR_materials_unlit" && ext != "KHR_texture_transform")
                 warnOnce("extension " + ext + " is not supported yet and was ignored");
@@ -237,12 +241,33 @@ private:
     // The first animation's node channels at timeSeconds_: keyframes found by binary search,
     // the time clamped to each sampler's range; STEP, LINEAR (slerp for rotations) and
     // CUBICSPLINE (Hermite over in-tangent, value, out-tangent triplets, glTF 2.0 Appendix C).
+    // The animation `chosen` names (a name, or an index as a decimal number); 0 when empty.
+    size_t chooseAnimation(const std::string& chosen) {
+        animationChosen_ = !chosen.empty();
+        if (chosen.empty()) return 0;
+        for (size_t i = 0; i < model_.animations.size(); ++i)
+            if (model_.animations[i].name == chosen) return i;
+        size_t index = 0;
+        const auto [end, ec] = std::from_chars(chosen.data(), chosen.data() + chosen.size(), index);
+        if (ec == std::errc() && end == chosen.data() + chosen.size() && index < model_.animations.size()) return index;
+        throw InputError(file_ + ": no animation '" + chosen + "' (" +
+                         (model_.animations.empty() ? std::string("the file has none") : "it has " + animationNames()) + ")");
+    }
+
+    /// The file's animations as `0 "name", 1 "name"`, for messages.
+    std::string animationNames() const {
+        std::string names;
+        for (size_t i = 0; i < model_.animations.size(); ++i)
+            names += (i ? ", " : "") + std::to_string(i) + (model_.animations[i].name.empty() ? "" : " '" + model_.animations[i].name + "'");
+        return names;
+    }
+
     void poseAnimation() {
         if (model_.animations.empty()) return;
-        const tinygltf::Animation& anim = model_.animations[0];
+        const tinygltf::Animation& anim = model_.animations[animation_];
         for (size_t c = 0; c < anim.channels.size(); ++c) {
             const tinygltf::AnimationChannel& ch = anim.channels[c];
-            const std::string where = "animation 0 channel " + std::to_string(c);
+            const std::string where = "animation " + std::to_string(animation_) + " channel " + std::to_string(c);
             if (ch.target_path != "translation" && ch.target_path != "rotation" && ch.target_path != "scale" &&
                 ch.target_path != "weights") {
                 warnOnce("animated " + ch.target_path + " is not supported");
@@ -685,6 +710,8 @@ private:
     LoadStats stats_;
     std::map<std::pair<int, bool>, std::shared_ptr<const raster::Texture>> textures_;  // (index, sRGB)
     float timeSeconds_;
+    bool animationChosen_ = false;
+    size_t animation_;  // the posed animation's index (0 when the file has none)
     std::map<int, NodePose> pose_;  // animated nodes
     std::map<int, std::vector<float>> poseWeights_;  // animated morph weights per node
     std::vector<glm::mat4> globals_;  // node → world, for the scene's nodes
@@ -737,7 +764,8 @@ std::string glbContainerProblem(const std::string& bytes) {
 
 }  // namespace
 
-GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds) {
+GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds,
+                   const std::string& animation) {
     const std::string file = path.string();
     if (!std::filesystem::exists(path)) throw InputError(file + ": cannot open file");
     tinygltf::TinyGLTF loader;
@@ -758,7 +786,7 @@ GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, f
     }
     if (!warning.empty()) warn(file + ": " + warning);
     if (!ok) throw InputError(file + ": " + placeOfLoadError(binary, error));
-    return GltfReader(model, file, warn, timeSeconds).read();
+    return GltfReader(model, file, warn, timeSeconds, animation).read();
 }
 
 }  // namespace cuberille::scene

@@ -37,8 +37,11 @@ struct GltfScene {
     LoadStats stats;
 };
 
-/// timeSeconds poses the first animation's node channels (translation, rotation, scale) at that
-/// time, clamped to the clip's range.
-GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds = 0.0f);
+/// timeSeconds poses an animation's node channels (translation, rotation, scale, morph weights)
+/// at that time, clamped to the clip's range. `animation` chooses which: its name, or its index
+/// in the file as a decimal number; empty, the first. A name or index the file lacks is an
+/// InputError naming the file's animations.
+GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds = 0.0f,
+                   const std::string& animation = "");
 
 }  // namespace cuberille::scene

@@ -37,7 +37,7 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     if (kind == FileKind::Obj) {
         s.meshes = loadObj(path, warn);
     } else if (isGltfKind(kind)) {
-        GltfScene g = loadGltf(path, warn, view.timeSeconds);
+        GltfScene g = loadGltf(path, warn, view.timeSeconds, view.animation);
         s.meshes = std::move(g.meshes);
         cameras = std::move(g.cameras);
         lights = std::move(g.lights);

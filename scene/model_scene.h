@@ -15,9 +15,10 @@ struct ModelSceneOptions {
     float azimuthDegrees = 30.0f;
     float elevationDegrees = 20.0f;
     int cameraIndex = -1;      // a camera of the file (glTF) instead of framing the bounds
-    float timeSeconds = 0.0f;  // glTF: the pose of the first animation at this time
+    float timeSeconds = 0.0f;  // glTF: the pose of the animation (below) at this time
     bool zUp = false;          // the file's up is +z (many scans and CAD files): turned to +y on load
     std::optional<CameraPlacement> placement;  // a camera placed by hand instead of the framing one
+    std::string animation;     // glTF: the animation posed, by name or index; empty: the first
 };
 
 bool isModelFile(const std::filesystem::path& path);

@@ -206,13 +206,15 @@ TEST_F(Cli, JpegOutputIsThePngsImageWithinItsCompression) {
     EXPECT_LT(sum / double(png.rgba.size()), 0.01);  // measured 0.002-0.004
 }
 
+// Options the output or the scene cannot honour (a PLY has no animations) are refused.
 TEST_F(Cli, OutputOptionsAFileCannotHoldAreRefusedBeforeAnyWork) {
     const fs::path ply = write("square.ply", kSquarePly);
     for (const std::string& options : {std::string("--background 1,1,1,0 --out ") + (dir_ / "x.jpg").string(),
                                        std::string("--png-bits 12 --out ") + (dir_ / "x.png").string(),
                                        std::string("--png-bits 16 --out ") + (dir_ / "x.exr").string(),
                                        std::string("--background 2,0,0 --out ") + (dir_ / "x.png").string(),
-                                       std::string("--background 1,1 --out ") + (dir_ / "x.png").string()}) {
+                                       std::string("--background 1,1 --out ") + (dir_ / "x.png").string(),
+                                       std::string("--animation 0 --out ") + (dir_ / "x.png").string()}) {
         const CommandRun r = run("render " + ply.string() + " --width 32 --height 32 " + options);
         EXPECT_EQ(r.exitCode, 2) << options << "\n" << r.output;
     }

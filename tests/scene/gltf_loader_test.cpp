@@ -106,6 +106,51 @@ float area(const Mesh& m, size_t t) {
     return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
 }
 
+// Two animations: the file's own (named "turn": translation, rotation, scale of node 1) and
+// "lift" (its translation alone). Either is chosen by name or by index; the default is the
+// first; a name or index the file lacks is an InputError naming what it has.
+TEST(GltfLoader, AnAnimationIsChosenByNameOrIndex) {
+    std::string text = gltf();
+    replaceOnce(text, R"("animations": [{
+    "samplers")", R"("animations": [{"name": "turn",
+    "samplers")");
+    replaceOnce(text, R"(                 {"sampler": 2, "target": {"node": 1, "path": "scale"}}]
+  }],)", R"(                 {"sampler": 2, "target": {"node": 1, "path": "scale"}}]
+  }, {"name": "lift", "samplers": [{"input": 4, "output": 5}],
+      "channels": [{"sampler": 0, "target": {"node": 1, "path": "translation"}}]}],)");
+    const fs::path path = write("two-animations.gltf", text);
+    std::vector<std::string> warnings;
+    const WarningSink warn = [&](const std::string& w) { warnings.push_back(w); };
+    auto positions = [&](const std::string& animation) {
+        std::vector<glm::vec3> all;
+        for (const Mesh& m : loadGltf(path, warn, 1.0f, animation).meshes) all.insert(all.end(), m.positions.begin(), m.positions.end());
+        return all;
+    };
+    const auto byDefault = positions(""), turn = positions("turn"), lift = positions("lift");
+    EXPECT_EQ(byDefault, turn);
+    EXPECT_NE(turn, lift);  // lift neither turns nor scales node 1
+    EXPECT_EQ(positions("0"), turn);
+    EXPECT_EQ(positions("1"), lift);
+    for (const std::string& missing : {"spin", "2", "-1"}) {
+        try {
+            positions(missing);
+            ADD_FAILURE() << "accepted animation " << missing;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("'" + missing + "'"), std::string::npos) << what;
+            EXPECT_NE(what.find("0 'turn', 1 'lift'"), std::string::npos) << what;
+        }
+    }
+    // Only the default of several is warned about, and the warning names the option.
+    warnings.clear();
+    loadGltf(path, warn, 1.0f, "");
+    ASSERT_FALSE(warnings.empty());
+    EXPECT_NE(warnings.front().find("--animation"), std::string::npos) << warnings.front();
+    warnings.clear();
+    loadGltf(path, warn, 1.0f, "lift");
+    for (const std::string& w : warnings) EXPECT_EQ(w.find("--animation"), std::string::npos) << w;
+}
+
 TEST(GltfLoader, HierarchyStripsFansIndicesColoursAndMirroring) {
     std::vector<std::string> warnings;
     const GltfScene scene = loadGltf(write("cuberille-test.gltf", gltf()), [&](const std::string& w) { warnings.push_back(w); });
