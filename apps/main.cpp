@@ -73,6 +73,9 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
     render->add_option("--fov", names.fovDegrees, "With --eye: vertical field of view, degrees (default: the framing one's)");
     render->add_option("--up-axis", names.upAxis, "Mesh files: the file's up axis, y or z (z-up scans are turned to y-up)")
         ->capture_default_str();
+    render->add_option("--zoom", o.zoom,
+                       "Magnify the view F times, whichever camera frames it (the field of view narrows; the eye stays)")
+        ->capture_default_str();
     render->add_option("--animation", o.animation,
                        "glTF: the animation --time, --animate and --turntable pose, by name or index (default: the first)");
     render->add_option("--time", o.timeSeconds,

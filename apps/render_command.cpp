@@ -66,6 +66,8 @@ void validate(const RenderOptions& o) {
     if (o.timeSeconds != 0.0f && !scene::isGltfKind(kind))
         throw InputError("--time: only glTF files (.gltf, .glb) have animations, not " + o.scene);
     if (!(o.fps > 0.0f && o.fps <= 1000.0f)) throw InputError("--fps: must be in (0, 1000]");
+    if (!(o.zoom > 0.0f && o.zoom <= 1000.0f)) throw InputError("--zoom: must be in (0, 1000]");
+    if (o.zoom != 1.0f && kind == scene::FileKind::TriangleList) throw InputError("--zoom: not for 2D .tri scenes");
     if (!o.animation.empty() && !scene::isGltfKind(kind))
         throw InputError("--animation: only glTF files (.gltf, .glb) have animations, not " + o.scene);
 }
@@ -227,6 +229,14 @@ bool isVoxelFile(const RenderOptions& o) { return scene::fileKindOf(o.scene) == 
 
 void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which);
 
+// --zoom F: a lens zoom. The eye stays and the field of view narrows until what it saw is F
+// times larger (tan of the half-angle divided by F), whichever camera framed the scene.
+void applyZoom(scene::Camera& camera, float zoom) {
+    if (zoom == 1.0f) return;
+    const double halfAngle = std::atan(std::tan(glm::radians(double(camera.verticalFovDegrees)) / 2.0) / zoom);
+    camera.verticalFovDegrees = float(glm::degrees(2.0 * halfAngle));
+}
+
 scene::Scene loadScene(const RenderOptions& o) {
     if (scene::isProceduralScene(o.scene)) {
         scene::Scene s = scene::makeProceduralScene(o.scene, o.detail);
@@ -253,6 +263,7 @@ scene::Scene load3dScene(const RenderOptions& o) {
     scene::Scene s = loadScene(o);
     overrideTextureFilters(s, o.textureFilter);
     s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
+    applyZoom(s.camera, o.zoom);
     return s;
 }
 
@@ -363,6 +374,7 @@ void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     if (model.blocks.empty()) throw scene::InputError(o.scene + ": no voxels to draw (a model of no blocks)");
     lod::VoxelScene s(std::move(model), o.azimuth, o.elevation);
     s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
+    applyZoom(s.camera, o.zoom);
     result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.model().triangleCount();
     result.voxelResolution = s.model().grid.resolution;

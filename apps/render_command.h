@@ -41,6 +41,7 @@ struct RenderOptions {
     bool zUp = false;         // --up-axis z: mesh files whose up is +z are turned to +y on load
     float timeSeconds = 0.0f; // glTF animation time
     std::string animation;    // --animation NAME|INDEX: the glTF animation posed; empty: the first
+    float zoom = 1.0f;        // --zoom F: the view magnified F times (the field of view narrowed)
     int turntable = 0;        // > 0: that many frames around the scene, OUT_000.ext ...
     int animate = 0;          // glTF, > 0: that many frames of the animation from --time, OUT_000.ext ...
     float fps = 30.0f;        // --animate: frames a second of animation time

@@ -176,6 +176,28 @@ TEST_F(Cli, ATransparentBackgroundWritesCoverageAsAlpha) {
     EXPECT_GT(edge, 10);
 }
 
+// --zoom F magnifies F times: the square covers F² times the pixels (to within the edge pixels'
+// share), for the framing camera and a placed one alike.
+TEST_F(Cli, ZoomMagnifiesTheViewByItsFactor) {
+    const fs::path ply = write("square.ply", kSquarePly);
+    auto covered = [&](const std::string& options) {
+        const fs::path out = dir_ / "z.exr";
+        const CommandRun r = run("render " + ply.string() + " --width 200 --height 200 --msaa 4 --background 0,0,0,0 " +
+                                 options + " --out " + out.string());
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        const auto image = cuberille::apps::readImage(out);
+        double sum = 0;
+        for (size_t i = 0; i < image.rgba.size() / 4; ++i) sum += image.rgba[i * 4 + 3];
+        return sum;
+    };
+    for (const std::string& camera : {std::string("--azimuth 0 --elevation 0"), std::string("--eye 0,0,8")}) {
+        // 1.4: the framed square (two thirds of the frame's height) still fits.
+        const double one = covered(camera), closer = covered(camera + " --zoom 1.4"), half = covered(camera + " --zoom 0.5");
+        EXPECT_NEAR(closer / one, 1.96, 0.05) << camera;
+        EXPECT_NEAR(half / one, 0.25, 0.02) << camera;
+    }
+}
+
 // A 16-bit PNG holds what the 8-bit one rounds: each channel within half an 8-bit step (plus
 // half a 16-bit one) of the 8-bit file's.
 TEST_F(Cli, SixteenBitPngsKeepWhatEightBitsRound) {
@@ -214,7 +236,8 @@ TEST_F(Cli, OutputOptionsAFileCannotHoldAreRefusedBeforeAnyWork) {
                                        std::string("--png-bits 16 --out ") + (dir_ / "x.exr").string(),
                                        std::string("--background 2,0,0 --out ") + (dir_ / "x.png").string(),
                                        std::string("--background 1,1 --out ") + (dir_ / "x.png").string(),
-                                       std::string("--animation 0 --out ") + (dir_ / "x.png").string()}) {
+                                       std::string("--animation 0 --out ") + (dir_ / "x.png").string(),
+                                       std::string("--zoom 0 --out ") + (dir_ / "x.png").string()}) {
         const CommandRun r = run("render " + ply.string() + " --width 32 --height 32 " + options);
         EXPECT_EQ(r.exitCode, 2) << options << "\n" << r.output;
     }
