@@ -69,7 +69,7 @@ TEST(ObjLoader, AnMtlNamingAFolderWarnsAndFallsBack) {
     // the reader once took for a file of a nonsense size and failed to allocate.
     const fs::path dir = cuberille::testing::uniqueTempPath("obj-mtl-folder");
     fs::create_directories(dir / "materials.mtl");
-    for (const std::string mtllib : {std::string("mtllib materials.mtl\n"), std::string("mtllib \0\0fuzz.mtl\n", 18)}) {
+    for (const std::string& mtllib : {std::string("mtllib materials.mtl\n"), std::string("mtllib \0\0fuzz.mtl\n", 18)}) {
         std::vector<std::string> warnings;
         const auto meshes = parse(mtllib + "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl x\nf 1 2 3\n", &warnings, dir);
         ASSERT_EQ(meshes.size(), 1u);

@@ -205,7 +205,9 @@ TEST(RealData, AssetGeneratorModelsMatchTheirSampleImages) {
             verdict = "not compared: points and lines are not drawn (by design)";
         } else {
             r = apps::renderScene(o);
-            const scene::Scene s = scene::loadModelScene(model, {0.0f, 0.0f, -1, 0.0f}, [](const std::string&) {});
+            scene::ModelSceneOptions view;
+            view.azimuthDegrees = view.elevationDegrees = 0.0f;
+            const scene::Scene s = scene::loadModelScene(model, view, [](const std::string&) {});
             const scene::Bounds b = scene::boundsOf(s.meshes);
             // Our crop: the projected bounds.
             const glm::mat4 clip = s.camera.clipFromWorld(1.0f);

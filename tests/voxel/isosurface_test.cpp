@@ -98,7 +98,9 @@ TEST(Isosurface, SameVoxelsForAnyThreadCount) {
     auto run = [&](testing::ThreadCount count) {
         const testing::ThreadCountScope scope(count);
         voxel::VoxelModel m = voxel::extractIsosurface(bytes, {dims, voxel::SampleType::F32}, {0.0});
-        if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+        if (count.exact) {
+            EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+        }
         return m;
     };
     const voxel::VoxelModel one = run(testing::kThreadCounts[0]);

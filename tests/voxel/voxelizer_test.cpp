@@ -278,7 +278,9 @@ voxel::VoxelModel voxelizeWithThreads(testing::ThreadCount count, Separability s
     o.resolution = 128;
     o.separability = s;
     voxel::VoxelModel m = voxel::voxelizeMesh(*view, o);
-    if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+    if (count.exact) {
+        EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+    }
     return m;
 }
 
