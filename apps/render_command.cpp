@@ -85,14 +85,19 @@ raster::FramebufferDesc frameDesc(const RenderOptions& o, glm::vec4 background) 
 }
 
 // Resolves only what the view shows: the colour resolve runs for color and tiles alone.
-void finishView(const raster::Pipeline& p, View view, raster::Image& image, double& resolveMs) {
+// camera: the frame's, for the depth view's distances; null for 2D .tri scenes, whose depth view
+// is the stored depth itself.
+void finishView(const raster::Pipeline& p, View view, const scene::Camera* camera, raster::Image& image, double& resolveMs) {
     const double t0 = raster::nowMs();
     switch (view) {
         case View::Color:
         case View::Lod:
         case View::Visibility:
         case View::ShadowPixels: raster::resolveColor(p.framebuffer(), image); break;
-        case View::Depth: raster::resolveDepth(p.framebuffer(), image); break;
+        case View::Depth:
+            if (camera) raster::resolveViewDistance(p.framebuffer(), camera->nearPlane, camera->farPlane, image);
+            else raster::resolveDepth(p.framebuffer(), image);
+            break;
         case View::Overdraw: raster::visualizeOverdraw(p.framebuffer(), image); break;
         case View::Tiles: {
             raster::Image color;
@@ -133,6 +138,27 @@ glm::vec4 clearColorFor(const glm::vec4& display) {
     const float a = display.a;
     return {float(raster::decodeSrgb(display.r)) * a, float(raster::decodeSrgb(display.g)) * a,
             float(raster::decodeSrgb(display.b)) * a, a};
+}
+
+raster::Image legibleDepth(const raster::Image& distances) {
+    float nearest = std::numeric_limits<float>::infinity(), farthest = 0.0f;
+    for (size_t i = 0; i < distances.rgba.size() / 4; ++i)
+        if (distances.rgba[i * 4 + 3] > 0.0f) {
+            nearest = std::min(nearest, distances.rgba[i * 4]);
+            farthest = std::max(farthest, distances.rgba[i * 4]);
+        }
+    raster::Image out = distances;
+    const float span = farthest > nearest ? farthest - nearest : 1.0f;
+    for (size_t i = 0; i < out.rgba.size() / 4; ++i) {
+        const bool covered = distances.rgba[i * 4 + 3] > 0.0f;
+        // Evenly spaced in the file's codes: the grey is chosen as a display value, then decoded
+        // to the linear value the sRGB encoding turns back into it.
+        const double grey = covered ? kNearestGrey - (kNearestGrey - kFarthestGrey) * (distances.rgba[i * 4] - nearest) / span : 0.0;
+        const float linear = float(raster::decodeSrgb(grey));
+        for (int c = 0; c < 3; ++c) out.rgba[i * 4 + c] = linear;
+        out.rgba[i * 4 + 3] = 1.0f;
+    }
+    return out;
 }
 
 ImageWriteOptions imageWriteOptions(const RenderOptions& o) {
@@ -298,13 +324,14 @@ void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
 // One frame: submit(pipeline) records the draws, whose arrays stay alive until endFrame
 // (Pipeline::draw's contract), then the view is resolved.
 template <class Submit>
-void renderFrame(const RenderOptions& o, glm::vec4 sceneBackground, Submit&& submit, RenderResult& result) {
+void renderFrame(const RenderOptions& o, glm::vec4 sceneBackground, const scene::Camera* camera, Submit&& submit,
+                 RenderResult& result) {
     raster::Pipeline pipeline;
     pipeline.beginFrame(frameDesc(o, o.background ? clearColorFor(*o.background) : sceneBackground));
     submit(pipeline);
     pipeline.endFrame();
     result.stats = pipeline.stats();
-    finishView(pipeline, o.view, result.image, result.stats.times.resolveMs);
+    finishView(pipeline, o.view, camera, result.image, result.stats.times.resolveMs);
 }
 
 // --view shadow-pixels: the frame dimmed, and the pixels the shadow stage traced rays for in red.
@@ -332,7 +359,7 @@ void renderFrame(scene::Scene& s, const RenderOptions& o, SceneFrustumCull* cull
         result.shadows->totalMs = raster::nowMs() - t0;
     }
     if (culling) result.culling = culling->cull(s, float(o.width) / float(o.height));
-    renderFrame(o, s.background, [&](raster::Pipeline& p) {
+    renderFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) {
         s.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
     }, result);
     if (o.view == View::ShadowPixels) showShadowPixels(shadows->markedPixels(), result.image);
@@ -390,14 +417,14 @@ void renderVoxelModel(const RenderOptions& o, RenderResult& result) {
     // (the image is the same with or without it; only the work differs).
     const int frames = vo.occlusion ? 1 + o.warmup : 1;
     for (int f = 0; f < frames; ++f) {
-        renderFrame(o, s.background, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
+        renderFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
                     result);
         s.readOcclusion(result.stats);
     }
     if (o.debugCamera) {  // what the main camera's frame selected, seen from its side
         const scene::Camera debug = lod::debugCameraFor(s.camera);
         vo.viewFrom = &debug;
-        renderFrame(o, s.background, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
+        renderFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
                     result);
     }
 }
@@ -433,7 +460,7 @@ RenderResult renderAtScale(const RenderOptions& o, float windowScale) {
     for (glm::vec3& p : s.positions) p *= windowScale;
     result.loadMs = raster::nowMs() - t0;
     result.sceneTriangles = s.triangleCount();
-    renderFrame(o, glm::vec4(0.0f), [&](raster::Pipeline& p) { p.draw(s.drawCall()); }, result);
+    renderFrame(o, glm::vec4(0.0f), nullptr, [&](raster::Pipeline& p) { p.draw(s.drawCall()); }, result);
     return result;
 }
 
@@ -640,6 +667,12 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
 int runTurntable(const RenderOptions& o);
 int runAnimation(const RenderOptions& o);
 
+// The depth view of a 3D scene holds distances: EXR keeps them, 8-bit files get them legible.
+raster::Image imageToWrite(const RenderOptions& o, const std::filesystem::path& file, const raster::Image& image) {
+    if (o.view == View::Depth && !isTriFile(o) && imageFormatFor(file) != ImageFormat::Exr) return legibleDepth(image);
+    return image;
+}
+
 int runRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png or .exr)");
     // Refuse what cannot be written before any work: a bad extension, alpha in a JPEG.
@@ -656,7 +689,7 @@ int runRenderCommand(const RenderOptions& o) {
     if (o.turntable > 0) return runTurntable(o);
     if (o.animate > 0) return runAnimation(o);
     const RenderResult r = renderScene(o);
-    writeImageAtomically(o.out, r.image, imageWriteOptions(o));
+    writeImageAtomically(o.out, imageToWrite(o, o.out, r.image), imageWriteOptions(o));
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, statsToJson(o, r));
     if (!o.quiet) printSummary(o, o.out, r);
     return 0;
@@ -665,7 +698,7 @@ int runRenderCommand(const RenderOptions& o) {
 // Frame `index` of a sequence: OUT_00i.ext, its stats kept for {"frames": [...]}, its summary.
 void writeSequenceFrame(const RenderOptions& o, int index, const RenderResult& r, nlohmann::json& frames) {
     const std::filesystem::path file = frameFileName(o.out, index);
-    writeImageAtomically(file, r.image, imageWriteOptions(o));
+    writeImageAtomically(file, imageToWrite(o, file, r.image), imageWriteOptions(o));
     if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
     if (!o.quiet) printSummary(o, file, r);
 }

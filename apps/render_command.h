@@ -72,6 +72,14 @@ glm::vec4 clearColorFor(const glm::vec4& displayBackground);
 /// How a render's images are written: alpha when the background is not opaque, --png-bits.
 ImageWriteOptions imageWriteOptions(const RenderOptions& o);
 
+/// The depth view's greys in an 8-bit file: the nearest covered pixel this display value, the
+/// farthest this one, evenly spaced between (a 1920x1080 view of a deep scene uses every code
+/// between), uncovered pixels black. EXR keeps the distances themselves.
+inline constexpr double kNearestGrey = 1.0, kFarthestGrey = 0.15;
+
+/// The depth view's distances (resolveViewDistance) as greys an 8-bit file can show.
+raster::Image legibleDepth(const raster::Image& distances);
+
 /// R,G,B or R,G,B,A, each in [0, 1]; throws scene::InputError naming the option.
 glm::vec4 parseBackground(const std::string& text);
 

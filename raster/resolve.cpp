@@ -111,6 +111,30 @@ void resolveDepth(const Framebuffer& fb, Image& out) {
     });
 }
 
+void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane, Image& out) {
+    prepare(fb, out);
+    const int n = fb.samples();
+    const bool reversed = fb.desc().depthConvention == DepthConvention::Reversed;
+    const double nearD = nearPlane, farD = farPlane;
+    forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
+        double sum = 0;
+        int covered = 0;
+        if (fb.tileTouched(tile)) {
+            const float* keys = fb.tileDepth(tile) + first;
+            for (int i = 0; i < n; ++i) {
+                // The key back to standard depth (raster/depth.h); the far plane is "nothing".
+                const double d = reversed ? 1.0 + double(keys[i]) : double(keys[i]);
+                if (!(d < 1.0)) continue;
+                // Inverting d = f (D - n) / ((f - n) D), the perspective depth of distance D.
+                sum += farD * nearD / (farD - d * (farD - nearD));
+                ++covered;
+            }
+        }
+        const float distance = covered ? float(sum / covered) : 0.0f;
+        store(out, x, y, glm::vec4(distance, distance, distance, float(covered) / float(n)));
+    });
+}
+
 void visualizeOverdraw(const Framebuffer& fb, Image& out) {
     prepare(fb, out);
     const auto& counts = fb.overdrawCounts();

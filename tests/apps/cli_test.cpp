@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <span>
 #include <sstream>
 #include <sys/wait.h>
@@ -17,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/image_io.h"
+#include "apps/render_command.h"
 #include "tests/scene/gltf_builder.h"
 #include "tests/scene/ply_builder.h"
 #include "voxel/cvox_file.h"
@@ -196,6 +198,33 @@ TEST_F(Cli, ZoomMagnifiesTheViewByItsFactor) {
         EXPECT_NEAR(closer / one, 1.96, 0.05) << camera;
         EXPECT_NEAR(half / one, 0.25, 0.02) << camera;
     }
+}
+
+// The depth view of a 3D scene: EXR holds each covered pixel's distance along the view axis
+// (world units), alpha the coverage; an 8-bit file shows those distances as greys spread over
+// the codes from kNearestGrey to kFarthestGrey, black where nothing was drawn.
+TEST_F(Cli, TheDepthViewIsDistanceInExrAndLegibleInPng) {
+    const fs::path ply = write("square.ply", kSquarePly);
+    const std::string common = "render " + ply.string() + " --width 640 --height 480 --azimuth 60 --elevation 0 --view depth ";
+    ASSERT_EQ(run(common + "--out " + (dir_ / "d.exr").string()).exitCode, 0);
+    ASSERT_EQ(run(common + "--out " + (dir_ / "d.png").string()).exitCode, 0);
+    const auto exr = cuberille::apps::readImage(dir_ / "d.exr"), png = cuberille::apps::readImage(dir_ / "d.png");
+    float nearest = 1e30f, farthest = 0.0f;
+    std::set<int> codes;
+    for (size_t i = 0; i < exr.rgba.size() / 4; ++i) {
+        if (exr.rgba[i * 4 + 3] == 0.0f) {
+            EXPECT_EQ(png.rgba[i * 4], 0.0f) << i;  // background black
+            continue;
+        }
+        nearest = std::min(nearest, exr.rgba[i * 4]);
+        farthest = std::max(farthest, exr.rgba[i * 4]);
+        if (exr.rgba[i * 4 + 3] == 1.0f) codes.insert(int(std::lround(png.rgba[i * 4] * 255.0f)));
+    }
+    // The square (side 2) seen at 60 degrees: its near and far edges lie 2 sin 60° apart along the view.
+    EXPECT_NEAR(farthest - nearest, 2.0f * std::sin(glm::radians(60.0f)), 0.05f);  // to within a pixel at each edge
+    EXPECT_EQ(*codes.rbegin(), 255);
+    EXPECT_NEAR(*codes.begin(), cuberille::apps::kFarthestGrey * 255.0, 3.0);
+    EXPECT_GT(codes.size(), 100u) << "an 8-bit depth view should use the codes between";
 }
 
 // A 16-bit PNG holds what the 8-bit one rounds: each channel within half an 8-bit step (plus

@@ -97,13 +97,35 @@ TEST_F(ImageFiles, PngReadsEveryColourTypeAndBitDepthAsTheFilesValues) {
     expectPixel(im, 1, 0, 0.0f, 0.0f, 1.0f, 1.0f);
 }
 
-TEST_F(ImageFiles, PngAndExrRoundTripWhatTheRendererWrites) {
+raster::Image smallGradient() {
     raster::Image image;
     image.width = 3;
     image.height = 2;
     for (int i = 0; i < 6; ++i) image.rgba.insert(image.rgba.end(), {i / 5.0f, 1.0f - i / 5.0f, 0.25f, 1.0f});
+    return image;
+}
+
+// Under clang 14's AddressSanitizer (make asan) this process's LeakSanitizer crashes at exit
+// ("Tracer caught signal 11" on a bogus dynamic-TLS range) after an EXR is written and read back
+// in-process through the dlopen'd OpenImageIO module; the test itself passes. The release run
+// checks it; the CLI's own EXR writes (Cli.RendersTriSceneToExrAndPng) run under ASan too.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define CUBERILLE_UNDER_ASAN 1
+#endif
+#endif
+
+TEST_F(ImageFiles, ExrRoundTripsTheRenderersFloatsExactly) {
+#ifdef CUBERILLE_UNDER_ASAN
+    GTEST_SKIP() << "LeakSanitizer (clang 14) crashes at exit after in-process EXR I/O through the dlopen'd module";
+#endif
+    const raster::Image image = smallGradient();
     apps::writeImageAtomically(dir_ / "out.exr", image);
     EXPECT_EQ(apps::readImage(dir_ / "out.exr").rgba, image.rgba);  // linear floats, exactly
+}
+
+TEST_F(ImageFiles, PngRoundTripsWhatTheRendererWrites) {
+    const raster::Image image = smallGradient();
     apps::writeImageAtomically(dir_ / "out.png", image);
     const raster::Image png = apps::readImage(dir_ / "out.png");
     ASSERT_EQ(png.width, 3);

@@ -119,6 +119,7 @@ raster::Image renderField(int msaa, apps::View view) {
 TEST(Golden, FieldSceneLambertAt4Samples) {
     compareWithGolden("field_msaa4", renderField(4, apps::View::Color));
 }
+// The depth view's distances along the view axis (world units), alpha the coverage.
 TEST(Golden, FieldSceneDepthView) {
     compareWithGolden("field_depth", renderField(1, apps::View::Depth));
 }

@@ -255,6 +255,51 @@ TEST(DepthView, EachPixelIsTheMeanOfItsSampleDepthsReadAsStandardDepth) {
     }
 }
 
+// The depth view for people: the distance along the view axis each stored depth stands for,
+// inverted from the perspective depth d = f (D - n) / ((f - n) D), averaged over covered samples
+// only, with the covered fraction as alpha. The geometry of the test above: column 8 holds two
+// samples of the left rectangle, and below row 8 two cleared ones.
+TEST(DepthView, ViewDistanceInvertsThePerspectiveDepthOverCoveredSamples) {
+    const double n = 0.5, f = 10.0;
+    auto distance = [&](double d) { return float(f * n / (f - d * (f - n))); };
+    for (const auto convention : {raster::DepthConvention::Standard, raster::DepthConvention::Reversed}) {
+        const bool reversed = convention == raster::DepthConvention::Reversed;
+        const float left = 0.25f, right = 0.75f;
+        const std::vector<glm::vec3> positions = {{0, 0, left},  {8.5f, 0, left},  {8.5f, 16, left},
+                                                  {0, 0, left},  {8.5f, 16, left}, {0, 16, left},
+                                                  {8.5f, 0, right}, {16, 0, right}, {16, 8, right},
+                                                  {8.5f, 0, right}, {16, 8, right}, {8.5f, 8, right}};
+        raster::DrawCall d;
+        d.space = raster::PositionSpace::Window;
+        d.positions = positions;
+        d.state.colorWriteMask = 0;
+        raster::FramebufferDesc desc = frame(16, 16, 4);
+        desc.depthConvention = convention;
+        raster::Pipeline p;
+        drawFrame(p, desc, d);
+        raster::Image view;
+        raster::resolveViewDistance(p.framebuffer(), float(n), float(f), view);
+        // A window depth as the resolve reads its key back: reversed stores -z, read as 1 - z.
+        auto seen = [&](float z) { return reversed ? 1.0 - double(z) : double(z); };
+        auto D = [&](float z) { return f * n / (f - seen(z) * (f - n)); };  // in double, as the resolve sums
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 16; ++x) {
+                const float* px = view.pixel(x, y);
+                if (x < 8) {
+                    EXPECT_EQ(px[0], distance(seen(left))) << x << "," << y;
+                    EXPECT_EQ(px[3], 1.0f);
+                } else if (x == 8) {
+                    const float both = float((2 * D(left) + (y < 8 ? 2 * D(right) : 0.0)) / (y < 8 ? 4 : 2));
+                    EXPECT_EQ(px[0], both) << x << "," << y;
+                    EXPECT_EQ(px[3], y < 8 ? 1.0f : 0.5f) << x << "," << y;
+                } else {
+                    EXPECT_EQ(px[0], y < 8 ? distance(seen(right)) : 0.0f) << x << "," << y;
+                    EXPECT_EQ(px[3], y < 8 ? 1.0f : 0.0f) << x << "," << y;
+                }
+            }
+    }
+}
+
 // ---- plain passes: depth and a flat colour at one sample (visibility buffers, shadow maps) -------
 
 /// A dense patch of small triangles over a few larger ones, as a scan looks from afar: most
