@@ -217,6 +217,22 @@ TEST(DepthOnlyTarget, RefusesColourWritesAndResolvesToTheClearColour) {
     EXPECT_THROW(p.draw(d), std::invalid_argument);
 }
 
+/// Two window-space rectangles, depth only, at 4 samples on 16x16 pixels: `left` spans x < 8.5
+/// on every row, `right` x > 8.5 on rows 0-7 (the DepthView tests' geometry).
+void drawMeetingRectangles(raster::Pipeline& p, raster::DepthConvention convention, float left, float right) {
+    const std::vector<glm::vec3> positions = {{0, 0, left},  {8.5f, 0, left},  {8.5f, 16, left},
+                                              {0, 0, left},  {8.5f, 16, left}, {0, 16, left},
+                                              {8.5f, 0, right}, {16, 0, right}, {16, 8, right},
+                                              {8.5f, 0, right}, {16, 8, right}, {8.5f, 8, right}};
+    raster::DrawCall d;
+    d.space = raster::PositionSpace::Window;
+    d.positions = positions;
+    d.state.colorWriteMask = 0;
+    raster::FramebufferDesc desc = frame(16, 16, 4);
+    desc.depthConvention = convention;
+    drawFrame(p, desc, d);
+}
+
 TEST(DepthView, EachPixelIsTheMeanOfItsSampleDepthsReadAsStandardDepth) {
     // Two window-space rectangles meet on the line x = 8.5 through column 8's centres: of the 4x
     // samples, (-2,-6)/16 and (-6,2)/16 lie left of it, (6,-2)/16 and (2,6)/16 right. The left
@@ -227,18 +243,8 @@ TEST(DepthView, EachPixelIsTheMeanOfItsSampleDepthsReadAsStandardDepth) {
     for (const auto convention : {raster::DepthConvention::Standard, raster::DepthConvention::Reversed}) {
         const bool reversed = convention == raster::DepthConvention::Reversed;
         const float left = 0.25f, right = 0.75f;
-        const std::vector<glm::vec3> positions = {{0, 0, left},  {8.5f, 0, left},  {8.5f, 16, left},
-                                                  {0, 0, left},  {8.5f, 16, left}, {0, 16, left},
-                                                  {8.5f, 0, right}, {16, 0, right}, {16, 8, right},
-                                                  {8.5f, 0, right}, {16, 8, right}, {8.5f, 8, right}};
-        raster::DrawCall d;
-        d.space = raster::PositionSpace::Window;
-        d.positions = positions;
-        d.state.colorWriteMask = 0;
-        raster::FramebufferDesc desc = frame(16, 16, 4);
-        desc.depthConvention = convention;
         raster::Pipeline p;
-        drawFrame(p, desc, d);
+        drawMeetingRectangles(p, convention, left, right);
         raster::Image view;
         raster::resolveDepth(p.framebuffer(), view);
         auto seen = [&](float z) { return reversed ? 1.0f - z : z; };  // a stored depth as the view reads it
@@ -265,18 +271,8 @@ TEST(DepthView, ViewDistanceInvertsThePerspectiveDepthOverCoveredSamples) {
     for (const auto convention : {raster::DepthConvention::Standard, raster::DepthConvention::Reversed}) {
         const bool reversed = convention == raster::DepthConvention::Reversed;
         const float left = 0.25f, right = 0.75f;
-        const std::vector<glm::vec3> positions = {{0, 0, left},  {8.5f, 0, left},  {8.5f, 16, left},
-                                                  {0, 0, left},  {8.5f, 16, left}, {0, 16, left},
-                                                  {8.5f, 0, right}, {16, 0, right}, {16, 8, right},
-                                                  {8.5f, 0, right}, {16, 8, right}, {8.5f, 8, right}};
-        raster::DrawCall d;
-        d.space = raster::PositionSpace::Window;
-        d.positions = positions;
-        d.state.colorWriteMask = 0;
-        raster::FramebufferDesc desc = frame(16, 16, 4);
-        desc.depthConvention = convention;
         raster::Pipeline p;
-        drawFrame(p, desc, d);
+        drawMeetingRectangles(p, convention, left, right);
         raster::Image view;
         raster::resolveViewDistance(p.framebuffer(), float(n), float(f), view);
         // A window depth as the resolve reads its key back: reversed stores -z, read as 1 - z.
