@@ -85,7 +85,7 @@ void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNa
                        "Write N frames turning around the scene (OUT_000.png, OUT_001.png, ...)")
         ->check(CLI::Range(1, 3600));
     render->add_option("--animate", o.animate,
-                       "glTF: write N frames of the first animation from --time, --fps apart (OUT_000.png, ...)")
+                       "glTF: write N frames of the animation (--animation) from --time, --fps apart (OUT_000.png, ...)")
         ->check(CLI::Range(1, 3600));
     render->add_option("--fps", o.fps, "With --animate: frames a second of animation time")->capture_default_str();
     render->add_option("--supersample", o.supersample,

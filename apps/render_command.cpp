@@ -674,7 +674,7 @@ raster::Image imageToWrite(const RenderOptions& o, const std::filesystem::path& 
 }
 
 int runRenderCommand(const RenderOptions& o) {
-    if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png or .exr)");
+    if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png, .exr or .jpg)");
     // Refuse what cannot be written before any work: a bad extension, alpha in a JPEG.
     if (imageFormatFor(o.out) == ImageFormat::Jpeg && imageWriteOptions(o).alpha)
         throw scene::InputError("--background: an opacity below 1 needs a .png or .exr output (JPEG has no alpha)");
@@ -736,7 +736,7 @@ int runTurntable(const RenderOptions& o) {
     return 0;
 }
 
-// --animate N: frame i poses the first animation at --time + i / --fps and is written as
+// --animate N: frame i poses the animation (--animation) at --time + i / --fps and is written as
 // OUT_00i.ext. The glTF loader poses at load, so each frame loads the file again; the frustum
 // cull's hierarchy and the shadow stage's are built on the first pose and refitted to each next
 // one (rebuilt when Lauterbach's criterion fires), which --stats reports per frame.
