@@ -24,10 +24,20 @@ std::string nameOf(int64_t target) {
 }
 
 /// Targets compiled into the back end (HWY_TARGETS: this library is built with the same
-/// HWY_DISABLED_TARGETS as tile_raster.cpp) that the CPU runs, before any restriction.
+/// HWY_DISABLED_TARGETS as tile_raster.cpp) that the CPU runs. Asked once, before any
+/// restriction: restrictions are made only by useInstructionSet(), which asks first.
 int64_t compiledAndSupported() {
-    hwy::DisableTargets(0);  // SupportedTargets() honours the last restriction; undo it to ask
-    return hwy::SupportedTargets() & HWY_TARGETS;
+    static const int64_t targets = hwy::SupportedTargets() & HWY_TARGETS;
+    return targets;
+}
+
+int64_t lowestBit(int64_t targets) { return targets & -targets; }
+
+/// Names of a set of targets, widest first (Highway numbers better targets with lower bits).
+std::vector<std::string> namesOf(int64_t targets) {
+    std::vector<std::string> names;
+    for (int64_t rest = targets; rest != 0; rest &= rest - 1) names.push_back(nameOf(lowestBit(rest)));
+    return names;
 }
 
 std::string joined(const std::vector<std::string>& names) {
@@ -36,32 +46,17 @@ std::string joined(const std::vector<std::string>& names) {
     return out;
 }
 
-int64_t lowestBit(int64_t targets) { return targets & -targets; }
-
 }  // namespace
 
-std::vector<std::string> availableInstructionSets() {
-    const int64_t restricted = hwy::SupportedTargets();
-    std::vector<std::string> names;
-    // Highway numbers better targets with lower bits: walk from the lowest set bit up.
-    for (int64_t rest = compiledAndSupported(); rest != 0; rest &= rest - 1) names.push_back(nameOf(lowestBit(rest)));
-    // Put back the restriction compiledAndSupported() lifted.
-    const int64_t best = lowestBit(restricted & HWY_TARGETS);
-    hwy::DisableTargets(best - 1);
-    return names;
-}
+std::vector<std::string> availableInstructionSets() { return namesOf(compiledAndSupported()); }
 
-std::vector<std::string> compiledInstructionSets() {
-    std::vector<std::string> names;
-    for (int64_t rest = HWY_TARGETS; rest != 0; rest &= rest - 1) names.push_back(nameOf(lowestBit(rest)));
-    return names;
-}
+std::vector<std::string> compiledInstructionSets() { return namesOf(HWY_TARGETS); }
 
 std::string activeInstructionSet() { return nameOf(lowestBit(hwy::SupportedTargets() & HWY_TARGETS)); }
 
 void useInstructionSet(std::string_view name) {
     const int64_t all = compiledAndSupported();
-    if (name == "best" || name.empty()) return;  // compiledAndSupported() lifted any restriction
+    if (name == "best" || name.empty()) return hwy::DisableTargets(0);
     for (int64_t rest = all; rest != 0; rest &= rest - 1) {
         const int64_t target = lowestBit(rest);
         // Disabling every better target (the lower bits) leaves this one the best, and makes
