@@ -27,7 +27,6 @@ ImageFormat imageFormatFor(const std::filesystem::path& path) {
                             "' (use .png, .exr or .jpg)");
 }
 
-
 namespace {
 
 /// Straight (unassociated) colour of pixel i's channel c: what PNG stores beside alpha.
@@ -75,17 +74,16 @@ void writeImageAtomically(const std::filesystem::path& path, const raster::Image
         std::filesystem::remove(temp, ignored);
     };
     try {
-        if (format == ImageFormat::Exr) {
-            const std::string error = oiioModule().writeExr(temp.string(), image);
-            if (!error.empty()) throw std::runtime_error(path.string() + ": cannot write image: " + error);
-        } else if (format == ImageFormat::Jpeg) {
-            const std::string error = oiioModule().writeJpeg(temp.string(), image.width, image.height,
-                                                             encodedPixels(image, false, 8), options.jpegQuality);
-            if (!error.empty()) throw std::runtime_error(path.string() + ": cannot write image: " + error);
-        } else {
+        std::string error;  // from the OpenImageIO module
+        if (format == ImageFormat::Exr)
+            error = oiioModule().writeExr(temp.string(), image);
+        else if (format == ImageFormat::Jpeg)
+            error = oiioModule().writeJpeg(temp.string(), image.width, image.height, encodedPixels(image, false, 8),
+                                           options.jpegQuality);
+        else
             writePng(temp, image.width, image.height, options.alpha ? 4 : 3, options.pngBits,
                      encodedPixels(image, options.alpha, options.pngBits));
-        }
+        if (!error.empty()) throw std::runtime_error(path.string() + ": cannot write image: " + error);
     } catch (...) {
         discardTemp();
         throw;

@@ -622,12 +622,13 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
     const double other = std::max(0.0, t.frameMs - t.vertexMs - t.frontEndMs - t.backEndMs);
     // A voxel model's frame draws the faces and source triangles its blocks chose, not the
     // model's source triangle count.
+    std::printf(" ");
     if (r.voxel)
-        std::printf("  %llu voxel faces and %llu source triangles drawn,", (unsigned long long)r.voxel->facesEmitted,
+        std::printf(" %llu voxel faces and %llu source triangles drawn,", (unsigned long long)r.voxel->facesEmitted,
                     (unsigned long long)r.voxel->hybridTriangles);
-    std::printf(" %s%llu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms = frame %.1f "
+    std::printf(" %llu triangles in, %llu set up, %llu culled, %llu clipped; %.1f ms = frame %.1f "
                 "(vertex %.1f, front end %.1f, back end %.1f, other %.1f) + resolve %.1f\n",
-                r.voxel ? "" : " ", (unsigned long long)(r.voxel ? c.trianglesIn : r.sceneTriangles),
+                (unsigned long long)(r.voxel ? c.trianglesIn : r.sceneTriangles),
                 (unsigned long long)c.trianglesSetUp,
                 (unsigned long long)(c.trianglesCulled + c.trianglesClipRejected),
                 (unsigned long long)c.trianglesClipped, t.frameMs + t.resolveMs, t.frameMs, t.vertexMs,
@@ -676,10 +677,11 @@ raster::Image imageToWrite(const RenderOptions& o, const std::filesystem::path& 
 int runRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png, .exr or .jpg)");
     // Refuse what cannot be written before any work: a bad extension, alpha in a JPEG.
-    if (imageFormatFor(o.out) == ImageFormat::Jpeg && imageWriteOptions(o).alpha)
+    const ImageFormat format = imageFormatFor(o.out);
+    if (format == ImageFormat::Jpeg && imageWriteOptions(o).alpha)
         throw scene::InputError("--background: an opacity below 1 needs a .png or .exr output (JPEG has no alpha)");
     if (o.pngBits != 8 && o.pngBits != 16) throw scene::InputError("--png-bits: 8 or 16");
-    if (o.pngBits != 8 && imageFormatFor(o.out) != ImageFormat::Png)
+    if (o.pngBits != 8 && format != ImageFormat::Png)
         throw scene::InputError("--png-bits: only for .png outputs");
     requireOutputPath(o.out, "--out");
     requireOutputPath(o.statsPath, "--stats");
