@@ -9,6 +9,7 @@
 
 #include "apps/oiio_module.h"
 #include "apps/png_file.h"
+#include "render/display_image.h"
 #include "raster/parallel.h"
 #include "raster/srgb.h"
 
@@ -29,36 +30,6 @@ ImageFormat imageFormatFor(const std::filesystem::path& path) {
 
 namespace {
 
-/// Straight (unassociated) colour of pixel i's channel c: what PNG stores beside alpha.
-float straightChannel(const raster::Image& image, size_t i, int c, bool alpha) {
-    const float value = image.rgba[i * 4 + c], a = image.rgba[i * 4 + 3];
-    if (!alpha) return value;
-    return a > 0.0f ? value / a : 0.0f;
-}
-
-/// The image's pixels as 8- or 16-bit samples (16-bit ones as host-order pairs of bytes, as
-/// libspng takes them): sRGB-encoded colour, then linear alpha when asked for. By rows on every
-/// core: at 1920x1080 the encoding is 6M lookups, a sixth of a small render's whole process
-/// when it ran on one.
-std::vector<uint8_t> encodedPixels(const raster::Image& image, bool alpha, int bits) {
-    const int channels = alpha ? 4 : 3, bytesPerSample = bits / 8;
-    std::vector<uint8_t> out(size_t(image.width) * image.height * channels * bytesPerSample);
-    raster::parallelFor(size_t(image.height), [&](size_t y) {
-        for (size_t i = y * size_t(image.width); i < (y + 1) * size_t(image.width); ++i)
-            for (int c = 0; c < channels; ++c) {
-                const float v = c == 3 ? std::clamp(image.rgba[i * 4 + 3], 0.0f, 1.0f) : straightChannel(image, i, c, alpha);
-                const size_t at = (i * channels + c) * bytesPerSample;
-                if (bits == 8) {
-                    out[at] = c == 3 ? uint8_t(std::lround(v * 255.0f)) : raster::encodeSrgb8(v);
-                } else {
-                    const uint16_t sample = c == 3 ? uint16_t(std::lround(v * 65535.0f)) : raster::encodeSrgb16(v);
-                    std::memcpy(&out[at], &sample, 2);
-                }
-            }
-    });
-    return out;
-}
-
 }  // namespace
 
 void writeImageAtomically(const std::filesystem::path& path, const raster::Image& image, const ImageWriteOptions& options) {
@@ -78,11 +49,11 @@ void writeImageAtomically(const std::filesystem::path& path, const raster::Image
         if (format == ImageFormat::Exr)
             error = oiioModule().writeExr(temp.string(), image);
         else if (format == ImageFormat::Jpeg)
-            error = oiioModule().writeJpeg(temp.string(), image.width, image.height, encodedPixels(image, false, 8),
+            error = oiioModule().writeJpeg(temp.string(), image.width, image.height, render::encodeDisplayPixels(image, false, 8),
                                            options.jpegQuality);
         else
             writePng(temp, image.width, image.height, options.alpha ? 4 : 3, options.pngBits,
-                     encodedPixels(image, options.alpha, options.pngBits));
+                     render::encodeDisplayPixels(image, options.alpha, options.pngBits));
         if (!error.empty()) throw std::runtime_error(path.string() + ": cannot write image: " + error);
     } catch (...) {
         discardTemp();

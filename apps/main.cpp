@@ -374,7 +374,7 @@ int main(int argc, char** argv) {
     try {
         if (app.got_subcommand("render")) {
             renderOptions.view = cuberille::apps::parseView(renderNames.view);
-            renderOptions.shadows.mode = cuberille::apps::parseShadowMode(renderNames.shadows);
+            renderOptions.shadows.mode = cuberille::render::parseShadowMode(renderNames.shadows);
             renderOptions.textureFilter = cuberille::apps::parseTextureFilter(renderNames.textureFilter);
             renderOptions.depth = cuberille::apps::parseDepthConvention(renderNames.depth);
             renderOptions.bvhUpdate = cuberille::apps::parseBvhUpdate(renderNames.bvhUpdate);

@@ -18,7 +18,7 @@
 #include <filesystem>
 #include <random>
 
-#include "apps/scene_shadows.h"
+#include "render/scene_shadows.h"
 #include "bench/bench_support.h"
 #include "bench/procedural_meshes.h"
 #include "raster/clock.h"
@@ -333,7 +333,7 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
                 rt::ShadowOptions o = base;
                 o.mode = mode;
                 o.mapSizeTexels = size;
-                runs.push_back({std::string(apps::shadowModeName(mode)) + " " + std::to_string(size), o});
+                runs.push_back({std::string(render::shadowModeName(mode)) + " " + std::to_string(size), o});
             }
     }
     std::printf("\n# shadows on %s (%zu triangles), %dx%d: stage ms (median of 3; BVH build and edge adjacency once, not included), share "
@@ -345,9 +345,9 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
     std::vector<float> reference;
     double referenceMs = 0.0, referenceMaskMs = 0.0;
     for (const Run& run : runs) {
-        apps::SceneShadows shadows(*s, run.options);
+        render::SceneShadows shadows(*s, run.options);
         std::vector<float> mask;
-        apps::ShadowFrameStats stats;
+        render::ShadowFrameStats stats;
         std::vector<double> surfacesMs, mapMs, maskMs;  // the stage's parts, medians apart
         const double ms = medianMs(3, [&] {
             const raster::Lighting lit = shadows.run(*s, width, height, stats);

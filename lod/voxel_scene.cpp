@@ -48,7 +48,8 @@ void VoxelScene::initialise(float azimuthDegrees, float elevationDegrees) {
         hi = glm::max(hi, bhi);
     }
     if (model.blocks.empty()) lo = model.grid.origin, hi = model.grid.origin + model.grid.extent;
-    camera = scene::frameBounds(glm::vec3(lo), glm::vec3(hi), azimuthDegrees, elevationDegrees);
+    boundsMin_ = glm::vec3(lo);
+    boundsMax_ = glm::vec3(hi);
     parent_.resize(model.blocks.size());
     for (uint32_t i = 0; i < model.blocks.size(); ++i) parent_[i] = i;
     for (uint32_t i = 0; i < model.blocks.size(); ++i) {
@@ -56,10 +57,17 @@ void VoxelScene::initialise(float azimuthDegrees, float elevationDegrees) {
         for (int k = 0; k < __builtin_popcount(b.childMask); ++k) parent_[b.firstChild + uint32_t(k)] = i;
     }
     visibility_.assign(model.blocks.size(), kUnknown);
+    frameFrom(azimuthDegrees, elevationDegrees);
+}
+
+void VoxelScene::frameFrom(float azimuthDegrees, float elevationDegrees) {
+    camera = scene::frameBounds(boundsMin_, boundsMax_, azimuthDegrees, elevationDegrees);
     const glm::vec3 toCamera = glm::normalize(camera.position - camera.target);
     lighting = raster::Lighting::directional(glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f)), glm::vec3(0.85f),
                                              glm::vec3(0.12f));
 }
+
+void VoxelScene::resetOcclusion() { std::fill(visibility_.begin(), visibility_.end(), kUnknown); }
 
 VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int height, const VoxelRenderOptions& o) {
     VoxelFrameStats stats;

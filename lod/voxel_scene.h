@@ -76,6 +76,11 @@ public:
     raster::Lighting lighting;
     glm::vec4 background{0.05f, 0.06f, 0.08f, 1.0f};
 
+    /// The camera and key light framed again from other angles (as the constructor frames them).
+    void frameFrom(float azimuthDegrees, float elevationDegrees);
+    /// Forgets what occlusion culling learnt from earlier frames: the next frame tests every block.
+    void resetOcclusion();
+
     /// The model's layout (with its data when it is all in memory).
     const voxel::VoxelModel& model() const { return source_->layout(); }
 
@@ -111,6 +116,8 @@ private:
 
     enum Visibility : uint8_t { kUnknown = 0, kVisible = 1, kHidden = 2 };
     void initialise(float azimuthDegrees, float elevationDegrees);
+
+    glm::vec3 boundsMin_{0.0f}, boundsMax_{0.0f};  // of every block, for the framing
 
     std::unique_ptr<BlockSource> owned_;  // a model in memory
     BlockSource* source_;

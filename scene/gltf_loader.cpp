@@ -23,11 +23,16 @@ namespace {
 
 constexpr int kMaxNodeDepth = 256;
 
+using TextureCache = std::map<std::pair<int, bool>, std::shared_ptr<const raster::Texture>>;  // (index, sRGB)
+
+// One pose of a parsed document. The texture cache and the warnings already given belong to the
+// document, so a second pose decodes no texture and repeats no warning.
 class GltfReader {
 public:
     GltfReader(const tinygltf::Model& model, const std::string& file, const WarningSink& warn, float timeSeconds,
-               const std::string& animation)
-        : model_(model), file_(file), warn_(warn), timeSeconds_(timeSeconds), animation_(chooseAnimation(animation)) {}
+               const std::string& animation, TextureCache& textures, std::set<std::string>& warned)
+        : model_(model), file_(file), warn_(warn), warned_(warned), textures_(textures), timeSeconds_(timeSeconds),
+          animation_(chooseAnimation(animation)) {}
 
     GltfScene read() {
         warnAboutUnsupported();
@@ -54,7 +59,7 @@ public:
             for (size_t m = 0; m < model_.meshes.size(); ++m) addMesh(int(m), glm::mat4(1.0f), -1, -1);
         }
         stats_.texturesDecoded = 0;
-        for (const auto& [key, texture] : textures_) stats_.texturesDecoded += texture != nullptr;
+        for (const auto& key : texturesUsed_) stats_.texturesDecoded += textures_.at(key) != nullptr;
         return {std::move(meshes_), std::move(cameras_), std::move(lights_), stats_};
     }
 
@@ -639,7 +644,10 @@ private:
     // other slots hold linear data.
     std::shared_ptr<const raster::Texture> textureFor(int index, bool srgb, const std::string& where) {
         const auto key = std::make_pair(index, srgb);
-        if (auto it = textures_.find(key); it != textures_.end()) return it->second;
+        if (auto it = textures_.find(key); it != textures_.end()) {
+            texturesUsed_.insert(key);
+            return it->second;
+        }
         std::shared_ptr<const raster::Texture> result;
         if (index >= int(model_.textures.size())) fail(where, "texture " + std::to_string(index) + " does not exist");
         const tinygltf::Texture& tex = model_.textures[index];
@@ -681,6 +689,7 @@ private:
                                                        filter);
         }
         textures_[key] = result;
+        texturesUsed_.insert(key);
         return result;
     }
 
@@ -703,12 +712,13 @@ private:
     const tinygltf::Model& model_;
     const std::string& file_;
     const WarningSink& warn_;
-    std::set<std::string> warned_;
+    std::set<std::string>& warned_;
     std::vector<Mesh> meshes_;
     std::vector<Camera> cameras_;
     std::vector<raster::Light> lights_;
     LoadStats stats_;
-    std::map<std::pair<int, bool>, std::shared_ptr<const raster::Texture>> textures_;  // (index, sRGB)
+    TextureCache& textures_;
+    std::set<std::pair<int, bool>> texturesUsed_;  // by this pose: its texturesDecoded
     float timeSeconds_;
     bool animationChosen_ = false;
     size_t animation_;  // the posed animation's index (0 when the file has none)
@@ -764,12 +774,19 @@ std::string glbContainerProblem(const std::string& bytes) {
 
 }  // namespace
 
-GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds,
-                   const std::string& animation) {
+struct GltfDocument::Parsed {
+    tinygltf::Model model;
+    std::string file;
+    TextureCache textures;
+    std::set<std::string> warned;
+};
+
+GltfDocument::GltfDocument(const std::filesystem::path& path, const WarningSink& warn) : parsed_(std::make_unique<Parsed>()) {
     const std::string file = path.string();
+    parsed_->file = file;
     if (!std::filesystem::exists(path)) throw InputError(file + ": cannot open file");
     tinygltf::TinyGLTF loader;
-    tinygltf::Model model;
+    tinygltf::Model& model = parsed_->model;
     std::string error, warning;
     const bool binary = fileKindOf(path) == FileKind::Glb;
     bool ok = false;
@@ -786,7 +803,24 @@ GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, f
     }
     if (!warning.empty()) warn(file + ": " + warning);
     if (!ok) throw InputError(file + ": " + placeOfLoadError(binary, error));
-    return GltfReader(model, file, warn, timeSeconds, animation).read();
+}
+
+GltfDocument::GltfDocument(GltfDocument&&) noexcept = default;
+GltfDocument::~GltfDocument() = default;
+
+GltfScene GltfDocument::pose(float timeSeconds, const std::string& animation, const WarningSink& warn) const {
+    return GltfReader(parsed_->model, parsed_->file, warn, timeSeconds, animation, parsed_->textures, parsed_->warned).read();
+}
+
+std::vector<std::string> GltfDocument::animationNames() const {
+    std::vector<std::string> names;
+    for (const tinygltf::Animation& a : parsed_->model.animations) names.push_back(a.name);
+    return names;
+}
+
+GltfScene loadGltf(const std::filesystem::path& path, const WarningSink& warn, float timeSeconds,
+                   const std::string& animation) {
+    return GltfDocument(path, warn).pose(timeSeconds, animation, warn);
 }
 
 }  // namespace cuberille::scene

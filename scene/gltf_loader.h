@@ -20,6 +20,8 @@
 // (mesh, primitive, accessor, node) and the problem.
 
 #include <filesystem>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "raster/draw.h"
@@ -35,6 +37,28 @@ struct GltfScene {
     std::vector<Camera> cameras;  // the scene's camera nodes, in traversal order
     std::vector<raster::Light> lights;  // KHR_lights_punctual, in node order
     LoadStats stats;
+};
+
+/// A glTF file parsed once and posed as often as asked: a renderer that draws several times or
+/// several frames of an animation reads and checks the file once and decodes each texture once.
+/// Not safe to pose from two threads at once (the texture cache is filled as poses need it).
+class GltfDocument {
+public:
+    /// Reads and parses the file; throws InputError for an unreadable or malformed container.
+    GltfDocument(const std::filesystem::path& path, const WarningSink& warn);
+    GltfDocument(GltfDocument&&) noexcept;
+    ~GltfDocument();
+
+    /// The default scene posed as loadGltf describes. A warning already given by an earlier
+    /// pose of this document is not repeated.
+    GltfScene pose(float timeSeconds, const std::string& animation, const WarningSink& warn) const;
+
+    /// The file's animations' names in file order ("" for an unnamed one).
+    std::vector<std::string> animationNames() const;
+
+private:
+    struct Parsed;
+    std::unique_ptr<Parsed> parsed_;
 };
 
 /// timeSeconds poses an animation's node channels (translation, rotation, scale, morph weights)

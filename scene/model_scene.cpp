@@ -28,31 +28,57 @@ void turnZUpToYUp(Mesh& m) {
 
 bool isModelFile(const std::filesystem::path& path) { return isMeshKind(fileKindOf(path)); }
 
-Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions& view, const WarningSink& warn) {
-    Scene s;
-    s.name = path.filename().string();
-    std::vector<Camera> cameras;
-    std::vector<raster::Light> lights;
+ModelContent readModelContent(const std::filesystem::path& path, const ModelSceneOptions& view, const WarningSink& warn) {
+    ModelContent c;
     const FileKind kind = fileKindOf(path);
     if (kind == FileKind::Obj) {
-        s.meshes = loadObj(path, warn);
+        c.meshes = loadObj(path, warn);
     } else if (isGltfKind(kind)) {
-        GltfScene g = loadGltf(path, warn, view.timeSeconds, view.animation);
-        s.meshes = std::move(g.meshes);
-        cameras = std::move(g.cameras);
-        lights = std::move(g.lights);
-        s.loadStats = g.stats;
+        c = fromGltfScene(loadGltf(path, warn, view.timeSeconds, view.animation), path, warn);
     } else {
-        s.meshes.push_back(loadPly(path));
+        c.meshes.push_back(loadPly(path));
     }
+    finishModelContent(c, path, view.zUp);
+    return c;
+}
+
+ModelContent fromGltfScene(GltfScene&& g, const std::filesystem::path& path, const WarningSink& warn) {
+    ModelContent c;
+    c.meshes = std::move(g.meshes);
+    c.cameras = std::move(g.cameras);
+    c.lights = std::move(g.lights);
+    c.stats = g.stats;
+    if (c.lights.size() > size_t(raster::kMaxLights)) {
+        warn(path.string() + ": " + std::to_string(c.lights.size()) + " lights; the first " +
+             std::to_string(raster::kMaxLights) + " are used");
+        c.lights.resize(raster::kMaxLights);
+    }
+    return c;
+}
+
+void finishModelContent(ModelContent& c, const std::filesystem::path& path, bool zUp) {
     // A file that yields no triangle is bad input, not an empty picture (exit code 2).
-    if (s.triangleCount() == 0)
+    size_t triangles = 0;
+    for (const Mesh& m : c.meshes) triangles += m.triangleCount();
+    if (triangles == 0)
         throw InputError(path.string() + ": no triangles to draw" +
-                         (isGltfKind(kind) ? " (no mesh of its scene has a primitive of triangles)"
-                              : " (no faces)"));
-    if (view.zUp)
-        for (Mesh& m : s.meshes) turnZUpToYUp(m);
-    const Bounds b = boundsOf(s.meshes);
+                         (isGltfKind(fileKindOf(path)) ? " (no mesh of its scene has a primitive of triangles)" : " (no faces)"));
+    if (zUp)
+        for (Mesh& m : c.meshes) turnZUpToYUp(m);
+}
+
+Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions& view, const WarningSink& warn) {
+    ModelContent c = readModelContent(path, view, warn);
+    Scene s;
+    s.name = path.filename().string();
+    s.meshes = std::move(c.meshes);
+    s.loadStats = c.stats;
+    frameModelScene(s, boundsOf(s.meshes), c.cameras, c.lights, view, path);
+    return s;
+}
+
+void frameModelScene(Scene& s, const Bounds& b, const std::vector<Camera>& cameras, const std::vector<raster::Light>& lights,
+                     const ModelSceneOptions& view, const std::filesystem::path& path) {
     if (view.cameraIndex >= 0) {
         if (view.cameraIndex >= int(cameras.size()))
             throw InputError("--camera-index " + std::to_string(view.cameraIndex) + ": " + path.string() + " has " +
@@ -68,17 +94,12 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     s.lighting = raster::Lighting::directional(glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f)), glm::vec3(0.85f),
                                                glm::vec3(0.12f));
     if (!lights.empty()) {
-        if (lights.size() > size_t(raster::kMaxLights))
-            warn(path.string() + ": " + std::to_string(lights.size()) + " lights; the first " +
-                 std::to_string(raster::kMaxLights) + " are used");
         s.lighting.lightCount = int(std::min(lights.size(), size_t(raster::kMaxLights)));
         std::copy_n(lights.begin(), s.lighting.lightCount, s.lighting.lights);
     }
     s.background = {0.05f, 0.06f, 0.08f, 1.0f};
     // glTF says which materials are double-sided; PLY and OBJ scans promise no winding.
-    const bool isGltf = isGltfKind(kind);
-    s.cull = isGltf ? raster::CullMode::Back : raster::CullMode::None;
-    return s;
+    s.cull = isGltfKind(fileKindOf(path)) ? raster::CullMode::Back : raster::CullMode::None;
 }
 
 }  // namespace cuberille::scene

@@ -30,7 +30,7 @@ struct Scene {
     /// centre, ties by mesh order, so the order is deterministic), without depth writes. The
     /// scene must outlive the frame (Pipeline::draw records). `shadowedLighting`, when given,
     /// replaces `lighting` for the opaque and alpha-tested meshes: the same lights carrying
-    /// screen-space shadow masks (apps/scene_shadows.h). The masks describe the opaque surface
+    /// screen-space shadow masks (render/scene_shadows.h). The masks describe the opaque surface
     /// at each pixel, so blended meshes in front of it keep the unshadowed lights.
     void draw(raster::Pipeline& pipeline, float aspect, const raster::Lighting* shadowedLighting = nullptr) const;
 };

@@ -1,4 +1,4 @@
-// The shadow stage wired to an animated scene (apps/scene_shadows.h): its hierarchy follows the
+// The shadow stage wired to an animated scene (render/scene_shadows.h): its hierarchy follows the
 // casters from pose to pose by refitting, is rebuilt when Lauterbach's criterion says so, and
 // the masks it gives are those of a stage built fresh on the same pose, pixel for pixel.
 
@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "apps/scene_shadows.h"
+#include "render/scene_shadows.h"
 
 namespace cuberille {
 namespace {
@@ -60,7 +60,7 @@ glm::vec3 exploded(const glm::vec3& p, uint32_t t) {
     return p + 2.0f * glm::vec3(unit(t * 3 + 1), 0.4f * (unit(t * 3 + 2) + 1.0f), unit(t * 3 + 3));
 }
 
-std::vector<float> mask(apps::SceneShadows& stage, const scene::Scene& s, apps::ShadowFrameStats& stats) {
+std::vector<float> mask(render::SceneShadows& stage, const scene::Scene& s, render::ShadowFrameStats& stats) {
     const raster::Lighting lit = stage.run(s, kWidth, kHeight, stats);
     return {lit.lights[0].visibility, lit.lights[0].visibility + size_t(kWidth) * kHeight};
 }
@@ -83,8 +83,8 @@ protected:
 
 TEST_P(AnimatedShadows, RigidMotionIsRefittedAndShadowsAsAFreshStage) {
     const scene::Scene first = sheetOverGround(still), next = sheetOverGround(slid);
-    apps::SceneShadows stage(first, options());
-    apps::ShadowFrameStats stats;
+    render::SceneShadows stage(first, options());
+    render::ShadowFrameStats stats;
     const std::vector<float> before = mask(stage, first, stats);
     EXPECT_FALSE(stats.bvhUpdated) << "the first frame builds";
     stage.update(next);
@@ -92,8 +92,8 @@ TEST_P(AnimatedShadows, RigidMotionIsRefittedAndShadowsAsAFreshStage) {
     EXPECT_TRUE(stats.bvhUpdated);
     EXPECT_FALSE(stats.bvhRebuilt) << "a translation leaves every box's shape as it was";
     EXPECT_LT(stats.degradation, 0.05);
-    apps::SceneShadows fresh(next, options());
-    apps::ShadowFrameStats freshStats;
+    render::SceneShadows fresh(next, options());
+    render::ShadowFrameStats freshStats;
     EXPECT_EQ(after, mask(fresh, next, freshStats)) << "a refitted hierarchy finds the same occluders";
     EXPECT_NE(before, after) << "the sheet's shadow moved";
     EXPECT_GT(shadowedPixels(after), size_t(kWidth * kHeight / 50)) << "the sheet shadows the ground";
@@ -107,15 +107,15 @@ TEST_P(AnimatedShadows, RigidMotionIsRefittedAndShadowsAsAFreshStage) {
 
 TEST_P(AnimatedShadows, AnExplodingMeshRebuildsAndShadowsAsAFreshStage) {
     const scene::Scene first = sheetOverGround(still), next = sheetOverGround(exploded);
-    apps::SceneShadows stage(first, options());
-    apps::ShadowFrameStats stats;
+    render::SceneShadows stage(first, options());
+    render::ShadowFrameStats stats;
     mask(stage, first, stats);
     stage.update(next);
     const std::vector<float> after = mask(stage, next, stats);
     EXPECT_TRUE(stats.bvhRebuilt) << "degradation " << stats.degradation;
     EXPECT_GT(stats.degradation, 0.4);
-    apps::SceneShadows fresh(next, options());
-    apps::ShadowFrameStats freshStats;
+    render::SceneShadows fresh(next, options());
+    render::ShadowFrameStats freshStats;
     EXPECT_EQ(after, mask(fresh, next, freshStats));
 }
 
@@ -123,13 +123,13 @@ TEST_P(AnimatedShadows, AMovedCameraAndANewSizeGetTheMasksOfAFreshStage) {
     // The stage keeps its visibility buffer's per-pose data and its masks' storage between
     // frames; nothing of one frame may leak into the next.
     scene::Scene s = sheetOverGround(still);
-    apps::SceneShadows stage(s, options());
-    apps::ShadowFrameStats stats;
+    render::SceneShadows stage(s, options());
+    render::ShadowFrameStats stats;
     mask(stage, s, stats);
     s.camera.position = {5, 3, -4};
     const raster::Lighting moved = stage.run(s, kWidth / 2, kHeight + 8, stats);
-    apps::SceneShadows fresh(s, options());
-    apps::ShadowFrameStats freshStats;
+    render::SceneShadows fresh(s, options());
+    render::ShadowFrameStats freshStats;
     const raster::Lighting reference = fresh.run(s, kWidth / 2, kHeight + 8, freshStats);
     const size_t pixels = size_t(kWidth / 2) * (kHeight + 8);
     EXPECT_EQ(std::vector<float>(moved.lights[0].visibility, moved.lights[0].visibility + pixels),
@@ -142,7 +142,7 @@ TEST_P(AnimatedShadows, AMovedCameraAndANewSizeGetTheMasksOfAFreshStage) {
 TEST_P(AnimatedShadows, ChangedTrianglesAreRefused) {
     scene::Scene first = sheetOverGround(still), next = sheetOverGround(slid);
     next.meshes[1].indices.resize(next.meshes[1].indices.size() - 3);
-    apps::SceneShadows stage(first, options());
+    render::SceneShadows stage(first, options());
     EXPECT_THROW(stage.update(next), std::runtime_error);
 }
 
@@ -151,8 +151,8 @@ TEST_P(AnimatedShadows, EveryUpdateMethodGivesTheMasksOfAFreshStage) {
     // still meet exactly the occluders of a tree built on the pose, frame after frame.
     const scene::Scene first = sheetOverGround(still);
     for (const rt::BvhUpdateMethod method : {rt::BvhUpdateMethod::Refit, rt::BvhUpdateMethod::Lazy, rt::BvhUpdateMethod::Rebuild}) {
-        apps::SceneShadows stage(first, options(), method);
-        apps::ShadowFrameStats stats;
+        render::SceneShadows stage(first, options(), method);
+        render::ShadowFrameStats stats;
         mask(stage, first, stats);
         for (int frame = 1; frame <= 3; ++frame) {
             const float step = 0.3f * float(frame);
@@ -163,8 +163,8 @@ TEST_P(AnimatedShadows, EveryUpdateMethodGivesTheMasksOfAFreshStage) {
             const std::vector<float> moved = mask(stage, pose, stats);
             EXPECT_TRUE(stats.bvhUpdated);
             EXPECT_EQ(stats.bvhRebuilt, method == rt::BvhUpdateMethod::Rebuild) << int(method) << " frame " << frame;
-            apps::SceneShadows fresh(pose, options());
-            apps::ShadowFrameStats freshStats;
+            render::SceneShadows fresh(pose, options());
+            render::ShadowFrameStats freshStats;
             EXPECT_EQ(moved, mask(fresh, pose, freshStats)) << int(method) << " frame " << frame;
         }
     }

@@ -15,7 +15,7 @@
 #include "rt/frustum_cull.h"
 #include "scene/scene.h"
 
-namespace cuberille::apps {
+namespace cuberille::render {
 
 struct FrustumCullStats {
     uint64_t trianglesIn = 0, trianglesKept = 0;
@@ -49,4 +49,4 @@ private:
     FrustumCullStats pending_;                // the build or update, reported with the next cull
 };
 
-}  // namespace cuberille::apps
+}  // namespace cuberille::render

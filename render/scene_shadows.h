@@ -17,7 +17,7 @@
 #include "rt/shadows.h"
 #include "scene/scene.h"
 
-namespace cuberille::apps {
+namespace cuberille::render {
 
 struct ShadowFrameStats {
     rt::ShadowMode mode = rt::ShadowMode::None;
@@ -86,4 +86,4 @@ private:
 rt::ShadowMode parseShadowMode(const std::string& name);  // throws scene::InputError
 const char* shadowModeName(rt::ShadowMode mode);
 
-}  // namespace cuberille::apps
+}  // namespace cuberille::render

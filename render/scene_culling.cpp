@@ -1,10 +1,10 @@
-#include "apps/scene_culling.h"
+#include "render/scene_culling.h"
 
 #include <stdexcept>
 
 #include "raster/clock.h"
 
-namespace cuberille::apps {
+namespace cuberille::render {
 
 void SceneFrustumCull::gather(const scene::Scene& s) {
     positions_.clear();
@@ -60,4 +60,4 @@ FrustumCullStats SceneFrustumCull::cull(scene::Scene& s, float aspect) {
     return stats;
 }
 
-}  // namespace cuberille::apps
+}  // namespace cuberille::render

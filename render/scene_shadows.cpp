@@ -1,4 +1,4 @@
-#include "apps/scene_shadows.h"
+#include "render/scene_shadows.h"
 
 #include <stdexcept>
 #include <utility>
@@ -7,7 +7,7 @@
 #include "rt/bvh_build.h"
 #include "scene/input_error.h"
 
-namespace cuberille::apps {
+namespace cuberille::render {
 
 SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& options, rt::BvhUpdateMethod bvhUpdate)
     : options_(options) {
@@ -115,4 +115,4 @@ const char* shadowModeName(rt::ShadowMode mode) {
     return "?";
 }
 
-}  // namespace cuberille::apps
+}  // namespace cuberille::render

@@ -1,0 +1,175 @@
+// The `cuberille` Python module's native part (`cuberille._cuberille`): a thin binding of the
+// renderer library (render/renderer.h). Keyword arguments are FrameSettings' fields under their
+// command-line names (`--pixel-error` is `pixel_error`), parsed by the same functions, so a bad
+// value raises cuberille.InputError with the message the command line prints. The pure-Python
+// part (python/cuberille/__init__.py, testing.py) builds on this.
+
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "apps/png_file.h"
+#include "render/renderer.h"
+#include "scene/input_error.h"
+
+namespace py = pybind11;
+using namespace cuberille;
+
+namespace {
+
+glm::vec3 vector3(const py::handle& value, const char* name) {
+    const auto v = value.cast<std::vector<float>>();
+    if (v.size() != 3) throw scene::InputError(std::string(name) + ": expected three numbers (x, y, z)");
+    return {v[0], v[1], v[2]};
+}
+
+// Each keyword is one FrameSettings field; an unknown keyword is a TypeError naming it, as
+// Python's own calls do.
+render::FrameSettings frameSettings(int width, int height, int msaa, const py::kwargs& kwargs) {
+    render::FrameSettings f;
+    f.width = width;
+    f.height = height;
+    f.msaa = msaa;
+    std::optional<scene::CameraPlacement> placement;
+    auto place = [&]() -> scene::CameraPlacement& {
+        if (!placement) placement.emplace();
+        return *placement;
+    };
+    bool eyeGiven = false;
+    for (const auto& [key, value] : kwargs) {
+        const std::string k = key.cast<std::string>();
+        if (k == "threads") f.threads = value.cast<int>();
+        else if (k == "view") f.view = render::parseView(value.cast<std::string>());
+        else if (k == "azimuth") f.azimuth = value.cast<float>();
+        else if (k == "elevation") f.elevation = value.cast<float>();
+        else if (k == "camera_index") f.cameraIndex = value.cast<int>();
+        else if (k == "eye") place().eye = vector3(value, "eye"), eyeGiven = true;
+        else if (k == "target") place().target = vector3(value, "target");
+        else if (k == "up") place().up = vector3(value, "up");
+        else if (k == "fov") place().verticalFovDegrees = value.cast<float>();
+        else if (k == "orbit") f.orbitDegrees = value.cast<float>();
+        else if (k == "time") f.timeSeconds = value.cast<float>();
+        else if (k == "animation") f.animation = py::isinstance<py::int_>(value) ? std::to_string(value.cast<int>()) : value.cast<std::string>();
+        else if (k == "zoom") f.zoom = value.cast<float>();
+        else if (k == "frustum_cull") f.frustumCull = value.cast<bool>();
+        else if (k == "bvh_update") f.bvhUpdate = render::parseBvhUpdate(value.cast<std::string>());
+        else if (k == "supersample") f.supersample = value.cast<int>();
+        else if (k == "texture_filter") f.textureFilter = render::parseTextureFilter(value.cast<std::string>());
+        else if (k == "depth") f.depth = render::parseDepthConvention(value.cast<std::string>());
+        else if (k == "pixel_error") f.pixelError = value.cast<float>();
+        else if (k == "voxel_resolution") f.voxelResolution = value.cast<uint32_t>();
+        else if (k == "no_hybrid") f.noHybrid = value.cast<bool>();
+        else if (k == "no_occlusion") f.noOcclusion = value.cast<bool>();
+        else if (k == "warmup") f.warmup = value.cast<int>();
+        else if (k == "shadows") f.shadows.mode = render::parseShadowMode(value.cast<std::string>());
+        else if (k == "soft") f.shadows.soft = value.cast<bool>();
+        else if (k == "light_radius") f.shadows.lightRadius = value.cast<float>();
+        else if (k == "shadow_map_size") f.shadows.mapSizeTexels = value.cast<int>();
+        else if (k == "soft_samples") f.shadows.softSamplesPerSide = value.cast<int>();
+        else if (k == "background") {
+            const auto v = value.cast<std::vector<float>>();
+            if (v.size() != 3 && v.size() != 4) throw scene::InputError("background: expected (r, g, b) or (r, g, b, a), each in [0, 1]");
+            glm::vec4 b(0.0f, 0.0f, 0.0f, 1.0f);
+            for (size_t i = 0; i < v.size(); ++i) {
+                if (!(v[i] >= 0.0f && v[i] <= 1.0f)) throw scene::InputError("background: each value in [0, 1]");
+                b[int(i)] = v[i];
+            }
+            f.background = b;
+        } else {
+            throw py::type_error("render() got an unexpected keyword argument '" + k + "'");
+        }
+    }
+    if (placement && !eyeGiven) throw scene::InputError("--target, --up and --fov: need --eye");
+    f.placement = placement;
+    return f;
+}
+
+/// A scene loaded once; each render() reuses it. The statistics of the last render are kept.
+class PyScene {
+public:
+    PyScene(const std::string& path, float detail, const std::string& upAxis) {
+        render::SceneOptions options;
+        options.detail = detail;
+        if (upAxis != "y" && upAxis != "z") throw scene::InputError("--up-axis: '" + upAxis + "' is not y or z");
+        options.zUp = upAxis == "z";
+        scene_ = std::make_unique<render::LoadedScene>(path, options,
+                                                       [this](const std::string& w) { warnings_.push_back(w); });
+    }
+
+    py::array render(int width, int height, int msaa, bool linear, const py::kwargs& kwargs) {
+        const render::FrameSettings f = frameSettings(width, height, msaa, kwargs);
+        render::RenderResult r;
+        std::vector<uint8_t> pixels;
+        {
+            py::gil_scoped_release release;  // other Python threads run while the frame renders
+            r = render::render(*scene_, f);
+            if (!linear) pixels = render::displayPixels(*scene_, f, r);
+        }
+        stats_ = render::statsJson(scene_->name(), f, r);
+        if (linear) {
+            py::array_t<float> out({r.image.height, r.image.width, 4});
+            std::memcpy(out.mutable_data(), r.image.rgba.data(), r.image.rgba.size() * sizeof(float));
+            return out;
+        }
+        py::array_t<uint8_t> out({r.image.height, r.image.width, 4});
+        std::memcpy(out.mutable_data(), pixels.data(), pixels.size());
+        return out;
+    }
+
+    const std::string& statsJson() const { return stats_; }
+    const std::string& name() const { return scene_->name(); }
+    std::vector<std::string> animations() const { return scene_->animations(); }
+    const std::vector<std::string>& warnings() const { return warnings_; }
+    double loadMs() const { return scene_->loadMs(); }
+
+private:
+    std::unique_ptr<render::LoadedScene> scene_;
+    std::vector<std::string> warnings_;
+    std::string stats_;
+};
+
+py::array_t<uint8_t> readPng8(const std::string& path) {
+    const raster::Image image = apps::readPng(path);
+    py::array_t<uint8_t> out({image.height, image.width, 4});
+    uint8_t* p = out.mutable_data();
+    for (size_t i = 0; i < image.rgba.size(); ++i) p[i] = uint8_t(std::lround(image.rgba[i] * 255.0f));
+    return out;
+}
+
+void writePng8(const std::string& path, py::array_t<uint8_t, py::array::c_style | py::array::forcecast> pixels) {
+    if (pixels.ndim() != 3 || (pixels.shape(2) != 3 && pixels.shape(2) != 4))
+        throw py::value_error("write_png: expected an array of shape (height, width, 3 or 4)");
+    const std::vector<uint8_t> bytes(pixels.data(), pixels.data() + pixels.size());
+    apps::writePng8(path, int(pixels.shape(1)), int(pixels.shape(0)), int(pixels.shape(2)), bytes);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_cuberille, m) {
+    m.doc() = "Cuberille's renderer (render/renderer.h); use the `cuberille` package, not this module.";
+    static py::exception<scene::InputError> inputError(m, "InputError", PyExc_ValueError);
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const scene::InputError& e) {
+            inputError(e.what());
+        }
+    });
+    py::class_<PyScene>(m, "Scene")
+        .def(py::init<const std::string&, float, const std::string&>(), py::arg("path"), py::arg("detail") = 1.0f,
+             py::arg("up_axis") = "y")
+        .def("render", &PyScene::render, py::arg("width") = 1280, py::arg("height") = 720, py::arg("msaa") = 1,
+             py::arg("linear") = false)
+        .def_property_readonly("stats_json", &PyScene::statsJson)
+        .def_property_readonly("name", &PyScene::name)
+        .def_property_readonly("animations", &PyScene::animations)
+        .def_property_readonly("warnings", &PyScene::warnings)
+        .def_property_readonly("load_ms", &PyScene::loadMs);
+    m.def("read_png", &readPng8, py::arg("path"), "A PNG as a (height, width, 4) uint8 array (8-bit files exactly).");
+    m.def("write_png", &writePng8, py::arg("path"), py::arg("pixels"), "An (h, w, 3|4) uint8 array as an sRGB PNG.");
+}

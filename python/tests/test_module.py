@@ -1,0 +1,146 @@
+"""The Python module against the command line and against itself: the same pixels as the PNG
+the tool writes, a loaded scene that renders the same frame whatever it rendered before, errors
+with the tool's messages, the GIL released while rendering, and the golden-image helper."""
+
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import cuberille
+from cuberille import testing
+
+# Each case: a scene (a file of the examples, or a built-in scene) and the options of both calls,
+# chosen to cover every kind of scene and the outputs that change the bytes (alpha, depth view,
+# an animation time, shadows, a camera placed by hand).
+CASES = [
+    ("triangles.tri", dict(width=128, height=128, msaa=4), ["--width", "128", "--height", "128", "--msaa", "4"]),
+    ("torus.ply", dict(width=160, height=120, msaa=4, azimuth=60.0), ["--width", "160", "--height", "120", "--msaa", "4", "--azimuth", "60"]),
+    ("knot.obj", dict(width=160, height=120, background=(1.0, 1.0, 1.0, 0.0)),
+     ["--width", "160", "--height", "120", "--background", "1,1,1,0"]),
+    ("spinning-box.gltf", dict(width=160, height=120, msaa=2, time=1.25, shadows="hybrid"),
+     ["--width", "160", "--height", "120", "--msaa", "2", "--time", "1.25", "--shadows", "hybrid"]),
+    ("spinning-box.gltf", dict(width=160, height=120, view="depth", eye=(3.0, 2.0, 4.0), target=(0.0, 0.0, 0.0)),
+     ["--width", "160", "--height", "120", "--view", "depth", "--eye", "3,2,4", "--target", "0,0,0"]),
+    ("demo", dict(width=160, height=90, msaa=4, detail=0.5), ["--width", "160", "--height", "90", "--msaa", "4", "--detail", "0.5"]),
+]
+
+
+def scene_path(examples, name):
+    return name if "." not in name else str(examples / name)
+
+
+@pytest.mark.parametrize("name,options,arguments", CASES, ids=[f"{c[0]}-{i}" for i, c in enumerate(CASES)])
+def test_render_gives_the_pixels_the_cli_writes(examples, cli, tmp_path, name, options, arguments):
+    out = tmp_path / "cli.png"
+    subprocess.run([cli, "render", scene_path(examples, name), *arguments, "--out", str(out), "--quiet"], check=True)
+    image = cuberille.render(scene_path(examples, name), **options)
+    assert image.dtype == np.uint8 and image.shape == (options["height"], options["width"], 4)
+    assert np.array_equal(image, cuberille.read_png(str(out)))
+
+
+def test_a_loaded_scene_renders_each_frame_as_a_fresh_load_does(examples):
+    path = str(examples / "spinning-box.gltf")
+    scene = cuberille.Scene(path)
+    settings = dict(width=96, height=72, msaa=4, shadows="raytraced", frustum_cull=True)
+    first = scene.render(time=0.5, **settings)
+    scene.render(time=2.0, azimuth=120.0, texture_filter="nearest", **settings)  # another pose, camera, filter
+    again = scene.render(time=0.5, **settings)
+    assert np.array_equal(first, again)
+    assert np.array_equal(first, cuberille.render(path, time=0.5, **settings))
+
+
+def test_linear_returns_the_renderers_floats(examples):
+    scene = cuberille.Scene(examples / "torus.ply")
+    linear = scene.render(64, 48, linear=True)
+    assert linear.dtype == np.float32 and linear.shape == (48, 64, 4)
+    assert np.all(linear[:, :, 3] == 1.0)  # an opaque background
+    display = scene.render(64, 48)
+    # Where the frame is black it is black in both; elsewhere the sRGB codes grow with the value.
+    order = np.argsort(linear[:, :, 1], axis=None, kind="stable")
+    assert np.all(np.diff(display[:, :, 1].ravel()[order].astype(int)) >= 0)
+
+
+def test_stats_are_the_cli_stats(examples):
+    scene = cuberille.Scene(examples / "knot.obj")
+    scene.render(80, 60, msaa=4, threads=1)
+    stats = scene.stats
+    assert stats["width"] == 80 and stats["msaa"] == 4 and stats["threads"] == 1
+    assert stats["sceneTriangles"] == 6144
+    assert stats["stages"]["setup"]["setUp"] > 0
+
+
+def test_the_thread_count_never_changes_the_image(examples):
+    scene = cuberille.Scene(examples / "knot.obj")
+    assert np.array_equal(scene.render(200, 150, msaa=4, threads=1), scene.render(200, 150, msaa=4, threads=2))
+
+
+def test_animations_and_cameras_are_chosen_by_name_or_index(examples):
+    scene = cuberille.Scene(examples / "spinning-box.gltf")
+    assert len(scene.animations) == 1
+    by_index = scene.render(64, 48, animation=0, time=1.0)
+    by_name = scene.render(64, 48, animation=scene.animations[0] or "0", time=1.0)
+    assert np.array_equal(by_index, by_name)
+    assert not np.array_equal(by_index, scene.render(64, 48, animation=0, time=0.5))  # an eighth of a turn
+    with pytest.raises(cuberille.InputError, match="no animation 'walk'"):
+        scene.render(64, 48, animation="walk")
+
+
+def test_errors_carry_the_clis_messages(examples, cli, tmp_path):
+    run = subprocess.run([cli, "render", str(examples / "torus.ply"), "--view", "sideways", "--out", str(tmp_path / "x.png")],
+                         capture_output=True, text=True)
+    assert run.returncode == 2
+    with pytest.raises(cuberille.InputError) as raised:
+        cuberille.render(examples / "torus.ply", view="sideways")
+    assert str(raised.value) in run.stderr
+    with pytest.raises(cuberille.InputError, match="cannot open file"):
+        cuberille.Scene(tmp_path / "missing.glb")
+    with pytest.raises(cuberille.InputError, match="--time: only glTF"):
+        cuberille.render(examples / "torus.ply", time=1.0)
+    with pytest.raises(ValueError):  # InputError is a ValueError
+        cuberille.render("no-such-scene")
+    with pytest.raises(TypeError, match="unexpected keyword argument 'colour'"):
+        cuberille.render("demo", colour="red")
+
+
+def test_rendering_releases_the_gil(examples):
+    scene = cuberille.Scene("demo")
+    worker = threading.Thread(target=lambda: scene.render(1280, 720, msaa=4, threads=1))
+    worker.start()
+    time.sleep(0.02)  # the worker is inside the native render by now (it takes far longer)
+    ticks = 0
+    while worker.is_alive():
+        ticks += 1
+        time.sleep(0.001)
+    worker.join()
+    assert ticks > 5, "the main thread did not run while the frame rendered: the GIL was held"
+
+
+def test_assert_image_equal_passes_fails_and_updates(tmp_path, monkeypatch):
+    monkeypatch.setenv("CUBERILLE_TEST_OUTPUT", str(tmp_path / "failed"))
+    monkeypatch.delenv("CUBERILLE_UPDATE_GOLDEN", raising=False)
+    image = cuberille.render("demo", 64, 36)
+    golden = tmp_path / "golden" / "demo.png"
+    with pytest.raises(AssertionError, match="no golden image"):
+        testing.assert_image_equal(image, golden)
+    monkeypatch.setenv("CUBERILLE_UPDATE_GOLDEN", "1")
+    testing.assert_image_equal(image, golden)
+    monkeypatch.delenv("CUBERILLE_UPDATE_GOLDEN")
+    testing.assert_image_equal(image, golden)
+
+    changed = image.copy()
+    changed[10, 20, 0] ^= 0x40
+    changed[11, 20, 1] = changed[11, 20, 1] // 2 + 1 if changed[11, 20, 1] > 2 else 200
+    with pytest.raises(AssertionError) as failure:
+        testing.assert_image_equal(changed, golden)
+    message = str(failure.value)
+    assert "2 pixels differ by more than 0" in message
+    for suffix in ("actual", "golden", "difference", "compare"):
+        written = tmp_path / "failed" / f"demo.{suffix}.png"
+        assert written.exists() and str(written) in message
+    assert np.array_equal(cuberille.read_png(str(tmp_path / "failed" / "demo.actual.png")), changed)
+    testing.assert_image_equal(changed, golden, max_differing_pixels=2)
+    with pytest.raises(AssertionError, match="is 32x36, the golden 64x36"):
+        testing.assert_image_equal(image[:, :32], golden)

@@ -1,0 +1,121 @@
+#include "render/frame_settings.h"
+
+#include <charconv>
+#include <cmath>
+#include <vector>
+
+#include "raster/sample_pattern.h"
+#include "raster/srgb.h"
+#include "scene/input_error.h"
+
+namespace cuberille::render {
+
+void validateFrameOptions(int width, int height, int msaa, int threads) {
+    using scene::InputError;
+    if (width < 1 || height < 1 || width > raster::kMaxFramebufferPixels || height > raster::kMaxFramebufferPixels)
+        throw InputError("--width/--height: " + std::to_string(width) + "x" + std::to_string(height) +
+                         " is outside 1.." + std::to_string(raster::kMaxFramebufferPixels));
+    if (!raster::isSupportedSampleCount(msaa))
+        throw InputError("--msaa: " + std::to_string(msaa) + " is not 1, 2, 4, 8 or 16");
+    if (threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
+}
+
+glm::vec4 clearColorFor(const glm::vec4& display) {
+    const float a = display.a;
+    return {float(raster::decodeSrgb(display.r)) * a, float(raster::decodeSrgb(display.g)) * a,
+            float(raster::decodeSrgb(display.b)) * a, a};
+}
+
+glm::vec4 parseBackground(const std::string& text) {
+    const std::string problem = "--background " + text + ": expected R,G,B or R,G,B,A, each in [0, 1]";
+    std::vector<std::string> parts;
+    for (size_t start = 0;;) {
+        const size_t end = std::min(text.find(',', start), text.size());
+        parts.push_back(text.substr(start, end - start));
+        if (end == text.size()) break;
+        start = end + 1;
+    }
+    if (parts.size() != 3 && parts.size() != 4) throw scene::InputError(problem);
+    glm::vec4 v(0.0f, 0.0f, 0.0f, 1.0f);
+    for (size_t k = 0; k < parts.size(); ++k) {
+        const char* first = parts[k].data();
+        const auto [last, ec] = std::from_chars(first, first + parts[k].size(), v[int(k)]);
+        if (ec != std::errc() || last != first + parts[k].size() || !(v[int(k)] >= 0.0f && v[int(k)] <= 1.0f))
+            throw scene::InputError(problem);
+    }
+    return v;
+}
+
+glm::vec3 parseVector3(const std::string& text, const std::string& option) {
+    glm::vec3 v(0.0f);
+    size_t start = 0;
+    for (int k = 0; k < 3; ++k) {
+        const size_t end = k < 2 ? text.find(',', start) : text.size();
+        if (end == std::string::npos) break;
+        const std::string part = text.substr(start, end - start);
+        const char* first = part.data();
+        const auto [last, ec] = std::from_chars(first, first + part.size(), v[k]);
+        if (ec != std::errc() || last != first + part.size() || !std::isfinite(v[k]))
+            throw scene::InputError(option + " " + text + ": expected three numbers X,Y,Z");
+        if (k == 2) return v;
+        start = end + 1;
+    }
+    throw scene::InputError(option + " " + text + ": expected three numbers X,Y,Z");
+}
+
+View parseView(const std::string& name) {
+    if (name == "color") return View::Color;
+    if (name == "depth") return View::Depth;
+    if (name == "tiles") return View::Tiles;
+    if (name == "overdraw") return View::Overdraw;
+    if (name == "lod") return View::Lod;
+    if (name == "visibility") return View::Visibility;
+    if (name == "shadow-pixels") return View::ShadowPixels;
+    throw scene::InputError("--view: '" + name + "' is not color, depth, tiles, overdraw, lod, visibility or shadow-pixels");
+}
+
+TextureFilterOverride parseTextureFilter(const std::string& name) {
+    if (name == "file") return TextureFilterOverride::File;
+    if (name == "nearest") return TextureFilterOverride::Nearest;
+    if (name == "bilinear") return TextureFilterOverride::Bilinear;
+    if (name == "trilinear") return TextureFilterOverride::Trilinear;
+    throw scene::InputError("--texture-filter: '" + name + "' is not file, nearest, bilinear or trilinear");
+}
+
+raster::DepthConvention parseDepthConvention(const std::string& name) {
+    if (name == "standard") return raster::DepthConvention::Standard;
+    if (name == "reversed") return raster::DepthConvention::Reversed;
+    throw scene::InputError("--depth: '" + name + "' is not standard or reversed");
+}
+
+rt::BvhUpdateMethod parseBvhUpdate(const std::string& name) {
+    if (name == "refit") return rt::BvhUpdateMethod::Refit;
+    if (name == "lazy") return rt::BvhUpdateMethod::Lazy;
+    if (name == "rebuild") return rt::BvhUpdateMethod::Rebuild;
+    throw scene::InputError("--bvh-update: '" + name + "' is not refit, lazy or rebuild");
+}
+
+const char* textureFilterName(TextureFilterOverride f) {
+    switch (f) {
+        case TextureFilterOverride::File: return "file";
+        case TextureFilterOverride::Nearest: return "nearest";
+        case TextureFilterOverride::Bilinear: return "bilinear";
+        case TextureFilterOverride::Trilinear: return "trilinear";
+    }
+    return "?";
+}
+
+const char* viewName(View v) {
+    switch (v) {
+        case View::Color: return "color";
+        case View::Depth: return "depth";
+        case View::Tiles: return "tiles";
+        case View::Overdraw: return "overdraw";
+        case View::Lod: return "lod";
+        case View::Visibility: return "visibility";
+        case View::ShadowPixels: return "shadow-pixels";
+    }
+    return "?";
+}
+
+}  // namespace cuberille::render

@@ -1,0 +1,89 @@
+#pragma once
+// What one frame asks of the renderer: its size and samples, the camera, the animation time, the
+// shadows, the view and the accuracy knobs. The command line's `render` options are these plus
+// what the tool does with files (apps/render_command.h); the Python module's keyword arguments
+// are these by the same names (python/).
+//
+// The parse functions turn the command line's words into these values and throw
+// scene::InputError with the message the tool prints, naming the option.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <glm/glm.hpp>
+
+#include "raster/framebuffer.h"
+#include "rt/deforming_bvh.h"
+#include "rt/shadows.h"
+#include "scene/camera.h"
+
+namespace cuberille::render {
+
+/// --texture-filter: the file's samplers, or one filter for every texture (an accuracy knob).
+enum class TextureFilterOverride { File, Nearest, Bilinear, Trilinear };
+
+/// What the image shows: the shaded frame, or one of the pipeline's internals made visible.
+enum class View { Color, Depth, Tiles, Overdraw, Lod, Visibility, ShadowPixels };
+
+/// How a scene is read, fixed for as long as it stays loaded (render/loaded_scene.h).
+struct SceneOptions {
+    float detail = 1.0f;  // tessellation scale of built-in scenes, (0, 16]
+    bool zUp = false;     // --up-axis z: mesh files whose up is +z are turned to +y on load
+};
+
+struct FrameSettings {
+    int width = 1280;
+    int height = 720;
+    int msaa = 1;
+    int threads = 0;  // 0 = all cores
+    View view = View::Color;
+    float azimuth = 30.0f;    // degrees, for mesh files (which carry no camera)
+    float elevation = 20.0f;  // degrees
+    int cameraIndex = -1;     // a camera of the file (glTF), instead of framing the model
+    std::optional<scene::CameraPlacement> placement;  // --eye, --target, --up, --fov: a camera placed by hand
+    /// The camera turned this far about the world's up axis through its target, after every
+    /// other choice (a turntable's frames); the light stays where the unturned camera put it.
+    float orbitDegrees = 0.0f;
+    float timeSeconds = 0.0f; // glTF animation time
+    std::string animation;    // --animation NAME|INDEX: the glTF animation posed; empty: the first
+    float zoom = 1.0f;        // --zoom F: the view magnified F times (the field of view narrowed)
+    bool frustumCull = false; // 3D scenes: cull triangles against the frustum through a BVH
+    rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit;  // how BVHs follow a new pose
+    int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)
+    TextureFilterOverride textureFilter = TextureFilterOverride::File;
+    raster::DepthConvention depth = raster::DepthConvention::Standard;  // --depth standard|reversed
+    float pixelError = 1.0f;  // voxel models: largest projected voxel in pixels (0: finest level)
+    uint32_t voxelResolution = 0; // voxel models: render at most at this resolution (0: the model's)
+    bool noHybrid = false;    // voxel models: never draw source triangles
+    bool noOcclusion = false; // voxel models: no occlusion culling
+    int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
+    bool debugCamera = false; // voxel models: show the frame's selection from behind and above
+    rt::ShadowOptions shadows; // --shadows, --soft, --light-radius, --shadow-map-size, --soft-samples
+    /// --background R,G,B[,A]: display (sRGB) values and opacity in [0, 1], instead of the
+    /// scene's own; an opacity below 1 gives the image coverage alpha.
+    std::optional<glm::vec4> background;
+};
+
+/// Whether a frame's image carries alpha worth keeping: a background that is not opaque.
+inline bool hasAlpha(const FrameSettings& f) { return f.background && f.background->a < 1.0f; }
+
+/// The framebuffer's clear colour for a --background: linear and premultiplied by its opacity.
+glm::vec4 clearColorFor(const glm::vec4& displayBackground);
+
+/// The frame options every rendering command takes (--width, --height, --msaa, --threads);
+/// throws scene::InputError naming the option.
+void validateFrameOptions(int width, int height, int msaa, int threads);
+
+View parseView(const std::string& name);
+const char* viewName(View view);
+/// "X,Y,Z" (three finite numbers) as a vector; `option` names it in the message.
+glm::vec3 parseVector3(const std::string& text, const std::string& option);
+/// R,G,B or R,G,B,A, each in [0, 1].
+glm::vec4 parseBackground(const std::string& text);
+TextureFilterOverride parseTextureFilter(const std::string& name);
+const char* textureFilterName(TextureFilterOverride filter);
+raster::DepthConvention parseDepthConvention(const std::string& name);
+rt::BvhUpdateMethod parseBvhUpdate(const std::string& name);
+
+}  // namespace cuberille::render

@@ -1,0 +1,162 @@
+#include "render/loaded_scene.h"
+
+#include <cmath>
+
+#include "raster/clock.h"
+#include "render/scene_state.h"
+#include "scene/model_scene.h"
+#include "scene/obj_loader.h"
+#include "scene/ply_loader.h"
+#include "scene/procedural.h"
+#include "voxel/cvox_file.h"
+
+namespace cuberille::render {
+namespace {
+
+void loadInto(LoadedScene::State& s);
+void load3d(LoadedScene::State& s);
+
+}  // namespace
+
+LoadedScene::LoadedScene(const std::string& sceneName, const SceneOptions& options, scene::WarningSink warn)
+    : state_(std::make_unique<State>()) {
+    State& s = *state_;
+    s.name = sceneName;
+    s.options = options;
+    s.warn = warn ? std::move(warn) : [](const std::string&) {};
+    s.kind = scene::fileKindOf(sceneName);
+    s.procedural = scene::isProceduralScene(sceneName);
+    if (!(options.detail > 0.0f && options.detail <= 16.0f)) throw scene::InputError("--detail: must be in (0, 16]");
+    if (options.zUp && !scene::isModelFile(sceneName))
+        throw scene::InputError("--up-axis: only for mesh files (PLY, OBJ, glTF), not " + sceneName);
+    const double t0 = raster::nowMs();
+    loadInto(s);
+    s.loadMs = raster::nowMs() - t0;
+}
+
+LoadedScene::LoadedScene(LoadedScene&&) noexcept = default;
+LoadedScene& LoadedScene::operator=(LoadedScene&&) noexcept = default;
+LoadedScene::~LoadedScene() = default;
+
+const std::string& LoadedScene::name() const { return state_->name; }
+bool LoadedScene::isTriangleList() const { return state_->kind == scene::FileKind::TriangleList; }
+bool LoadedScene::isVoxelModel() const { return state_->kind == scene::FileKind::VoxelModel; }
+bool LoadedScene::isGltf() const { return scene::isGltfKind(state_->kind); }
+const SceneOptions& LoadedScene::options() const { return state_->options; }
+double LoadedScene::loadMs() const { return state_->loadMs; }
+std::vector<std::string> LoadedScene::animations() const {
+    return state_->gltf ? state_->gltf->animationNames() : std::vector<std::string>{};
+}
+
+namespace {
+
+void loadInto(LoadedScene::State& s) {
+    if (s.kind == scene::FileKind::TriangleList) {
+        s.tri = scene::loadTriScene(s.name);
+        if (s.tri.positions.empty()) throw scene::InputError(s.name + ": no triangles to draw (no triangle lines)");
+        return;
+    }
+    if (s.kind == scene::FileKind::VoxelModel) {
+        voxel::VoxelModel model = voxel::readCvox(s.name);
+        if (model.blocks.empty()) throw scene::InputError(s.name + ": no voxels to draw (a model of no blocks)");
+        s.voxel = std::make_unique<lod::VoxelScene>(std::move(model), 30.0f, 20.0f);
+        return;
+    }
+    if (s.procedural || scene::isModelFile(s.name)) {
+        load3d(s);
+        return;
+    }
+    std::string builtIn;
+    for (const std::string& name : scene::proceduralSceneNames()) builtIn += (builtIn.empty() ? "" : ", ") + name;
+    throw scene::InputError("'" + s.name + "' is not a scene: expected a .tri, .ply, .ply.gz, .obj, .gltf, .glb or .cvox "
+                            "file, or a built-in scene (" + builtIn + ")");
+}
+
+// Built-in scenes and PLY and OBJ files are read whole here; a glTF is parsed here and posed by
+// the first frame (which says at what time).
+void load3d(LoadedScene::State& s) {
+    if (s.procedural) {
+        s.posed = scene::makeProceduralScene(s.name, s.options.detail);
+        s.ownCamera = s.posed.camera;
+    } else if (scene::isGltfKind(s.kind)) {
+        s.gltf.emplace(s.name, s.warn);
+        return;
+    } else {
+        scene::ModelContent c;
+        if (s.kind == scene::FileKind::Obj) c.meshes = scene::loadObj(s.name, s.warn);
+        else c.meshes.push_back(scene::loadPly(s.name));
+        scene::finishModelContent(c, s.name, s.options.zUp);
+        s.posed.name = std::filesystem::path(s.name).filename().string();
+        s.posed.meshes = std::move(c.meshes);
+    }
+    s.bounds = scene::boundsOf(s.posed.meshes);
+    s.hasPose = true;
+}
+
+}  // namespace
+
+double LoadedScene::State::poseFor(const FrameSettings& f) {
+    if (!gltf) return 0.0;
+    const bool animated = !gltf->animationNames().empty();
+    // A file without animations has one pose whatever the time; the animation's name is still
+    // checked (an unknown one is refused) on each frame that gives one.
+    if (hasPose && poseAnimation == f.animation && (poseTimeSeconds == f.timeSeconds || !animated)) return 0.0;
+    const double t0 = raster::nowMs();
+    scene::ModelContent c = scene::fromGltfScene(gltf->pose(f.timeSeconds, f.animation, warn), name, warn);
+    scene::finishModelContent(c, name, options.zUp);
+    posed.name = std::filesystem::path(name).filename().string();
+    posed.meshes = std::move(c.meshes);
+    posed.loadStats = c.stats;
+    fileCameras = std::move(c.cameras);
+    fileLights = std::move(c.lights);
+    bounds = scene::boundsOf(posed.meshes);
+    shadowsPoseStale = cullingPoseStale = hasPose;  // the hierarchies follow the new pose
+    hasPose = true;
+    poseTimeSeconds = f.timeSeconds;
+    poseAnimation = f.animation;
+    return raster::nowMs() - t0;
+}
+
+void LoadedScene::State::frameFor(const FrameSettings& f) {
+    if (procedural) {
+        posed.camera = f.placement ? scene::placeCamera(*f.placement, ownCamera, bounds.min, bounds.max) : ownCamera;
+        return;
+    }
+    scene::ModelSceneOptions view;
+    view.azimuthDegrees = f.azimuth;
+    view.elevationDegrees = f.elevation;
+    view.cameraIndex = f.cameraIndex;
+    view.placement = f.placement;
+    scene::frameModelScene(posed, bounds, fileCameras, fileLights, view, name);
+}
+
+SceneShadows* LoadedScene::State::shadowsFor(const FrameSettings& f) {
+    if (f.shadows.mode == rt::ShadowMode::None) return nullptr;
+    const rt::ShadowOptions& o = f.shadows;
+    const bool same = shadows && shadowsMethod == f.bvhUpdate && shadowsOptions.mode == o.mode && shadowsOptions.soft == o.soft &&
+                      shadowsOptions.lightRadius == o.lightRadius && shadowsOptions.mapSizeTexels == o.mapSizeTexels &&
+                      shadowsOptions.softSamplesPerSide == o.softSamplesPerSide;
+    if (!same) {
+        shadows.emplace(posed, o, f.bvhUpdate);
+        shadowsOptions = o;
+        shadowsMethod = f.bvhUpdate;
+    } else if (shadowsPoseStale) {
+        shadows->update(posed);
+    }
+    shadowsPoseStale = false;
+    return &*shadows;
+}
+
+SceneFrustumCull* LoadedScene::State::cullingFor(const FrameSettings& f) {
+    if (!f.frustumCull) return nullptr;
+    if (!culling || cullingMethod != f.bvhUpdate) {
+        culling.emplace(posed, f.bvhUpdate);
+        cullingMethod = f.bvhUpdate;
+    } else if (cullingPoseStale) {
+        culling->update(posed);
+    }
+    cullingPoseStale = false;
+    return &*culling;
+}
+
+}  // namespace cuberille::render

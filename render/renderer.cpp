@@ -1,0 +1,470 @@
+#include "render/renderer.h"
+
+#include <cmath>
+#include <mutex>
+#include <unordered_map>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <nlohmann/json.hpp>
+
+#include "raster/clock.h"
+#include "raster/instruction_set.h"
+#include "raster/limits.h"
+#include "raster/parallel.h"
+#include "raster/pipeline.h"
+#include "raster/texture.h"
+#include "render/display_image.h"
+#include "render/scene_state.h"
+#include "scene/input_error.h"
+
+namespace cuberille::render {
+namespace {
+
+using State = LoadedScene::State;
+
+void validate(const State& s, const FrameSettings& f);
+RenderResult renderAtScale(State& s, const FrameSettings& f, float windowScale);
+RenderResult renderSupersampled(State& s, const FrameSettings& f);
+
+// Frames are drawn one at a time in a process: each already runs on every core it is allowed
+// (raster/parallel.h), and the thread limit and the threads-that-ran count are the process's.
+std::mutex gFrameMutex;
+
+}  // namespace
+
+RenderResult render(const LoadedScene& scene, const FrameSettings& f) {
+    State& s = SceneAccess::state(scene);
+    std::lock_guard lock(gFrameMutex);
+    if (f.supersample < 1 || f.supersample > 16) throw scene::InputError("--supersample: must be 1 to 16");
+    validate(s, f);
+    raster::ThreadLimit threadLimit(f.threads);
+    raster::resetThreadsThatRan();
+    RenderResult r = f.supersample > 1 ? renderSupersampled(s, f) : renderAtScale(s, f, 1.0f);
+    r.threadsRan = raster::threadsThatRan();
+    return r;
+}
+
+raster::Image displayImage(const LoadedScene& scene, const FrameSettings& f, const RenderResult& r) {
+    return displayImage(r.image, f.view, !scene.isTriangleList());
+}
+
+std::vector<uint8_t> displayPixels(const LoadedScene& scene, const FrameSettings& f, const RenderResult& r) {
+    if (f.view == View::Depth && !scene.isTriangleList()) return displayRgba8(legibleDepth(r.image), hasAlpha(f));
+    return displayRgba8(r.image, hasAlpha(f));
+}
+
+namespace {
+
+// An option a scene cannot use is refused, not silently ignored.
+void validate(const State& s, const FrameSettings& o) {
+    using scene::InputError;
+    validateFrameOptions(o.width, o.height, o.msaa, o.threads);
+    if (!std::isfinite(o.timeSeconds)) throw InputError("--time: must be a finite number of seconds");
+    const rt::ShadowOptions& sh = o.shadows;
+    if (sh.mapSizeTexels < 16 || sh.mapSizeTexels > 16384)
+        throw InputError("--shadow-map-size: " + std::to_string(sh.mapSizeTexels) + " is outside 16..16384");
+    if (sh.softSamplesPerSide < 1 || sh.softSamplesPerSide > 16)
+        throw InputError("--soft-samples: " + std::to_string(sh.softSamplesPerSide) + " is outside 1..16 (rays per side)");
+    if (!(sh.lightRadius >= 0.0f) || !std::isfinite(sh.lightRadius))
+        throw InputError("--light-radius: must be a finite number, 0 or more");
+    const bool tri = s.kind == scene::FileKind::TriangleList, voxel = s.kind == scene::FileKind::VoxelModel;
+    const bool threeD = !tri && !voxel, gltf = scene::isGltfKind(s.kind);
+    if ((sh.mode != rt::ShadowMode::None || o.view == View::ShadowPixels) && !threeD)
+        throw InputError("--shadows and --view shadow-pixels: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
+    if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
+        throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
+    if (o.frustumCull && !threeD) throw InputError("--frustum-cull: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
+    if (o.placement && !threeD) throw InputError("--eye: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
+    if (o.placement && o.cameraIndex >= 0) throw InputError("--eye and --camera-index: one camera or the other");
+    if (o.placement && !(o.placement->verticalFovDegrees >= 0.0f && o.placement->verticalFovDegrees < 180.0f))
+        throw InputError("--fov: degrees in (0, 180)");
+    if (o.placement) {
+        const glm::vec3 forward = o.placement->target.value_or(glm::vec3(0.0f)) - o.placement->eye;
+        const glm::vec3 up = o.placement->up.value_or(glm::vec3(0.0f, 1.0f, 0.0f));
+        if (o.placement->target && !(glm::length(forward) > 0.0f)) throw InputError("--target: must differ from --eye");
+        if (!(glm::length(up) > 0.0f)) throw InputError("--up: must not be zero");
+    }
+    if (o.timeSeconds != 0.0f && !gltf)
+        throw InputError("--time: only glTF files (.gltf, .glb) have animations, not " + s.name);
+    if (!(o.zoom > 0.0f && o.zoom <= 1000.0f)) throw InputError("--zoom: must be in (0, 1000]");
+    if (o.zoom != 1.0f && tri) throw InputError("--zoom: not for 2D .tri scenes");
+    if (!o.animation.empty() && !gltf)
+        throw InputError("--animation: only glTF files (.gltf, .glb) have animations, not " + s.name);
+    if (o.orbitDegrees != 0.0f && tri) throw InputError("--turntable: " + s.name + " is a 2D .tri scene");
+    if (o.orbitDegrees != 0.0f && voxel) throw InputError("--turntable: not for voxel models yet");
+    if (!std::isfinite(o.orbitDegrees)) throw InputError("orbit: must be a finite number of degrees");
+    if ((o.view == View::Lod || o.view == View::Visibility || o.debugCamera) && !voxel)
+        throw InputError("--view lod, --view visibility and --debug-camera: only for voxel models (.cvox)");
+    if (!(o.pixelError >= 0.0f)) throw InputError("--pixel-error: must be 0 or more");
+    if (o.warmup < 0 || o.warmup > 100) throw InputError("--warmup: must be 0 to 100 frames");
+    if (o.supersample > 1 && o.view != View::Color) throw InputError("--supersample: only with --view color");
+}
+
+raster::FramebufferDesc frameDesc(const FrameSettings& o, glm::vec4 background) {
+    raster::FramebufferDesc d;
+    d.widthPixels = o.width;
+    d.heightPixels = o.height;
+    d.samples = o.msaa;
+    d.depthConvention = o.depth;
+    d.clearColor = background;
+    d.recordOverdraw = o.view == View::Overdraw;
+    d.recordBlockClasses = o.view == View::Tiles;
+    return d;
+}
+
+// Resolves only what the view shows: the colour resolve runs for color and tiles alone.
+// camera: the frame's, for the depth view's distances; null for 2D .tri scenes, whose depth view
+// is the stored depth itself.
+void finishView(const raster::Pipeline& p, View view, const scene::Camera* camera, raster::Image& image, double& resolveMs) {
+    const double t0 = raster::nowMs();
+    switch (view) {
+        case View::Color:
+        case View::Lod:
+        case View::Visibility:
+        case View::ShadowPixels: raster::resolveColor(p.framebuffer(), image); break;
+        case View::Depth:
+            if (camera) raster::resolveViewDistance(p.framebuffer(), camera->nearPlane, camera->farPlane, image);
+            else raster::resolveDepth(p.framebuffer(), image);
+            break;
+        case View::Overdraw: raster::visualizeOverdraw(p.framebuffer(), image); break;
+        case View::Tiles: {
+            raster::Image color;
+            raster::resolveColor(p.framebuffer(), color);
+            raster::visualizeBlockClasses(p.framebuffer(), color, image);
+            break;
+        }
+    }
+    resolveMs = raster::nowMs() - t0;
+}
+
+// One frame: submit(pipeline) records the draws, whose arrays stay alive until endFrame
+// (Pipeline::draw's contract), then the view is resolved.
+template <class Submit>
+void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::Camera* camera, Submit&& submit,
+               RenderResult& result) {
+    raster::Pipeline pipeline;
+    pipeline.beginFrame(frameDesc(o, o.background ? clearColorFor(*o.background) : sceneBackground));
+    submit(pipeline);
+    pipeline.endFrame();
+    result.stats = pipeline.stats();
+    finishView(pipeline, o.view, camera, result.image, result.stats.times.resolveMs);
+}
+
+// --zoom F: a lens zoom. The eye stays and the field of view narrows until what it saw is F
+// times larger (tan of the half-angle divided by F), whichever camera framed the scene.
+void applyZoom(scene::Camera& camera, float zoom) {
+    if (zoom == 1.0f) return;
+    const double halfAngle = std::atan(std::tan(glm::radians(double(camera.verticalFovDegrees)) / 2.0) / zoom);
+    camera.verticalFovDegrees = float(glm::degrees(2.0 * halfAngle));
+}
+
+// The camera turned about the world's up axis through its target.
+scene::Camera orbit(const scene::Camera& c, float degrees) {
+    if (degrees == 0.0f) return c;
+    const glm::mat3 turn(glm::rotate(glm::mat4(1.0f), glm::radians(degrees), glm::vec3(0, 1, 0)));
+    scene::Camera r = c;
+    r.position = c.target + turn * (c.position - c.target);
+    r.up = turn * c.up;
+    return r;
+}
+
+// --texture-filter other than file: every texture of the scene gets the one filter. Textures are
+// shared between meshes, so each distinct one is copied once (the map is only a lookup; nothing
+// is ordered by address).
+void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
+    if (which == TextureFilterOverride::File) return;
+    raster::TextureFilter filter;
+    filter.magnifyNearest = which == TextureFilterOverride::Nearest;
+    filter.minify = which == TextureFilterOverride::Nearest  ? raster::MinFilter::Nearest
+                    : which == TextureFilterOverride::Bilinear ? raster::MinFilter::Linear
+                                                               : raster::MinFilter::LinearMipmapLinear;
+    std::unordered_map<const raster::Texture*, std::shared_ptr<const raster::Texture>> replaced;
+    auto retarget = [&](scene::MeshTexture& slot) {
+        if (!slot.texture) return;
+        auto& copy = replaced[slot.texture.get()];
+        if (!copy) {
+            auto t = std::make_shared<raster::Texture>(*slot.texture);
+            t->setFilter(filter);
+            copy = std::move(t);
+        }
+        slot.texture = copy;
+    };
+    for (scene::Mesh& m : s.meshes) {
+        scene::MeshTextures& t = m.textures;
+        for (scene::MeshTexture* slot : {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive})
+            retarget(*slot);
+    }
+}
+
+// What a frame changes in the pose it borrows (the texture filters, the culled index lists),
+// put back when the frame ends, so the next frame starts from the scene as loaded.
+class BorrowedPose {
+public:
+    BorrowedPose(scene::Scene& s, bool textures, bool indices) : scene_(s) {
+        for (const scene::Mesh& m : s.meshes) {
+            if (textures) textures_.push_back(m.textures);
+            if (indices) indices_.push_back(m.indices);
+        }
+    }
+    ~BorrowedPose() {
+        for (size_t m = 0; m < textures_.size(); ++m) scene_.meshes[m].textures = std::move(textures_[m]);
+        for (size_t m = 0; m < indices_.size(); ++m) scene_.meshes[m].indices = std::move(indices_[m]);
+    }
+    BorrowedPose(const BorrowedPose&) = delete;
+    BorrowedPose& operator=(const BorrowedPose&) = delete;
+
+private:
+    scene::Scene& scene_;
+    std::vector<scene::MeshTextures> textures_;
+    std::vector<std::vector<uint32_t>> indices_;
+};
+
+// --view shadow-pixels: the frame dimmed, and the pixels the shadow stage traced rays for in red.
+void showShadowPixels(const std::vector<uint8_t>& marked, raster::Image& image) {
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) {
+            float* p = image.pixel(x, y);
+            const bool traced = !marked.empty() && marked[size_t(y) * image.width + x];
+            for (int k = 0; k < 3; ++k) p[k] = traced ? (k == 0 ? 1.0f : 0.1f) : 0.3f * p[k];
+        }
+}
+
+// A 3D scene's frame: posed and framed, the shadow stage first when asked for (its masks go to
+// the shade stage with the lights; casters outside the view still cast into it, so it runs on
+// the whole scene), then the frustum cull trims what the frame draws, then the draws.
+void render3d(State& st, const FrameSettings& o, RenderResult& result) {
+    result.loadMs = st.poseFor(o);
+    scene::Scene& s = st.posed;
+    result.load = s.loadStats;
+    st.frameFor(o);
+    s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
+    applyZoom(s.camera, o.zoom);
+    s.camera = orbit(s.camera, o.orbitDegrees);
+    BorrowedPose borrowed(s, o.textureFilter != TextureFilterOverride::File, o.frustumCull);
+    overrideTextureFilters(s, o.textureFilter);
+    result.sceneTriangles = s.triangleCount();
+    SceneShadows* shadows = st.shadowsFor(o);
+    SceneFrustumCull* culling = st.cullingFor(o);
+    std::optional<raster::Lighting> shadowed;
+    if (shadows) {
+        result.shadows.emplace();
+        const double t0 = raster::nowMs();
+        if (shadows->active()) shadowed = shadows->run(s, o.width, o.height, *result.shadows);
+        result.shadows->totalMs = raster::nowMs() - t0;
+    }
+    if (culling) result.culling = culling->cull(s, float(o.width) / float(o.height));
+    drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) {
+        s.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
+    }, result);
+    if (o.view == View::ShadowPixels) showShadowPixels(shadows->markedPixels(), result.image);
+}
+
+// --voxel-resolution N: the level whose resolution is N (the finest level's halved per level).
+uint32_t finestLevelFor(const voxel::VoxelModel& model, uint32_t resolution) {
+    if (resolution == 0) return 0;
+    const uint32_t finest = model.grid.resolution;
+    const uint32_t levels = model.blocks.empty() ? 1 : model.blocks.front().level + 1;
+    std::string offered;
+    for (uint32_t level = 0; level < levels; ++level) {
+        if ((finest >> level) == resolution) return level;
+        offered += (level ? ", " : "") + std::to_string(finest >> level);
+    }
+    throw scene::InputError("--voxel-resolution: " + std::to_string(resolution) + " is not a level of the model (" +
+                            offered + ")");
+}
+
+/// A voxel model: blocks selected, expanded and drawn through the same pipeline.
+void renderVoxelModel(State& st, const FrameSettings& o, RenderResult& result) {
+    lod::VoxelScene& s = *st.voxel;
+    s.frameFrom(o.azimuth, o.elevation);
+    s.resetOcclusion();  // each render starts from nothing (render/loaded_scene.h)
+    s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
+    applyZoom(s.camera, o.zoom);
+    result.sceneTriangles = s.model().triangleCount();
+    result.voxelResolution = s.model().grid.resolution;
+    lod::VoxelRenderOptions vo;
+    vo.selection.pixelError = o.pixelError;
+    vo.selection.finestLevel = finestLevelFor(s.model(), o.voxelResolution);
+    vo.selection.hybrid = !o.noHybrid;
+    vo.coloring = o.view == View::Lod          ? lod::BlockColoring::Level
+                  : o.view == View::Visibility ? lod::BlockColoring::Visibility
+                                               : lod::BlockColoring::Model;
+    vo.occlusion = !o.noOcclusion;
+    // Occlusion culling learns from the frame before: the warm-up frames give it that history
+    // (the image is the same with or without it; only the work differs).
+    const int frames = vo.occlusion ? 1 + o.warmup : 1;
+    for (int f = 0; f < frames; ++f) {
+        drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
+                  result);
+        s.readOcclusion(result.stats);
+    }
+    if (o.debugCamera) {  // what the main camera's frame selected, seen from its side
+        const scene::Camera debug = lod::debugCameraFor(s.camera);
+        vo.viewFrom = &debug;
+        drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
+                  result);
+    }
+}
+
+// The frame; `windowScale` scales a .tri scene's window-space coordinates (pixels) with the
+// frame when supersampling, as 3D scenes scale through their projection.
+RenderResult renderAtScale(State& st, const FrameSettings& o, float windowScale) {
+    RenderResult result;
+    if (st.voxel) {
+        renderVoxelModel(st, o, result);
+        return result;
+    }
+    if (st.kind != scene::FileKind::TriangleList) {
+        render3d(st, o, result);
+        return result;
+    }
+    scene::TriScene scaled;
+    const scene::TriScene* s = &st.tri;
+    if (windowScale != 1.0f) {
+        scaled = st.tri;
+        for (glm::vec3& p : scaled.positions) p *= windowScale;
+        s = &scaled;
+    }
+    result.sceneTriangles = s->triangleCount();
+    drawFrame(o, glm::vec4(0.0f), nullptr, [&](raster::Pipeline& p) { p.draw(s->drawCall()); }, result);
+    return result;
+}
+
+// --supersample N: the frame at N x N times the pixels, each N x N block box-filtered into one
+// pixel (summed in double): N² samples per pixel on a regular grid through the same pipeline, the
+// ground truth of `cuberille accuracy` (256 samples at N = 16).
+RenderResult renderSupersampled(State& st, const FrameSettings& o) {
+    const int n = o.supersample;
+    if (int64_t(o.width) * n > raster::kMaxFramebufferPixels || int64_t(o.height) * n > raster::kMaxFramebufferPixels)
+        throw scene::InputError("--supersample: " + std::to_string(o.width) + "x" + std::to_string(o.height) + " times " +
+                                std::to_string(n) + " exceeds " + std::to_string(raster::kMaxFramebufferPixels) + " pixels a side");
+    FrameSettings big = o;
+    big.width *= n;
+    big.height *= n;
+    big.supersample = 1;
+    RenderResult r = renderAtScale(st, big, float(n));
+    raster::Image small;
+    small.width = o.width;
+    small.height = o.height;
+    small.rgba.resize(size_t(o.width) * o.height * 4);
+    raster::parallelFor(size_t(o.height), [&](size_t y) {
+        for (int x = 0; x < o.width; ++x)
+            for (int c = 0; c < 4; ++c) {
+                double sum = 0.0;
+                for (int j = 0; j < n; ++j)
+                    for (int i = 0; i < n; ++i) sum += r.image.pixel(x * n + i, int(y) * n + j)[c];
+                small.pixel(x, int(y))[c] = float(sum / double(n * n));
+            }
+    });
+    r.image = std::move(small);
+    return r;
+}
+
+}  // namespace
+
+std::string statsJson(const std::string& sceneName, const FrameSettings& o, const RenderResult& r) {
+    const raster::StageCounters& c = r.stats.counters;
+    const raster::StageTimes& t = r.stats.times;
+    nlohmann::json j;
+    j["scene"] = sceneName;
+    j["width"] = o.width;
+    j["height"] = o.height;
+    j["msaa"] = o.msaa;
+    j["supersample"] = o.supersample;
+    j["depth"] = o.depth == raster::DepthConvention::Reversed ? "reversed" : "standard";
+    j["threads"] = r.threadsRan;  // that ran: TBB never runs more than the cores, whatever was asked
+    j["threadsRequested"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
+    j["instructionSet"] = raster::activeInstructionSet();  // of the back end; the image is the same on each
+    j["view"] = viewName(o.view);
+    j["sceneTriangles"] = r.sceneTriangles;
+    if (r.voxel) {
+        const lod::VoxelFrameStats& v = *r.voxel;
+        j["voxel"] = {{"modelResolution", r.voxelResolution},
+                      {"blocksVisited", v.selection.blocksVisited},
+                      {"frustumCulled", v.selection.frustumCulled},
+                      {"occlusionCulled", v.occlusionCulled},
+                      {"visibilityTests", v.visibilityTests},
+                      {"voxelBlocksDrawn", v.voxelBlocksDrawn},
+                      {"drawnPerLevel", v.selection.drawnPerLevel},
+                      {"triangleBlocksDrawn", v.triangleBlocksDrawn},
+                      {"hybridTriangles", v.hybridTriangles},
+                      {"voxelsExpanded", v.voxelsExpanded},
+                      {"facesEmitted", v.facesEmitted},
+                      {"selectMs", v.selectMs},
+                      {"expandMs", v.expandMs}};
+    }
+    if (r.culling) {
+        const FrustumCullStats& c = *r.culling;
+        j["frustumCull"] = {{"trianglesIn", c.trianglesIn},
+                            {"trianglesKept", c.trianglesKept},
+                            {"nodesVisited", c.counters.nodesVisited},
+                            {"subtreesAccepted", c.counters.subtreesAccepted},
+                            {"subtreesRejected", c.counters.subtreesRejected},
+                            {"bvhMs", c.buildMs},
+                            {"degradation", c.degradation},
+                            {"rebuilt", c.rebuilt},
+                            {"cullMs", c.cullMs}};
+    }
+    if (r.shadows) {
+        const ShadowFrameStats& sh = *r.shadows;
+        const rt::ShadowStats& st = sh.shadows;
+        j["shadows"] = {{"mode", shadowModeName(sh.mode)},
+                        {"soft", sh.soft},
+                        {"lightsShadowed", st.lightsShadowed},
+                        {"casterTriangles", sh.casterTriangles},
+                        {"receiverPixels", st.receiverPixels},
+                        {"markedPixels", st.markedPixels},
+                        {"markedShare", st.receiverPixels ? double(st.markedPixels) / double(st.receiverPixels) : 0.0},
+                        {"raysTraced", st.raysTraced},
+                        {"thinTriangles", st.thinTriangles},
+                        {"bvhBuildMs", sh.bvhBuildMs},
+                        {"adjacencyMs", sh.adjacencyMs},
+                        {"bvhUpdated", sh.bvhUpdated},
+                        {"bvhRebuilt", sh.bvhRebuilt},
+                        {"degradation", sh.degradation},
+                        {"bvhUpdateMs", sh.bvhUpdateMs},
+                        {"castersMs", sh.castersMs},
+                        {"surfacesMs", sh.surfacesMs},
+                        {"mapMs", st.mapMs},
+                        {"maskMs", st.maskMs},
+                        {"totalMs", sh.totalMs}};
+    }
+    j["stages"] = {
+        {"vertex", {{"verticesShaded", c.verticesShaded}, {"ms", t.vertexMs}}},
+        {"clip",
+         {{"trianglesIn", c.trianglesIn},
+          {"invalid", c.trianglesInvalid},
+          {"rejected", c.trianglesClipRejected},
+          {"clipped", c.trianglesClipped},
+          {"clippedTrianglesOut", c.clippedTrianglesOut}}},
+        {"setup",
+         {{"degenerate", c.trianglesDegenerate},
+          {"culled", c.trianglesCulled},
+          {"noSamples", c.trianglesNoSamples},
+          {"setUp", c.trianglesSetUp}}},
+        {"bin", {{"binEntries", c.binEntries}, {"flushes", r.stats.flushes}}},
+        {"coarse",
+         {{"smallTriangleEntries", c.smallTriangleEntries},
+          {"blocksEmpty", c.blocksEmpty},
+          {"blocksPartial", c.blocksPartial},
+          {"blocksFull", c.blocksFull},
+          {"blocksDepthCulled", c.blocksDepthCulled}}},
+        {"depth", {{"samplesTested", c.samplesTested}, {"samplesPassed", c.samplesPassed}}},
+        {"shade",
+         {{"pixelsShaded", c.pixelsShaded},
+          {"varyingsInterpolated", c.varyingsInterpolated},
+          {"textureSamples", c.textureSamples},
+          {"lightEvaluations", c.lightEvaluations}}},
+        {"outputMerge", {{"pixelsAlphaTested", c.pixelsAlphaTested}, {"pixelsBlended", c.pixelsBlended}}},
+    };
+    j["load"] = {{"verticesSkinned", r.load.verticesSkinned},
+                 {"verticesMorphed", r.load.verticesMorphed},
+                 {"texturesDecoded", r.load.texturesDecoded}};
+    j["timesMs"] = {{"load", r.loadMs},         {"vertex", t.vertexMs},
+                    {"frontEnd", t.frontEndMs}, {"backEnd", t.backEndMs},
+                    {"resolve", t.resolveMs},   {"frame", t.frameMs}};
+    j["occlusionSamplesPassed"] = r.stats.occlusionSamplesPassed;
+    return j.dump();
+}
+
+}  // namespace cuberille::render

@@ -1,0 +1,68 @@
+#pragma once
+// Inside a LoadedScene (render/loaded_scene.h): what was read, the pose it holds and what is kept
+// between frames. Only render/ includes this; it is not installed.
+
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lod/voxel_scene.h"
+#include "render/frame_settings.h"
+#include "render/loaded_scene.h"
+#include "render/scene_culling.h"
+#include "render/scene_shadows.h"
+#include "scene/gltf_loader.h"
+#include "scene/scene.h"
+#include "scene/tri_scene.h"
+
+namespace cuberille::render {
+
+struct LoadedScene::State {
+    std::string name;
+    SceneOptions options;
+    scene::WarningSink warn;
+    scene::FileKind kind = scene::FileKind::Unknown;
+    bool procedural = false;
+    double loadMs = 0.0;
+    std::mutex frameMutex;  // one frame at a time draws from this state
+
+    scene::TriScene tri;                       // a .tri file
+    std::unique_ptr<lod::VoxelScene> voxel;    // a .cvox model
+
+    // A 3D scene: the meshes at the pose held; camera and lighting are set per frame.
+    std::optional<scene::GltfDocument> gltf;
+    scene::Scene posed;
+    bool hasPose = false;          // glTF: whether `posed` holds a pose yet (posed on first use)
+    float poseTimeSeconds = 0.0f;  // glTF: the pose held
+    std::string poseAnimation;
+    std::vector<scene::Camera> fileCameras;
+    std::vector<raster::Light> fileLights;
+    scene::Bounds bounds;
+    scene::Camera ownCamera;       // a built-in scene's own camera (and its lighting stays put)
+
+    // Kept between frames while the settings that shaped them hold (render/loaded_scene.h).
+    std::optional<SceneShadows> shadows;
+    rt::ShadowOptions shadowsOptions;
+    rt::BvhUpdateMethod shadowsMethod = rt::BvhUpdateMethod::Refit;
+    bool shadowsPoseStale = false;  // the pose changed since they were built or updated
+    std::optional<SceneFrustumCull> culling;
+    rt::BvhUpdateMethod cullingMethod = rt::BvhUpdateMethod::Refit;
+    bool cullingPoseStale = false;
+
+    /// A 3D scene at the frame's pose (glTF: its animation and time; posed again only when they
+    /// differ from the pose held). Returns the milliseconds spent posing.
+    double poseFor(const FrameSettings& f);
+    /// The frame's camera and lights on `posed` (render/renderer.cpp applies zoom and orbit).
+    void frameFor(const FrameSettings& f);
+    /// The shadow stage and frustum cull for this frame, built or brought to the pose held.
+    SceneShadows* shadowsFor(const FrameSettings& f);
+    SceneFrustumCull* cullingFor(const FrameSettings& f);
+};
+
+struct SceneAccess {
+    static LoadedScene::State& state(const LoadedScene& s) { return *s.state_; }
+};
+
+}  // namespace cuberille::render
