@@ -12,7 +12,9 @@
 #include "apps/accuracy_command.h"
 #include "apps/explain_command.h"
 #include "apps/fly_command.h"
+#include "apps/batch_command.h"
 #include "apps/render_command.h"
+#include "apps/render_options_cli.h"
 #include "apps/voxel_commands.h"
 #include "raster/instruction_set.h"
 #include "scene/input_error.h"
@@ -23,119 +25,6 @@ namespace {
 constexpr int kExitFailure = 1;
 constexpr int kExitBadInput = 2;
 
-/// The frame's size, samples and the worker threads, as every rendering command takes them.
-void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int& threads) {
-    command->add_option("--width", width, "Image width in pixels")->capture_default_str();
-    command->add_option("--height", height, "Image height in pixels")->capture_default_str();
-    command->add_option("--msaa", msaa, "Samples per pixel: 1, 2, 4, 8 or 16")->capture_default_str();
-    command->add_option("--threads", threads, "Worker threads (0 = all cores)")->capture_default_str();
-}
-
-/// The render options parsed from names after CLI11 has read them.
-struct RenderNames {
-    std::string view = "color", shadows = "none", textureFilter = "file", depth = "standard", bvhUpdate = "refit";
-    std::string eye, target, up, upAxis = "y", background;
-    float fovDegrees = 0.0f;
-};
-
-void addRenderCommand(CLI::App& app, cuberille::apps::RenderOptions& o, RenderNames& names) {
-    CLI::App* render = app.add_subcommand(
-        "render", "Render one frame of a scene to an image (PNG: sRGB 8-bit; EXR: linear float)");
-    std::string scenes;
-    for (const auto& n : cuberille::scene::proceduralSceneNames()) scenes += " " + n;
-    render->add_option("scene", o.scene,
-                       "A .tri, .ply, .ply.gz, .obj, .gltf, .glb or .cvox file, or a built-in scene:" + scenes)
-        ->required();
-    addFrameOptions(render, o.width, o.height, o.msaa, o.threads);
-    render->add_option("--out", o.out, "Output image: .png (sRGB, 8 or 16 bits, alpha with a transparent --background), .exr (linear float RGBA) or .jpg")->required();
-    render->add_option("--background", names.background,
-                       "R,G,B[,A]: the background as display (sRGB) values and opacity in [0, 1], instead of the scene's; "
-                       "an opacity below 1 writes alpha (PNG with straight alpha, EXR premultiplied)");
-    render->add_option("--png-bits", o.pngBits, "Bits per PNG channel: 8 or 16")->capture_default_str();
-    render->add_option("--stats", o.statsPath, "Write per-stage counters and timings as JSON");
-    render->add_option("--view", names.view, "What to show: color, depth, tiles (coarse block "
-                                       "classes), overdraw (depth-passing samples), lod (voxel models: "
-                                       "blocks coloured by level) or visibility (voxel models: drawn green, "
-                                       "source triangles yellow, occlusion-culled red) or shadow-pixels "
-                                       "(the pixels the shadow stage traced rays for, red)")
-        ->capture_default_str();
-    render->add_option("--detail", o.detail, "Tessellation scale of built-in scenes")
-        ->capture_default_str();
-    render->add_option("--azimuth", o.azimuth, "Camera azimuth for mesh files, degrees about +y")
-        ->capture_default_str();
-    render->add_option("--elevation", o.elevation, "Camera elevation for mesh files, degrees")
-        ->capture_default_str();
-    render->add_option("--camera-index", o.cameraIndex,
-                       "Use the file's N-th camera (glTF, in node order) instead of framing the model");
-    render->add_option("--eye", names.eye, "Place the camera at X,Y,Z (world units) instead of framing the model");
-    render->add_option("--target", names.target, "With --eye: the point X,Y,Z looked at (default: the model's centre)");
-    render->add_option("--up", names.up, "With --eye: the up direction X,Y,Z (default: 0,1,0)");
-    render->add_option("--fov", names.fovDegrees, "With --eye: vertical field of view, degrees (default: the framing one's)");
-    render->add_option("--up-axis", names.upAxis, "Mesh files: the file's up axis, y or z (z-up scans are turned to y-up)")
-        ->capture_default_str();
-    render->add_option("--zoom", o.zoom,
-                       "Magnify the view F times, whichever camera frames it (the field of view narrows; the eye stays)")
-        ->capture_default_str();
-    render->add_option("--animation", o.animation,
-                       "glTF: the animation --time, --animate and --turntable pose, by name or index (default: the first)");
-    render->add_option("--time", o.timeSeconds,
-                       "glTF: pose the animation (--animation; the first by default) at this time, in seconds")
-        ->capture_default_str();
-    render->add_option("--turntable", o.turntable,
-                       "Write N frames turning around the scene (OUT_000.png, OUT_001.png, ...)")
-        ->check(CLI::Range(1, 3600));
-    render->add_option("--animate", o.animate,
-                       "glTF: write N frames of the animation (--animation) from --time, --fps apart (OUT_000.png, ...)")
-        ->check(CLI::Range(1, 3600));
-    render->add_option("--fps", o.fps, "With --animate: frames a second of animation time")->capture_default_str();
-    render->add_option("--supersample", o.supersample,
-                       "Render N x N times the pixels and box-filter down: N² samples per pixel on a grid (1..16)")
-        ->capture_default_str();
-    render->add_option("--texture-filter", names.textureFilter,
-                       "Texture filtering: file (each texture's own sampler), or nearest, bilinear or trilinear for "
-                       "every texture")
-        ->capture_default_str();
-    render->add_option("--depth", names.depth,
-                       "Depth convention: standard (0 near, 1 far) or reversed (1 near, 0 far: float precision "
-                       "where distant surfaces need it)")
-        ->capture_default_str();
-    render->add_flag("--frustum-cull", o.frustumCull,
-                     "3D scenes: cull triangles against the view frustum through a BVH (refitted per --animate frame)");
-    render->add_option("--bvh-update", names.bvhUpdate,
-                       "With --animate: how the frustum cull's and the shadow stage's BVHs follow each pose: refit "
-                       "(bottom-up, rebuilt past Lauterbach's 0.4), lazy (Larsson's: the upper half refitted, the "
-                       "rest on first touch by a ray) or rebuild (a new tree every frame)")
-        ->capture_default_str();
-    render->add_option("--pixel-error", o.pixelError,
-                       "Voxel models: refine blocks until a voxel projects to at most this many pixels "
-                       "(0: always the finest level)")
-        ->capture_default_str();
-    render->add_option("--voxel-resolution", o.voxelResolution,
-                       "Voxel models: refine no finer than this resolution, one of the model's levels (0: the finest)")
-        ->capture_default_str();
-    render->add_flag("--no-hybrid", o.noHybrid,
-                     "Voxel models: never draw source triangles where even the finest voxels are too coarse");
-    render->add_flag("--no-occlusion", o.noOcclusion, "Voxel models: no occlusion culling");
-    render->add_flag("--debug-camera", o.debugCamera,
-                     "Voxel models: draw what the camera's frame selected as seen from its side, farther and above");
-    render->add_option("--warmup", o.warmup,
-                       "Voxel models: frames rendered first so occlusion culling has the frame before to learn from")
-        ->capture_default_str();
-    render->add_option("--shadows", names.shadows,
-                       "Shadows from the scene's lights: none, map (shadow maps), hybrid (maps, with shadow rays "
-                       "for the pixels a map may get wrong) or raytraced (a shadow ray per pixel, the reference)")
-        ->capture_default_str();
-    render->add_flag("--soft", o.shadows.soft, "Area lights: soft shadows (N x N rays where rays are traced)");
-    render->add_option("--light-radius", o.shadows.lightRadius,
-                       "With --soft: light radius in world units (point, spot); tangent of the angular radius "
-                       "(directional)")
-        ->capture_default_str();
-    render->add_option("--shadow-map-size", o.shadows.mapSizeTexels, "Shadow map side in texels (per cube face)")
-        ->capture_default_str();
-    render->add_option("--soft-samples", o.shadows.softSamplesPerSide, "With --soft: N, for N x N rays per pixel")
-        ->capture_default_str();
-    render->add_flag("--quiet", o.quiet, "Print nothing on success");
-}
 
 void addExplainCommand(CLI::App& app, cuberille::apps::ExplainOptions& o) {
     CLI::App* explain = app.add_subcommand(
@@ -236,7 +125,7 @@ void addFlyCommand(CLI::App& app, cuberille::apps::FlyOptions& o) {
                     "('px py pz tx ty tz' per line)")
         ->capture_default_str();
     fly->add_option("--frames", o.frames, "Frames along the path")->capture_default_str();
-    addFrameOptions(fly, o.width, o.height, o.msaa, o.threads);
+    cuberille::apps::addFrameOptions(fly, o.width, o.height, o.msaa, o.threads);
     fly->add_option("--out-dir", o.outDir, "Write final.png (the settled last view) and frames asked for by --save-every");
     fly->add_option("--save-every", o.saveEvery, "Also write every K-th frame as frame_NNNNN.png (0: none)")
         ->capture_default_str();
@@ -330,8 +219,10 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("cuberille ") + CUBERILLE_VERSION);
     cuberille::apps::RenderOptions renderOptions;
-    RenderNames renderNames;
-    addRenderCommand(app, renderOptions, renderNames);
+    cuberille::apps::RenderNames renderNames;
+    cuberille::apps::addRenderCommand(app, renderOptions, renderNames);
+    cuberille::apps::BatchOptions batchOptions;
+    cuberille::apps::addBatchCommand(app, batchOptions);
     cuberille::apps::PackOptions packOptions;
     addPackCommand(app, packOptions);
     cuberille::apps::VoxelizeCommandOptions voxelizeOptions;
@@ -373,28 +264,10 @@ int main(int argc, char** argv) {
     }
     try {
         if (app.got_subcommand("render")) {
-            renderOptions.view = cuberille::apps::parseView(renderNames.view);
-            renderOptions.shadows.mode = cuberille::render::parseShadowMode(renderNames.shadows);
-            renderOptions.textureFilter = cuberille::apps::parseTextureFilter(renderNames.textureFilter);
-            renderOptions.depth = cuberille::apps::parseDepthConvention(renderNames.depth);
-            renderOptions.bvhUpdate = cuberille::apps::parseBvhUpdate(renderNames.bvhUpdate);
-            if (renderNames.upAxis != "y" && renderNames.upAxis != "z")
-                throw cuberille::scene::InputError("--up-axis " + renderNames.upAxis + ": expected y or z");
-            renderOptions.zUp = renderNames.upAxis == "z";
-            if (!renderNames.background.empty()) renderOptions.background = cuberille::apps::parseBackground(renderNames.background);
-            const bool placed = !renderNames.eye.empty();
-            if (!placed && (!renderNames.target.empty() || !renderNames.up.empty() || renderNames.fovDegrees != 0.0f))
-                throw cuberille::scene::InputError("--target, --up and --fov: only with --eye");
-            if (placed) {
-                cuberille::scene::CameraPlacement p;
-                p.eye = cuberille::apps::parseVector3(renderNames.eye, "--eye");
-                if (!renderNames.target.empty()) p.target = cuberille::apps::parseVector3(renderNames.target, "--target");
-                if (!renderNames.up.empty()) p.up = cuberille::apps::parseVector3(renderNames.up, "--up");
-                p.verticalFovDegrees = renderNames.fovDegrees;
-                renderOptions.placement = p;
-            }
+            cuberille::apps::applyRenderNames(renderNames, renderOptions);
             return cuberille::apps::runRenderCommand(renderOptions);
         }
+        if (app.got_subcommand("batch")) return cuberille::apps::runBatchCommand(batchOptions);
         if (app.got_subcommand("pack")) return cuberille::apps::runPackCommand(packOptions);
         if (app.got_subcommand("voxelize")) return cuberille::apps::runVoxelizeCommand(voxelizeOptions);
         if (app.got_subcommand("isosurface")) return cuberille::apps::runIsosurfaceCommand(isosurfaceOptions);

@@ -139,8 +139,7 @@ void writeFrame(const RenderOptions& o, int index, const RenderResult& r, nlohma
 // 360/N degrees a frame) or --animate N (the animation posed at --time + i / --fps). The scene
 // is loaded once; the hierarchies the frustum cull and shadows need are built on the first frame
 // and, for an animation, refitted to each next pose (render/loaded_scene.h).
-int renderFrames(const RenderOptions& o) {
-    const render::LoadedScene scene = loadScene(o);
+int renderFrames(const render::LoadedScene& scene, const RenderOptions& o) {
     const bool sequence = o.turntable > 0 || o.animate > 0;
     const int count = o.turntable > 0 ? o.turntable : o.animate > 0 ? o.animate : 1;
     nlohmann::json frames = nlohmann::json::array();
@@ -161,6 +160,16 @@ int renderFrames(const RenderOptions& o) {
 }  // namespace
 
 int runRenderCommand(const RenderOptions& o) {
+    checkRenderCommand(o);
+    return renderFrames(loadScene(o), o);
+}
+
+int runRenderCommand(const RenderOptions& o, const render::LoadedScene& scene) {
+    checkRenderCommand(o);
+    return renderFrames(scene, o);
+}
+
+void checkRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png, .exr or .jpg)");
     // Refuse what cannot be written before any work: a bad extension, alpha in a JPEG.
     const ImageFormat format = imageFormatFor(o.out);
@@ -172,7 +181,6 @@ int runRenderCommand(const RenderOptions& o) {
     requireOutputPath(o.out, "--out");
     requireOutputPath(o.statsPath, "--stats");
     validateSequence(o);
-    return renderFrames(o);
 }
 
 }  // namespace cuberille::apps

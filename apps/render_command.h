@@ -62,5 +62,9 @@ nlohmann::json statsToJson(const RenderOptions& options, const RenderResult& res
 /// The whole subcommand: render, write the image and stats, print a summary. Returns the
 /// exit code.
 int runRenderCommand(const RenderOptions& options);
+/// The same with the scene already loaded (options.scene, .detail and .zUp as it was loaded with).
+int runRenderCommand(const RenderOptions& options, const render::LoadedScene& scene);
+/// What the command refuses before any work: no --out, an unwritable output, a bad sequence.
+void checkRenderCommand(const RenderOptions& options);
 
 }  // namespace cuberille::apps

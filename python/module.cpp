@@ -84,7 +84,7 @@ render::FrameSettings frameSettings(int width, int height, int msaa, const py::k
             throw py::type_error("render() got an unexpected keyword argument '" + k + "'");
         }
     }
-    if (placement && !eyeGiven) throw scene::InputError("--target, --up and --fov: need --eye");
+    if (placement && !eyeGiven) throw scene::InputError("--target, --up and --fov: only with --eye");
     f.placement = placement;
     return f;
 }

@@ -180,6 +180,46 @@ TEST_F(Cli, ATransparentBackgroundWritesCoverageAsAlpha) {
 
 // --zoom F magnifies F times: the square covers F² times the pixels (to within the edge pixels'
 // share), for the framing camera and a placed one alike.
+// `batch`: each job's image is the one `render` writes for the same options (bytes compared),
+// a scene named by several jobs is loaded once, and failing jobs are reported by line while the
+// others still run; the exit code says that some failed.
+TEST_F(Cli, BatchRendersEachJobAsRenderDoesAndReportsFailuresByLine) {
+    const fs::path gltf = dir_ / "slide.gltf";
+    cuberille::testing::writeSlidingCubeGltf(gltf);
+    const fs::path tri = write("t.tri", "10 10 100 20 30 90 1 0.2 0.2\n");
+    const std::vector<std::pair<std::string, std::string>> good = {
+        {"{\"scene\": \"" + gltf.string() + "\", \"out\": \"" + (dir_ / "a.png").string() +
+             "\", \"width\": 96, \"height\": 64, \"msaa\": 4, \"time\": 0.25, \"shadows\": \"hybrid\"}",
+         gltf.string() + " --width 96 --height 64 --msaa 4 --time 0.25 --shadows hybrid"},
+        {"{\"scene\": \"" + gltf.string() + "\", \"out\": \"" + (dir_ / "b.png").string() +
+             "\", \"width\": 96, \"height\": 64, \"time\": 0.75, \"frustum_cull\": true, \"eye\": [0, 3, 9]}",
+         gltf.string() + " --width 96 --height 64 --time 0.75 --frustum-cull --eye 0,3,9"},
+        {"{\"scene\": \"" + tri.string() + "\", \"out\": \"" + (dir_ / "c.png").string() + "\", \"width\": 128, \"height\": 128}",
+         tri.string() + " --width 128 --height 128"},
+    };
+    std::string jobs = "# three good jobs and two bad ones\n" + good[0].first + "\n" + good[1].first + "\n" +
+                       "{\"scene\": \"" + gltf.string() + "\", \"out\": \"" + (dir_ / "d.png").string() + "\", \"view\": \"sideways\"}\n" +
+                       good[2].first + "\n{\"scene\": \"" + tri.string() + "\", \"colour\": \"red\"}\n";
+    const fs::path file = write("jobs.jsonl", jobs);
+    const CommandRun batch = run("batch " + file.string());
+    EXPECT_EQ(batch.exitCode, 1) << batch.output;
+    EXPECT_NE(batch.output.find("jobs.jsonl:4: --view: 'sideways' is not"), std::string::npos) << batch.output;
+    EXPECT_NE(batch.output.find("jobs.jsonl:6: \"colour\": render has no option --colour"), std::string::npos) << batch.output;
+    EXPECT_NE(batch.output.find("5 jobs, 2 failed, 2 scenes loaded"), std::string::npos) << batch.output;
+    EXPECT_FALSE(fs::exists(dir_ / "d.png"));
+    const char* names[] = {"a.png", "b.png", "c.png"};
+    for (size_t i = 0; i < good.size(); ++i) {
+        const fs::path single = dir_ / ("single-" + std::string(names[i]));
+        const CommandRun r = run("render " + good[i].second + " --quiet --out " + single.string());
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        std::ifstream a(dir_ / names[i], std::ios::binary), b(single, std::ios::binary);
+        const std::string batchBytes((std::istreambuf_iterator<char>(a)), {}), singleBytes((std::istreambuf_iterator<char>(b)), {});
+        EXPECT_FALSE(batchBytes.empty()) << names[i];
+        EXPECT_EQ(batchBytes, singleBytes) << names[i];
+    }
+    EXPECT_EQ(run("batch " + (dir_ / "none.jsonl").string()).exitCode, 2);
+}
+
 TEST_F(Cli, ZoomMagnifiesTheViewByItsFactor) {
     const fs::path ply = write("square.ply", kSquarePly);
     auto covered = [&](const std::string& options) {

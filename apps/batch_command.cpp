@@ -1,0 +1,131 @@
+#include "apps/batch_command.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/render_options_cli.h"
+#include "raster/clock.h"
+#include "scene/input_error.h"
+
+namespace cuberille::apps {
+namespace {
+
+RenderOptions parseJob(const std::string& line, bool quiet);
+std::vector<std::string> renderArguments(const nlohmann::json& job);
+
+// Scenes by what they were loaded from and how: a job reuses one loaded for an earlier job.
+using SceneKey = std::tuple<std::string, float, bool>;
+
+}  // namespace
+
+void addBatchCommand(CLI::App& app, BatchOptions& o) {
+    CLI::App* batch = app.add_subcommand(
+        "batch", "Run many renders in one process: one JSON object per line of JOBS ({\"scene\": ..., \"out\": ..., "
+                 "and render's options by name}); each scene is loaded once");
+    batch->add_option("jobs", o.jobs, "A JSON-lines file of render jobs (blank lines and lines starting with # are skipped)")
+        ->required();
+    batch->add_flag("--quiet", o.quiet, "Print only failures");
+}
+
+int runBatchCommand(const BatchOptions& o) {
+    std::ifstream in(o.jobs);
+    if (!in) throw scene::InputError(o.jobs.string() + ": cannot open file");
+    std::map<SceneKey, std::unique_ptr<render::LoadedScene>> scenes;
+    int jobs = 0, failed = 0;
+    const double t0 = raster::nowMs();
+    std::string line;
+    for (int number = 1; std::getline(in, line); ++number) {
+        if (line.find_first_not_of(" \t\r") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
+        ++jobs;
+        try {
+            const RenderOptions job = parseJob(line, o.quiet);
+            checkRenderCommand(job);
+            std::unique_ptr<render::LoadedScene>& scene = scenes[{job.scene, job.detail, job.zUp}];
+            if (!scene) scene = std::make_unique<render::LoadedScene>(loadScene(job));
+            runRenderCommand(job, *scene);
+        } catch (const std::exception& e) {
+            ++failed;
+            std::fprintf(stderr, "cuberille batch: %s:%d: %s\n", o.jobs.c_str(), number, e.what());
+        }
+    }
+    if (!o.quiet)
+        std::printf("batch: %d job%s, %d failed, %zu scene%s loaded; %.1f ms\n", jobs, jobs == 1 ? "" : "s", failed,
+                    scenes.size(), scenes.size() == 1 ? "" : "s", raster::nowMs() - t0);
+    return failed > 0 ? 1 : 0;
+}
+
+namespace {
+
+// A job line parsed by the render command's own options (apps/render_options_cli.h), so it takes
+// what `render` takes and is refused as `render` would refuse it.
+RenderOptions parseJob(const std::string& line, bool quiet) {
+    nlohmann::json job;
+    try {
+        job = nlohmann::json::parse(line);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw scene::InputError(std::string("not a JSON object: ") + e.what());
+    }
+    if (!job.is_object()) throw scene::InputError("not a JSON object");
+    if (!job.contains("scene") || !job["scene"].is_string()) throw scene::InputError("\"scene\": a string is required");
+    CLI::App app;
+    RenderOptions o;
+    RenderNames names;
+    const CLI::App* render = addRenderCommand(app, o, names);
+    for (const auto& [key, value] : job.items()) {
+        std::string name = key;
+        std::replace(name.begin(), name.end(), '_', '-');
+        bool known = key == "scene";
+        for (const CLI::Option* option : render->get_options())
+            for (const std::string& n : option->get_lnames()) known = known || n == name;
+        if (!known) throw scene::InputError("\"" + key + "\": render has no option --" + name);
+    }
+    std::vector<std::string> arguments = renderArguments(job);
+    std::reverse(arguments.begin(), arguments.end());  // CLI11 takes them last first
+    try {
+        app.parse(arguments);
+    } catch (const CLI::ParseError& e) {
+        throw scene::InputError(e.what());
+    }
+    applyRenderNames(names, o);
+    o.quiet = o.quiet || quiet;
+    return o;
+}
+
+std::vector<std::string> renderArguments(const nlohmann::json& job) {
+    std::vector<std::string> arguments{"render", job["scene"].get<std::string>()};
+    for (const auto& [key, value] : job.items()) {
+        if (key == "scene") continue;
+        std::string option = "--" + key;
+        std::replace(option.begin(), option.end(), '_', '-');
+        if (value.is_boolean()) {
+            if (value.get<bool>()) arguments.push_back(option);  // a flag; false leaves it off
+            continue;
+        }
+        std::string text;
+        if (value.is_string()) {
+            text = value.get<std::string>();
+        } else if (value.is_number()) {
+            text = value.dump();
+        } else if (value.is_array()) {
+            for (const auto& item : value) {
+                if (!item.is_number()) throw scene::InputError("\"" + key + "\": an array of numbers, or a string");
+                text += (text.empty() ? "" : ",") + item.dump();
+            }
+        } else {
+            throw scene::InputError("\"" + key + "\": a string, number, true/false or array of numbers");
+        }
+        arguments.push_back(option);
+        arguments.push_back(text);
+    }
+    return arguments;
+}
+
+}  // namespace
+}  // namespace cuberille::apps

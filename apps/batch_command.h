@@ -1,0 +1,24 @@
+#pragma once
+// `cuberille batch JOBS.jsonl`: many renders in one process. Each line of the jobs file is one
+// `render` as a JSON object: "scene" and "out" and any of render's options by their long names
+// ("msaa": 4, "pixel-error": 2, "frustum-cull": true, "eye": [1, 2, 3]; underscores may stand for
+// hyphens). Every scene is loaded once and reused by every job that names it with the same
+// --detail and --up-axis. A job that fails is reported with its line number and the others go
+// on; the exit code is 1 if any failed (2 if the jobs file itself cannot be read).
+
+#include <filesystem>
+
+#include <CLI/CLI.hpp>
+
+namespace cuberille::apps {
+
+struct BatchOptions {
+    std::filesystem::path jobs;
+    bool quiet = false;
+};
+
+void addBatchCommand(CLI::App& app, BatchOptions& o);
+
+int runBatchCommand(const BatchOptions& o);
+
+}  // namespace cuberille::apps

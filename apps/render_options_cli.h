@@ -1,0 +1,31 @@
+#pragma once
+// The render command's options as CLI11 reads them: shared by `cuberille render` and the jobs of
+// `cuberille batch` (apps/batch_command.h), so a job line takes exactly the options `render` does,
+// with the same checks and messages.
+
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "apps/render_command.h"
+
+namespace cuberille::apps {
+
+/// The frame's size, samples and the worker threads, as every rendering command takes them.
+void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int& threads);
+
+/// The render options parsed from names after CLI11 has read them.
+struct RenderNames {
+    std::string view = "color", shadows = "none", textureFilter = "file", depth = "standard", bvhUpdate = "refit";
+    std::string eye, target, up, upAxis = "y", background;
+    float fovDegrees = 0.0f;
+};
+
+/// Adds the `render` subcommand, whose options fill `o` and `names`.
+CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names);
+
+/// The options read as names (--view, --shadows, --eye, ...) turned into `o`'s values; throws
+/// scene::InputError naming the option.
+void applyRenderNames(const RenderNames& names, RenderOptions& o);
+
+}  // namespace cuberille::apps
