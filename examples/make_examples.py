@@ -11,6 +11,8 @@ checked in.
   spinning-box.gltf   a textured box on a ground, spinning (one 4 s rotation animation), lit by
                       a KHR_lights_punctual sun: texture, animation and shadows in one small file
   blob.raw            a 64x64x64 volume of uint16 (x fastest): two overlapping soft spheres
+  thumbnails.jsonl    render jobs for `cuberille batch`: thumbnails of the models above, scene
+                      paths relative to the repository root (where the README's commands run)
 """
 
 import base64
@@ -237,6 +239,24 @@ def main():
     write_obj(os.path.join(out, "knot.obj"), *knot())
     write_gltf(os.path.join(out, "spinning-box.gltf"))
     write_volume(os.path.join(out, "blob.raw"))
+    write_jobs(os.path.join(out, "thumbnails.jsonl"))
+
+
+def write_jobs(path):
+    """Four views of each mesh and two moments of the animation, as `cuberille batch` takes them:
+    one JSON object per line, render's options by name."""
+    jobs = []
+    for model in ("torus.ply", "knot.obj"):
+        for azimuth in (0, 90, 180, 270):
+            jobs.append({"scene": f"examples/{model}", "out": f"thumb-{model.split('.')[0]}-{azimuth}.png",
+                         "width": 256, "height": 256, "msaa": 4, "azimuth": azimuth})
+    for seconds in (0.5, 1.5):
+        jobs.append({"scene": "examples/spinning-box.gltf", "out": f"thumb-box-{seconds}s.png", "width": 256,
+                     "height": 256, "msaa": 4, "time": seconds, "shadows": "hybrid", "zoom": 2})
+    with open(path, "w") as f:
+        f.write("# cuberille batch examples/thumbnails.jsonl: one render job per line\n")
+        for job in jobs:
+            f.write(json.dumps(job) + "\n")
 
 
 if __name__ == "__main__":

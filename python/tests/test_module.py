@@ -3,6 +3,7 @@ the tool writes, a loaded scene that renders the same frame whatever it rendered
 with the tool's messages, the GIL released while rendering, and the golden-image helper."""
 
 import subprocess
+from pathlib import Path
 import threading
 import time
 
@@ -144,3 +145,14 @@ def test_assert_image_equal_passes_fails_and_updates(tmp_path, monkeypatch):
     testing.assert_image_equal(changed, golden, max_differing_pixels=2)
     with pytest.raises(AssertionError, match="is 32x36, the golden 64x36"):
         testing.assert_image_equal(image[:, :32], golden)
+
+
+def test_the_readme_python_example_runs_as_written(examples, tmp_path, monkeypatch):
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    start = readme.index("```python\n", readme.index("From Python and C++")) + len("```python\n")
+    code = readme[start:readme.index("```", start)]
+    (tmp_path / "examples").symlink_to(examples)
+    monkeypatch.chdir(tmp_path)
+    namespace = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    assert namespace["image"].shape == (480, 640, 4) and len(namespace["frames"]) == 3
