@@ -23,32 +23,14 @@ namespace {
 
 constexpr double kMib = 1024.0 * 1024.0;
 
-void validate(const FlyOptions& o) {
+// What the tool adds to the library's checks: its outputs.
+void validateOutputs(const FlyOptions& o) {
     using scene::InputError;
-    if (scene::fileKindOf(o.model) != scene::FileKind::VoxelModel) throw InputError(o.model.string() + ": fly needs a voxel model (.cvox)");
-    if (o.frames < 1 || o.frames > 1000000) throw InputError("--frames: must be 1 to 1000000");
-    validateFrameOptions(o.width, o.height, o.msaa, o.threads);
     if (o.saveEvery < 0) throw InputError("--save-every: must be 0 (the final image only) or more");
     if (o.saveEvery > 0 && o.outDir.empty()) throw InputError("--save-every: needs --out-dir");
-    if (!(o.budgetMib >= 1.0 && o.budgetMib <= 1024.0 * 1024.0)) throw InputError("--budget-mib: must be 1 to 1048576");
-    if (!(o.uploadLimitMib >= 0.0 && std::isfinite(o.uploadLimitMib)))
-        throw InputError("--upload-limit: must be 0 (unlimited) or more MiB");
-    if (!(o.ioThrottleMibps >= 0.0 && std::isfinite(o.ioThrottleMibps)))
-        throw InputError("--io-throttle: must be 0 (no throttle) or more MiB/s");
-    if (o.refine != "full" && o.refine != "partial") throw InputError("--refine: '" + o.refine + "' is not full or partial");
-    if (!(o.pixelError >= 0.0f && std::isfinite(o.pixelError))) throw InputError("--pixel-error: must be 0 or more");
-    if (o.settleFrames < 0) throw InputError("--settle-frames: must be 0 or more");
     if (!o.plotPath.empty()) imageFormatFor(o.plotPath);
     requireOutputPath(o.plotPath, "--plot");
     requireOutputPath(o.statsPath, "--stats");
-    if (o.path != "orbit" && o.path != "zoom" && !std::filesystem::exists(o.path))
-        throw InputError("--path: '" + o.path + "' is not orbit, zoom or an existing keyframe file");
-}
-
-lod::CameraPath cameraPath(const FlyOptions& o, const scene::Camera& framing) {
-    if (o.path == "orbit") return lod::CameraPath::orbit(framing);
-    if (o.path == "zoom") return lod::CameraPath::zoom(framing);
-    return lod::CameraPath::fromFile(o.path);
 }
 
 std::filesystem::path framePath(const FlyOptions& o, int frame) {
@@ -63,11 +45,6 @@ void saveImage(const raster::Pipeline& p, const std::filesystem::path& path) {
     writeImageAtomically(path, image);
 }
 
-uint64_t heldBytes(const lod::StreamingFrameStats& s) {
-    uint64_t held = 0;
-    for (int k = 0; k < lod::kPoolCount; ++k) held += s.residentBytes[k] + s.freeListBytes[k];
-    return held;
-}
 
 size_t levelCount(const FlyResult& r) {
     size_t levels = 0;
@@ -157,51 +134,17 @@ void printSummary(const FlyOptions& o, const FlyResult& r) {
 }  // namespace
 
 FlyResult runFly(const FlyOptions& o) {
-    validate(o);
-    raster::ThreadLimit threadLimit(o.threads);
+    validateOutputs(o);
     FlyResult r;
-    const double start = raster::nowMs();
-    const voxel::CvoxReader reader(o.model);
-    if (reader.blockCount() == 0) throw scene::InputError(o.model.string() + ": no voxels to fly through (a model of no blocks)");
-    lod::StreamingOptions so;
-    so.budgetBytes = uint64_t(o.budgetMib * kMib);
-    so.uploadLimitBytes = uint64_t(o.uploadLimitMib * kMib);
-    so.ioThrottleMibPerSecond = o.ioThrottleMibps;
-    lod::StreamingBlocks blocks(reader, so, [&](const std::string& w) {
-        r.warnings.push_back(w);
-        std::fprintf(stderr, "cuberille: warning: %s (its parent is drawn instead)\n", w.c_str());
-    });
-    r.budgetBytes = blocks.capacityBytes();
-    lod::VoxelScene scene(blocks, o.azimuth, o.elevation);
-    r.openMs = raster::nowMs() - start;
-    const lod::CameraPath path = cameraPath(o, scene.camera);
-    const scene::Camera lens = scene.camera;
-    lod::VoxelRenderOptions ro;
-    ro.selection.pixelError = o.pixelError;
-    ro.selection.hybrid = !o.noHybrid;
-    ro.occlusion = !o.noOcclusion;
-    ro.refine = o.refine == "partial" ? lod::Refinement::Partial : lod::Refinement::Full;
-    raster::FramebufferDesc fb;
-    fb.widthPixels = o.width, fb.heightPixels = o.height, fb.samples = o.msaa, fb.clearColor = scene.background;
-    lod::Flight flight(scene, blocks, fb, ro);
     if (!o.outDir.empty()) std::filesystem::create_directories(o.outDir);
-    for (int i = 0; i < o.frames; ++i) {
-        const float t = o.frames > 1 ? float(i) / float(o.frames - 1) : 0.0f;
-        r.frames.push_back(flight.frame(path.at(t, lens)));
+    const auto onFrame = [&](int frame, const lod::FlightFrame& f, const raster::Pipeline& p) {
         r.residentBytes.push_back(residentBytes());
-        if (i == 0) r.timeToFirstImageMs = raster::nowMs() - start;
-        if (o.saveEvery > 0 && i % o.saveEvery == 0) saveImage(flight.pipeline(), framePath(o, i));
-    }
-    r.pathFrames = o.frames;
-    if (o.settleFrames > 0) {
-        const auto measure = [&](const lod::FlightFrame&) { r.residentBytes.push_back(residentBytes()); };
-        for (lod::FlightFrame& f : flight.settle(path.at(1.0f, lens), o.settleFrames, measure))
-            r.frames.push_back(std::move(f));
-        r.settled = blocks.settled();
-    }
-    for (const lod::FlightFrame& f : r.frames) r.peakHeldBytes = std::max(r.peakHeldBytes, heldBytes(f.streaming));
-    r.bytesReadFromDisk = blocks.bytesReadFromDisk();
-    if (!o.outDir.empty()) saveImage(flight.pipeline(), o.outDir / "final.png");
+        if (o.saveEvery > 0 && !f.settling && frame % o.saveEvery == 0) saveImage(p, framePath(o, frame));
+    };
+    static_cast<render::FlyResult&>(r) = render::fly(o, onFrame, [](const std::string& w) {
+        std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str());
+    });
+    if (!o.outDir.empty()) writeImageAtomically(o.outDir / "final.png", r.finalImage);
     return r;
 }
 

@@ -125,6 +125,7 @@ public:
     const std::string& name() const { return scene_->name(); }
     std::vector<std::string> animations() const { return scene_->animations(); }
     const std::vector<std::string>& warnings() const { return warnings_; }
+    size_t cameras() const { return render::cameraCount(*scene_); }
     double loadMs() const { return scene_->loadMs(); }
 
 private:
@@ -169,6 +170,7 @@ PYBIND11_MODULE(_cuberille, m) {
         .def_property_readonly("name", &PyScene::name)
         .def_property_readonly("animations", &PyScene::animations)
         .def_property_readonly("warnings", &PyScene::warnings)
+        .def_property_readonly("cameras", &PyScene::cameras)
         .def_property_readonly("load_ms", &PyScene::loadMs);
     m.def("read_png", &readPng8, py::arg("path"), "A PNG as a (height, width, 4) uint8 array (8-bit files exactly).");
     m.def("write_png", &writePng8, py::arg("path"), py::arg("pixels"), "An (h, w, 3|4) uint8 array as an sRGB PNG.");

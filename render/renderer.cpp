@@ -44,6 +44,14 @@ RenderResult render(const LoadedScene& scene, const FrameSettings& f) {
     return r;
 }
 
+size_t cameraCount(const LoadedScene& scene) {
+    State& s = SceneAccess::state(scene);
+    std::lock_guard lock(gFrameMutex);
+    if (!s.gltf) return 0;
+    if (!s.hasPose) s.poseFor(FrameSettings{});
+    return s.fileCameras.size();
+}
+
 raster::Image displayImage(const LoadedScene& scene, const FrameSettings& f, const RenderResult& r) {
     return displayImage(r.image, f.view, !scene.isTriangleList());
 }

@@ -47,6 +47,10 @@ struct RenderResult {
 /// use for is refused, not ignored), with the message the command line prints.
 RenderResult render(const LoadedScene& scene, const FrameSettings& settings);
 
+/// A glTF's cameras (render with FrameSettings::cameraIndex below this), at the pose last rendered
+/// (at time 0 of the first animation before any); 0 for other scenes.
+size_t cameraCount(const LoadedScene& scene);
+
 /// The image an 8-bit file shows (render/display_image.h): four sRGB samples a pixel, alpha 255
 /// unless the background is not opaque. Exactly the pixels `cuberille render` writes to a PNG.
 std::vector<uint8_t> displayPixels(const LoadedScene& scene, const FrameSettings& settings, const RenderResult& result);

@@ -49,6 +49,11 @@ class Scene:
         return list(self._scene.animations)
 
     @property
+    def cameras(self):
+        """How many cameras a glTF has (render(camera_index=i) looks through one); 0 for others."""
+        return self._scene.cameras
+
+    @property
     def warnings(self):
         """What the loader warned about (unsupported extensions and the like), in order."""
         return list(self._scene.warnings)

@@ -87,6 +87,9 @@ def test_animations_and_cameras_are_chosen_by_name_or_index(examples):
     assert not np.array_equal(by_index, scene.render(64, 48, animation=0, time=0.5))  # an eighth of a turn
     with pytest.raises(cuberille.InputError, match="no animation 'walk'"):
         scene.render(64, 48, animation="walk")
+    assert scene.cameras == 0 and cuberille.Scene("demo").cameras == 0
+    with pytest.raises(cuberille.InputError, match="--camera-index 0: .* has 0 camera"):
+        scene.render(64, 48, camera_index=0)
 
 
 def test_errors_carry_the_clis_messages(examples, cli, tmp_path):
