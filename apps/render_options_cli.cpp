@@ -29,7 +29,8 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
                        "an opacity below 1 writes alpha (PNG with straight alpha, EXR premultiplied)");
     render->add_option("--png-bits", o.pngBits, "Bits per PNG channel: 8 or 16")->capture_default_str();
     render->add_option("--stats", o.statsPath, "Write per-stage counters and timings as JSON");
-    render->add_option("--view", names.view, "What to show: color, depth, tiles (coarse block "
+    render->add_option("--view", names.view, "What to show: color, depth, normals (world-space vertex normals as "
+                                       "colours, x red, y green, z blue), tiles (coarse block "
                                        "classes), overdraw (depth-passing samples), lod (voxel models: "
                                        "blocks coloured by level) or visibility (voxel models: drawn green, "
                                        "source triangles yellow, occlusion-culled red) or shadow-pixels "
@@ -52,6 +53,9 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
     render->add_option("--zoom", o.zoom,
                        "Magnify the view F times, whichever camera frames it (the field of view narrows; the eye stays)")
         ->capture_default_str();
+    render->add_flag("--orthographic", o.orthographic,
+                     "A parallel projection: the target's plane at the size the perspective camera shows it "
+                     "(--zoom narrows it)");
     render->add_option("--animation", o.animation,
                        "glTF: the animation --time, --animate and --turntable pose, by name or index (default: the first)");
     render->add_option("--time", o.timeSeconds,

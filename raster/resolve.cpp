@@ -111,7 +111,7 @@ void resolveDepth(const Framebuffer& fb, Image& out) {
     });
 }
 
-void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane, Image& out) {
+void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane, Image& out, bool orthographic) {
     prepare(fb, out);
     const int n = fb.samples();
     const bool reversed = fb.desc().depthConvention == DepthConvention::Reversed;
@@ -125,8 +125,9 @@ void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane,
                 // The key back to standard depth (raster/depth.h); the far plane is "nothing".
                 const double d = reversed ? 1.0 + double(keys[i]) : double(keys[i]);
                 if (!(d < 1.0)) continue;
-                // Inverting d = f (D - n) / ((f - n) D), the perspective depth of distance D.
-                sum += farD * nearD / (farD - d * (farD - nearD));
+                // Inverting d = f (D - n) / ((f - n) D), the perspective depth of distance D, or
+                // d = (D - n) / (f - n), the orthographic one.
+                sum += orthographic ? nearD + d * (farD - nearD) : farD * nearD / (farD - d * (farD - nearD));
                 ++covered;
             }
         }

@@ -29,10 +29,11 @@ void resolveDepth(const Framebuffer& fb, Image& out);
 /// reads back, without a four-channel image.
 void resolveDepthPlane(const Framebuffer& fb, std::vector<float>& out);
 /// The depth view for people: each pixel's distance along the view axis, in the units of the
-/// perspective projection's near and far planes (depth 0 at nearPlane and 1 at farPlane in the
-/// standard convention, as glm::perspectiveRH_ZO makes it), averaged over the samples a surface
+/// projection's near and far planes (depth 0 at nearPlane and 1 at farPlane in the standard
+/// convention, as glm::perspectiveRH_ZO and orthoRH_ZO make it: falling like 1/distance for a
+/// perspective projection, linear for an orthographic one), averaged over the samples a surface
 /// covers; alpha is the covered fraction. Uncovered pixels are 0 with alpha 0.
-void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane, Image& out);
+void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane, Image& out, bool orthographic = false);
 /// Heat map of depth-passing samples per pixel, normalised by the sample count.
 void visualizeOverdraw(const Framebuffer& fb, Image& out);
 /// Each 8x8 block coloured by what the coarse stage decided for it: never touched, only

@@ -71,7 +71,8 @@ View parseView(const std::string& name) {
     if (name == "lod") return View::Lod;
     if (name == "visibility") return View::Visibility;
     if (name == "shadow-pixels") return View::ShadowPixels;
-    throw scene::InputError("--view: '" + name + "' is not color, depth, tiles, overdraw, lod, visibility or shadow-pixels");
+    if (name == "normals") return View::Normals;
+    throw scene::InputError("--view: '" + name + "' is not color, depth, normals, tiles, overdraw, lod, visibility or shadow-pixels");
 }
 
 TextureFilterOverride parseTextureFilter(const std::string& name) {
@@ -114,6 +115,7 @@ const char* viewName(View v) {
         case View::Lod: return "lod";
         case View::Visibility: return "visibility";
         case View::ShadowPixels: return "shadow-pixels";
+        case View::Normals: return "normals";
     }
     return "?";
 }

@@ -24,7 +24,7 @@ namespace cuberille::render {
 enum class TextureFilterOverride { File, Nearest, Bilinear, Trilinear };
 
 /// What the image shows: the shaded frame, or one of the pipeline's internals made visible.
-enum class View { Color, Depth, Tiles, Overdraw, Lod, Visibility, ShadowPixels };
+enum class View { Color, Depth, Normals, Tiles, Overdraw, Lod, Visibility, ShadowPixels };
 
 /// How a scene is read, fixed for as long as it stays loaded (render/loaded_scene.h).
 struct SceneOptions {
@@ -48,6 +48,9 @@ struct FrameSettings {
     float timeSeconds = 0.0f; // glTF animation time
     std::string animation;    // --animation NAME|INDEX: the glTF animation posed; empty: the first
     float zoom = 1.0f;        // --zoom F: the view magnified F times (the field of view narrowed)
+    /// --orthographic: parallel projection, the target's plane shown at the size the perspective
+    /// camera shows it (scene::orthographicView); --zoom then narrows the half height.
+    bool orthographic = false;
     bool frustumCull = false; // 3D scenes: cull triangles against the frustum through a BVH
     rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit;  // how BVHs follow a new pose
     int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)

@@ -12,6 +12,7 @@
 #include "raster/limits.h"
 #include "raster/parallel.h"
 #include "raster/pipeline.h"
+#include "raster/srgb.h"
 #include "raster/texture.h"
 #include "render/display_image.h"
 #include "render/scene_state.h"
@@ -79,6 +80,8 @@ void validate(const State& s, const FrameSettings& o) {
     const bool threeD = !tri && !voxel, gltf = scene::isGltfKind(s.kind);
     if ((sh.mode != rt::ShadowMode::None || o.view == View::ShadowPixels) && !threeD)
         throw InputError("--shadows and --view shadow-pixels: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
+    if (o.view == View::Normals && !threeD)
+        throw InputError("--view normals: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
         throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
     if (o.frustumCull && !threeD) throw InputError("--frustum-cull: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
@@ -96,6 +99,7 @@ void validate(const State& s, const FrameSettings& o) {
         throw InputError("--time: only glTF files (.gltf, .glb) have animations, not " + s.name);
     if (!(o.zoom > 0.0f && o.zoom <= 1000.0f)) throw InputError("--zoom: must be in (0, 1000]");
     if (o.zoom != 1.0f && tri) throw InputError("--zoom: not for 2D .tri scenes");
+    if (o.orthographic && tri) throw InputError("--orthographic: not for 2D .tri scenes");
     if (!o.animation.empty() && !gltf)
         throw InputError("--animation: only glTF files (.gltf, .glb) have animations, not " + s.name);
     if (o.orbitDegrees != 0.0f && tri) throw InputError("--turntable: " + s.name + " is a 2D .tri scene");
@@ -129,9 +133,10 @@ void finishView(const raster::Pipeline& p, View view, const scene::Camera* camer
         case View::Color:
         case View::Lod:
         case View::Visibility:
-        case View::ShadowPixels: raster::resolveColor(p.framebuffer(), image); break;
+        case View::ShadowPixels:
+        case View::Normals: raster::resolveColor(p.framebuffer(), image); break;
         case View::Depth:
-            if (camera) raster::resolveViewDistance(p.framebuffer(), camera->nearPlane, camera->farPlane, image);
+            if (camera) raster::resolveViewDistance(p.framebuffer(), camera->nearPlane, camera->farPlane, image, camera->orthographic);
             else raster::resolveDepth(p.framebuffer(), image);
             break;
         case View::Overdraw: raster::visualizeOverdraw(p.framebuffer(), image); break;
@@ -159,9 +164,14 @@ void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::C
 }
 
 // --zoom F: a lens zoom. The eye stays and the field of view narrows until what it saw is F
-// times larger (tan of the half-angle divided by F), whichever camera framed the scene.
+// times larger (tan of the half-angle divided by F), whichever camera framed the scene; an
+// orthographic camera's half height is divided by F.
 void applyZoom(scene::Camera& camera, float zoom) {
     if (zoom == 1.0f) return;
+    if (camera.orthographic) {
+        camera.orthographicHalfHeight /= zoom;
+        return;
+    }
     const double halfAngle = std::atan(std::tan(glm::radians(double(camera.verticalFovDegrees)) / 2.0) / zoom);
     camera.verticalFovDegrees = float(glm::degrees(2.0 * halfAngle));
 }
@@ -227,6 +237,29 @@ private:
     std::vector<std::vector<uint32_t>> indices_;
 };
 
+// --view normals: each mesh drawn unlit in its interpolated world-space vertex normals as display
+// colours, (x, y, z) / 2 + 1/2 — the usual normal-map colouring, so +x is red, +y green, +z blue.
+// Normal maps are not applied and textures are dropped (an alpha mask's cut-outs with them).
+scene::Scene normalsScene(const scene::Scene& s) {
+    scene::Scene view = s;
+    for (scene::Mesh& m : view.meshes) {
+        m.colors.resize(m.normals.size());
+        for (size_t i = 0; i < m.normals.size(); ++i)
+            for (int k = 0; k < 3; ++k) m.colors[i][k] = float(raster::decodeSrgb(0.5 * double(m.normals[i][k]) + 0.5));
+        m.color = glm::vec3(1.0f);
+        m.unlit = true;
+        m.metallicRoughness = false;
+        m.emissive = glm::vec3(0.0f);
+        m.textures = {};
+        m.texCoords.clear();
+        m.tangents.clear();
+        m.alphas.clear();
+        m.alpha = 1.0f;
+        m.alphaMode = raster::AlphaMode::Opaque;
+    }
+    return view;
+}
+
 // --view shadow-pixels: the frame dimmed, and the pixels the shadow stage traced rays for in red.
 void showShadowPixels(const std::vector<uint8_t>& marked, raster::Image& image) {
     for (int y = 0; y < image.height; ++y)
@@ -246,6 +279,7 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
     result.load = s.loadStats;
     st.frameFor(o);
     s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
+    if (o.orthographic) s.camera = scene::orthographicView(s.camera);
     applyZoom(s.camera, o.zoom);
     s.camera = orbit(s.camera, o.orbitDegrees);
     BorrowedPose borrowed(s, o.textureFilter != TextureFilterOverride::File, o.frustumCull);
@@ -261,8 +295,10 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
         result.shadows->totalMs = raster::nowMs() - t0;
     }
     if (culling) result.culling = culling->cull(s, float(o.width) / float(o.height));
+    const std::optional<scene::Scene> normals = o.view == View::Normals ? std::optional(normalsScene(s)) : std::nullopt;
+    const scene::Scene& drawn = normals ? *normals : s;
     drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) {
-        s.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
+        drawn.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
     }, result);
     if (o.view == View::ShadowPixels) showShadowPixels(shadows->markedPixels(), result.image);
 }
@@ -287,6 +323,7 @@ void renderVoxelModel(State& st, const FrameSettings& o, RenderResult& result) {
     s.frameFrom(o.azimuth, o.elevation);
     s.resetOcclusion();  // each render starts from nothing (render/loaded_scene.h)
     s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
+    if (o.orthographic) s.camera = scene::orthographicView(s.camera);
     applyZoom(s.camera, o.zoom);
     result.sceneTriangles = s.model().triangleCount();
     result.voxelResolution = s.model().grid.resolution;
@@ -384,6 +421,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
     j["threadsRequested"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
     j["instructionSet"] = raster::activeInstructionSet();  // of the back end; the image is the same on each
     j["view"] = viewName(o.view);
+    j["projection"] = o.orthographic ? "orthographic" : "perspective";
     j["sceneTriangles"] = r.sceneTriangles;
     if (r.voxel) {
         const lod::VoxelFrameStats& v = *r.voxel;

@@ -50,6 +50,15 @@ Camera placeCamera(const CameraPlacement& p, const Camera& framing, const glm::v
     return c;
 }
 
+Camera orthographicView(const Camera& c) {
+    if (c.orthographic) return c;
+    Camera o = c;
+    o.orthographic = true;
+    o.orthographicHalfHeight =
+        glm::length(c.target - c.position) * std::tan(glm::radians(c.verticalFovDegrees) * 0.5f);
+    return o;
+}
+
 Camera frameBounds(const glm::vec3& boundsMin, const glm::vec3& boundsMax, float azimuthDegrees,
                    float elevationDegrees, float verticalFovDegrees) {
     Camera c;

@@ -37,6 +37,11 @@ struct CameraPlacement {
 Camera placeCamera(const CameraPlacement& placement, const Camera& framing, const glm::vec3& boundsMin,
                    const glm::vec3& boundsMax);
 
+/// The orthographic camera that sees what `c` sees in the plane through its target at the same
+/// size (half height = the target's distance times tan(half the field of view)); the same eye,
+/// direction and planes. An orthographic camera is returned as it is.
+Camera orthographicView(const Camera& c);
+
 /// A camera that frames a bounding box (its bounding sphere fills the vertical field of view),
 /// looking at its centre from the given azimuth (degrees about +y, 0 = from +z) and elevation
 /// (degrees above the horizon), with near and far planes hugging the sphere.

@@ -31,7 +31,7 @@ class Scene:
         """One frame as a (height, width, 4) array: uint8 sRGB, or with linear=True float32
         linear RGBA (colour premultiplied by alpha; for view="depth", distances from the eye).
         Options: threads, view, azimuth, elevation, camera_index, eye, target, up, fov, orbit,
-        time, animation, zoom, shadows, soft, light_radius, shadow_map_size, soft_samples,
+        time, animation, zoom, orthographic, shadows, soft, light_radius, shadow_map_size, soft_samples,
         frustum_cull, bvh_update, supersample, texture_filter, depth, background, pixel_error,
         voxel_resolution, no_hybrid, no_occlusion, warmup. Afterwards `stats` holds the frame's
         statistics as `--stats` writes them."""

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <sys/wait.h>
 
@@ -80,6 +81,89 @@ TEST_F(Renderer, ALoadedSceneRendersAFrameAsAFreshLoadDoes) {
     other.shadows.mode = rt::ShadowMode::RayTraced;
     render::render(reused, other);  // the shadow stage refitted to another pose
     EXPECT_EQ(render::render(reused, frame).image.rgba, expected.rgba);
+}
+
+// Two unit squares facing +z, one at z = 0 left of the axis and one at z = -3 right of it.
+fs::path writeTwoSquaresPly(const fs::path& dir) {
+    const fs::path path = dir / "two-squares.ply";
+    std::ofstream(path) << "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+                           "-2 -0.5 0\n-1 -0.5 0\n-1 0.5 0\n-2 0.5 0\n1 -0.5 -3\n2 -0.5 -3\n2 0.5 -3\n1 0.5 -3\n"
+                           "3 0 1 2\n3 0 2 3\n3 4 5 6\n3 4 6 7\n";
+    return path;
+}
+
+// Covered pixels left and right of the image's middle column (alpha of a transparent background).
+std::pair<double, double> coverageLeftRight(const raster::Image& image) {
+    double left = 0, right = 0;
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) (x < image.width / 2 ? left : right) += image.pixel(x, y)[3];
+    return {left, right};
+}
+
+// A parallel projection shows equal squares at different depths at one size, where the
+// perspective one shrinks the farther; --zoom 2 then covers four times the pixels.
+TEST_F(Renderer, OrthographicShowsEqualSquaresAtEveryDepthAlike) {
+    const render::LoadedScene scene(writeTwoSquaresPly(dir_).string());
+    render::FrameSettings frame;
+    frame.width = 240, frame.height = 120, frame.msaa = 16;
+    frame.background = glm::vec4(0, 0, 0, 0);
+    frame.placement = scene::CameraPlacement{glm::vec3(0, 0, 8), glm::vec3(0, 0, -1.5f), std::nullopt, 40.0f};
+    const auto [nearPerspective, farPerspective] = coverageLeftRight(render::render(scene, frame).image);
+    EXPECT_LT(farPerspective, 0.8 * nearPerspective);  // (9.5 / 12.5)² = 0.58 as far as the eye goes
+    frame.orthographic = true;
+    const auto [nearOrtho, farOrtho] = coverageLeftRight(render::render(scene, frame).image);
+    EXPECT_NEAR(farOrtho / nearOrtho, 1.0, 0.01);  // equal areas; the edges' sampling differs a little
+    frame.zoom = 2.0f;
+    const auto [nearZoomed, farZoomed] = coverageLeftRight(render::render(scene, frame).image);
+    EXPECT_NEAR((nearZoomed + farZoomed) / (nearOrtho + farOrtho), 4.0, 0.05);
+}
+
+// The depth view of an orthographic frame is distance along the view axis, as a perspective one's.
+TEST_F(Renderer, OrthographicDepthViewIsDistanceAlongTheViewAxis) {
+    const render::LoadedScene scene(writeTwoSquaresPly(dir_).string());
+    render::FrameSettings frame;
+    frame.width = 240, frame.height = 120, frame.view = render::View::Depth;
+    frame.placement = scene::CameraPlacement{glm::vec3(0, 0, 8), glm::vec3(0, 0, -1.5f), std::nullopt, 40.0f};
+    for (bool orthographic : {false, true}) {
+        frame.orthographic = orthographic;
+        const raster::Image image = render::render(scene, frame).image;
+        // Every fully covered pixel: the near square's (left half) 8 from the eye along the view
+        // axis, the far one's 11.
+        int left = 0, right = 0;
+        for (int y = 0; y < image.height; ++y)
+            for (int x = 0; x < image.width; ++x) {
+                const float* p = image.pixel(x, y);
+                if (p[3] < 1.0f) continue;
+                const bool isLeft = x < image.width / 2;
+                (isLeft ? left : right)++;
+                const float expected = isLeft ? 8.0f : 11.0f;
+                ASSERT_NEAR(p[0], expected, expected * 1e-4f) << "orthographic " << orthographic << " at " << x << "," << y;
+            }
+        EXPECT_GT(left, 100) << orthographic;
+        EXPECT_GT(right, 100) << orthographic;
+    }
+}
+
+// --view normals: a surface facing +z shows (0.5, 0.5, 1) as display values, whatever lights it.
+TEST_F(Renderer, NormalsViewShowsEachSurfacesNormalAsItsColour) {
+    const render::LoadedScene scene(writeTwoSquaresPly(dir_).string());
+    render::FrameSettings frame;
+    frame.width = 240, frame.height = 120, frame.view = render::View::Normals;
+    frame.placement = scene::CameraPlacement{glm::vec3(0, 0, 8), glm::vec3(0, 0, -1.5f), std::nullopt, 40.0f};
+    frame.background = glm::vec4(0, 0, 0, 0);  // alpha tells covered pixels from the background
+    const render::RenderResult r = render::render(scene, frame);
+    const std::vector<uint8_t> pixels = render::displayPixels(scene, frame, r);
+    int covered = 0;
+    for (size_t i = 0; i < pixels.size(); i += 4) {
+        if (pixels[i + 3] != 255) continue;
+        ++covered;
+        ASSERT_NEAR(pixels[i], 128, 1) << "pixel " << i / 4;
+        ASSERT_NEAR(pixels[i + 1], 128, 1) << "pixel " << i / 4;
+        ASSERT_EQ(pixels[i + 2], 255) << "pixel " << i / 4;
+    }
+    EXPECT_GT(covered, 200);
+    EXPECT_EQ(r.stats.counters.lightEvaluations, 0u);
 }
 
 TEST_F(Renderer, BadInputThrowsTheCliMessages) {
