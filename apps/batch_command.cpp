@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "apps/progress.h"
 #include "apps/render_options_cli.h"
 #include "raster/clock.h"
 #include "scene/input_error.h"
@@ -40,8 +41,12 @@ int runBatchCommand(const BatchOptions& o) {
     std::map<SceneKey, std::unique_ptr<render::LoadedScene>> scenes;
     int jobs = 0, failed = 0;
     const double t0 = raster::nowMs();
-    std::string line;
-    for (int number = 1; std::getline(in, line); ++number) {
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    ProgressLine progress("line", int(lines.size()), o.quiet);
+    for (int number = 1; number <= int(lines.size()); ++number) {
+        const std::string& line = lines[size_t(number) - 1];
+        progress.update(number);
         if (line.find_first_not_of(" \t\r") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
         ++jobs;
         try {
@@ -52,9 +57,11 @@ int runBatchCommand(const BatchOptions& o) {
             runRenderCommand(job, *scene);
         } catch (const std::exception& e) {
             ++failed;
+            progress.finish();
             std::fprintf(stderr, "cuberille batch: %s:%d: %s\n", o.jobs.c_str(), number, e.what());
         }
     }
+    progress.finish();
     if (!o.quiet)
         std::printf("batch: %d job%s, %d failed, %zu scene%s loaded; %.1f ms\n", jobs, jobs == 1 ? "" : "s", failed,
                     scenes.size(), scenes.size() == 1 ? "" : "s", raster::nowMs() - t0);

@@ -9,6 +9,7 @@
 #include "apps/frame_plot.h"
 #include "apps/image_io.h"
 #include "apps/process_memory.h"
+#include "apps/progress.h"
 #include "apps/render_command.h"
 #include "lod/camera_path.h"
 #include "raster/clock.h"
@@ -137,13 +138,16 @@ FlyResult runFly(const FlyOptions& o) {
     validateOutputs(o);
     FlyResult r;
     if (!o.outDir.empty()) std::filesystem::create_directories(o.outDir);
+    ProgressLine progress("frame", o.frames, o.quiet);
     const auto onFrame = [&](int frame, const lod::FlightFrame& f, const raster::Pipeline& p) {
+        progress.update(std::min(frame + 1, o.frames));  // the settling frames after the path count as its last
         r.residentBytes.push_back(residentBytes());
         if (o.saveEvery > 0 && !f.settling && frame % o.saveEvery == 0) saveImage(p, framePath(o, frame));
     };
     static_cast<render::FlyResult&>(r) = render::fly(o, onFrame, [](const std::string& w) {
         std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str());
     });
+    progress.finish();
     if (!o.outDir.empty()) writeImageAtomically(o.outDir / "final.png", r.finalImage);
     return r;
 }

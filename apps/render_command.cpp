@@ -1,9 +1,11 @@
 #include "apps/render_command.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "apps/atomic_file.h"
 #include "apps/image_io.h"
+#include "apps/progress.h"
 #include "raster/clock.h"
 #include "scene/file_names.h"
 #include "scene/input_error.h"
@@ -127,12 +129,44 @@ raster::Image imageToWrite(const RenderOptions& o, const std::filesystem::path& 
 }
 
 // Frame `index` of a sequence (or the one frame, index < 0): its image, its stats kept for
-// {"frames": [...]}, its summary.
+// {"frames": [...]}; the one frame's summary (a sequence prints one for all its frames).
 void writeFrame(const RenderOptions& o, int index, const RenderResult& r, nlohmann::json& frames) {
     const std::filesystem::path file = index < 0 ? o.out : frameFileName(o.out, index);
     writeImageAtomically(file, imageToWrite(o, file, r.image), imageWriteOptions(o));
     if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
-    if (!o.quiet) printSummary(o, file, r);
+    if (!o.quiet && index < 0) printSummary(o, file, r);
+}
+
+// What a sequence's summary adds up over its frames.
+struct SequenceTotals {
+    std::vector<double> frameMs;  // each frame's whole time: its frame and resolve, shadows included
+    double loadMs = 0.0;
+    uint64_t trianglesIn = 0, pixelsShaded = 0, raysTraced = 0;
+};
+
+void addToTotals(const RenderResult& r, SequenceTotals& t) {
+    t.frameMs.push_back(r.stats.times.frameMs + r.stats.times.resolveMs + (r.shadows ? r.shadows->totalMs : 0.0));
+    t.loadMs += r.loadMs;
+    t.trianglesIn += r.stats.counters.trianglesIn;
+    t.pixelsShaded += r.stats.counters.pixelsShaded;
+    if (r.shadows) t.raysTraced += r.shadows->shadows.raysTraced;
+}
+
+// One summary for a --turntable or --animate sequence, not one per frame.
+void printSequenceSummary(const RenderOptions& o, int count, SequenceTotals t) {
+    const int samplesPerPixel = o.msaa * o.supersample * o.supersample;
+    std::printf("wrote %s .. %s (%d frames, %dx%d, %d sample%s, view %s)\n", frameFileName(o.out, 0).c_str(),
+                frameFileName(o.out, count - 1).c_str(), count, o.width, o.height, samplesPerPixel,
+                samplesPerPixel > 1 ? "s" : "", render::viewName(o.view));
+    double total = 0.0;
+    for (double ms : t.frameMs) total += ms;
+    std::sort(t.frameMs.begin(), t.frameMs.end());
+    std::printf("  frames: median %.1f ms, slowest %.1f ms, %.1f ms in all; loading and posing %.1f ms\n",
+                t.frameMs[t.frameMs.size() / 2], t.frameMs.back(), total, t.loadMs);
+    std::printf("  %llu triangles in, %llu pixels shaded in all", (unsigned long long)t.trianglesIn,
+                (unsigned long long)t.pixelsShaded);
+    if (o.shadows.mode != rt::ShadowMode::None) std::printf(", %llu shadow rays", (unsigned long long)t.raysTraced);
+    std::printf("; --stats has each frame\n");
 }
 
 // The frames of the command: one, --turntable N (the camera turned about the world's up axis by
@@ -143,6 +177,8 @@ int renderFrames(const render::LoadedScene& scene, const RenderOptions& o) {
     const bool sequence = o.turntable > 0 || o.animate > 0;
     const int count = o.turntable > 0 ? o.turntable : o.animate > 0 ? o.animate : 1;
     nlohmann::json frames = nlohmann::json::array();
+    SequenceTotals totals;
+    ProgressLine progress("frame", count, o.quiet);
     for (int i = 0; i < count; ++i) {
         render::FrameSettings frame = o;
         if (o.turntable > 0) frame.orbitDegrees = 360.0f * float(i) / float(o.turntable);
@@ -152,7 +188,11 @@ int renderFrames(const render::LoadedScene& scene, const RenderOptions& o) {
         RenderOptions written = o;
         static_cast<render::FrameSettings&>(written) = frame;
         writeFrame(written, sequence ? i : -1, r, frames);
+        addToTotals(r, totals);
+        progress.update(i + 1);
     }
+    progress.finish();
+    if (sequence && !o.quiet) printSequenceSummary(o, count, std::move(totals));
     if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, sequence ? nlohmann::json{{"frames", frames}} : frames[0]);
     return 0;
 }

@@ -40,6 +40,18 @@ void Framebuffer::reset(const FramebufferDesc& desc) {
     }
 }
 
+uint64_t Framebuffer::bytesFor(const FramebufferDesc& d) {
+    const uint64_t tiles = uint64_t((d.widthPixels + kTileSizePixels - 1) / kTileSizePixels) *
+                           uint64_t((d.heightPixels + kTileSizePixels - 1) / kTileSizePixels);
+    const uint64_t samples = tiles * kPixelsPerTile * uint64_t(d.samples);
+    const uint64_t pixels = uint64_t(d.widthPixels) * uint64_t(d.heightPixels);
+    uint64_t bytes = samples * (sizeof(float) + (d.colorAttachment ? sizeof(glm::vec4) : 0)) +
+                     tiles * kBlocksPerTile * sizeof(float) + tiles;
+    if (d.recordOverdraw) bytes += pixels * sizeof(uint32_t);
+    if (d.recordBlockClasses) bytes += 2 * tiles * kBlocksPerTile * sizeof(uint32_t);
+    return bytes;
+}
+
 void Framebuffer::touchTile(int tile) {
     if (tileTouched_[tile]) return;
     tileTouched_[tile] = 1;

@@ -53,6 +53,11 @@ class Framebuffer {
 public:
     void reset(const FramebufferDesc& desc);
 
+    /// The bytes reset(desc) allocates: per sample a 4-byte depth key and, with a colour
+    /// attachment, 16 bytes of linear RGBA, over whole 64x64 tiles; per 8x8 block a 4-byte
+    /// hierarchical-Z bound; the overdraw and block-class records when asked for.
+    static uint64_t bytesFor(const FramebufferDesc& desc);
+
     const FramebufferDesc& desc() const { return desc_; }
     int width() const { return desc_.widthPixels; }
     int height() const { return desc_.heightPixels; }

@@ -15,6 +15,7 @@
 #include "raster/srgb.h"
 #include "raster/texture.h"
 #include "render/display_image.h"
+#include "render/frame_memory.h"
 #include "render/scene_state.h"
 #include "scene/input_error.h"
 
@@ -37,7 +38,8 @@ RenderResult render(const LoadedScene& scene, const FrameSettings& f) {
     State& s = SceneAccess::state(scene);
     std::lock_guard lock(gFrameMutex);
     if (f.supersample < 1 || f.supersample > 16) throw scene::InputError("--supersample: must be 1 to 16");
-    validate(s, f);
+    validate(s, f);  // before the memory check: a frame too large for the rasterizer is refused as such
+    requireFrameMemory(f);
     raster::ThreadLimit threadLimit(f.threads);
     raster::resetThreadsThatRan();
     RenderResult r = f.supersample > 1 ? renderSupersampled(s, f) : renderAtScale(s, f, 1.0f);
@@ -110,6 +112,10 @@ void validate(const State& s, const FrameSettings& o) {
     if (!(o.pixelError >= 0.0f)) throw InputError("--pixel-error: must be 0 or more");
     if (o.warmup < 0 || o.warmup > 100) throw InputError("--warmup: must be 0 to 100 frames");
     if (o.supersample > 1 && o.view != View::Color) throw InputError("--supersample: only with --view color");
+    const int n = o.supersample;
+    if (int64_t(o.width) * n > raster::kMaxFramebufferPixels || int64_t(o.height) * n > raster::kMaxFramebufferPixels)
+        throw InputError("--supersample: " + std::to_string(o.width) + "x" + std::to_string(o.height) + " times " +
+                         std::to_string(n) + " exceeds " + std::to_string(raster::kMaxFramebufferPixels) + " pixels a side");
 }
 
 raster::FramebufferDesc frameDesc(const FrameSettings& o, glm::vec4 background) {
@@ -379,10 +385,7 @@ RenderResult renderAtScale(State& st, const FrameSettings& o, float windowScale)
 // pixel (summed in double): N² samples per pixel on a regular grid through the same pipeline, the
 // ground truth of `cuberille accuracy` (256 samples at N = 16).
 RenderResult renderSupersampled(State& st, const FrameSettings& o) {
-    const int n = o.supersample;
-    if (int64_t(o.width) * n > raster::kMaxFramebufferPixels || int64_t(o.height) * n > raster::kMaxFramebufferPixels)
-        throw scene::InputError("--supersample: " + std::to_string(o.width) + "x" + std::to_string(o.height) + " times " +
-                                std::to_string(n) + " exceeds " + std::to_string(raster::kMaxFramebufferPixels) + " pixels a side");
+    const int n = o.supersample;  // validate() bounded n times the size
     FrameSettings big = o;
     big.width *= n;
     big.height *= n;
@@ -422,6 +425,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
     j["instructionSet"] = raster::activeInstructionSet();  // of the back end; the image is the same on each
     j["view"] = viewName(o.view);
     j["projection"] = o.orthographic ? "orthographic" : "perspective";
+    const FrameMemory memory = frameMemory(o);
+    j["memory"] = {{"framebufferBytes", memory.framebufferBytes}, {"imageBytes", memory.imageBytes}};
     j["sceneTriangles"] = r.sceneTriangles;
     if (r.voxel) {
         const lod::VoxelFrameStats& v = *r.voxel;

@@ -159,3 +159,27 @@ def test_the_readme_python_example_runs_as_written(examples, tmp_path, monkeypat
     namespace = {}
     exec(compile(code, "README.md", "exec"), namespace)
     assert namespace["image"].shape == (480, 640, 4) and len(namespace["frames"]) == 3
+
+
+def test_sequences_show_progress_on_a_terminal_only(cli, tmp_path):
+    import os
+    import pty
+    controller, terminal = pty.openpty()
+    try:
+        run = subprocess.run([cli, "render", "demo", "--turntable", "3", "--width", "64", "--height", "36",
+                              "--out", str(tmp_path / "t.png")], stdout=subprocess.PIPE, stderr=terminal, text=True)
+        os.close(terminal)
+        shown = b""
+        while True:
+            try:
+                chunk = os.read(controller, 4096)
+            except OSError:  # the terminal's other end closed
+                break
+            if not chunk:
+                break
+            shown += chunk
+    finally:
+        os.close(controller)
+    assert run.returncode == 0
+    assert b"frame 3 of 3" in shown and shown.endswith(b"\r\x1b[K"), shown
+    assert "\r" not in run.stdout and run.stdout.startswith("wrote ")

@@ -443,6 +443,15 @@ TEST_F(Cli, TurntableWritesNumberedFramesThatDiffer) {
     }
     EXPECT_NE(contents[0], contents[1]) << "frames must show the model from different sides";
     EXPECT_FALSE(fs::exists(dir_ / "t_003.exr"));
+    // One summary for the sequence, not one per frame; no progress line when not on a terminal.
+    EXPECT_NE(r.output.find("wrote " + (dir_ / "t_000.exr").string() + " .. " + (dir_ / "t_002.exr").string() + " (3 frames"),
+              std::string::npos) << r.output;
+    size_t wrote = 0;
+    for (size_t at = r.output.find("wrote "); at != std::string::npos; at = r.output.find("wrote ", at + 1)) ++wrote;
+    EXPECT_EQ(wrote, 1u) << r.output;
+    EXPECT_EQ(r.output.find('\r'), std::string::npos) << "a progress line in captured output";
+    std::ifstream statsFile(dir_ / "t.json");
+    EXPECT_EQ(nlohmann::json::parse(statsFile)["frames"].size(), 3u);
     EXPECT_EQ(run("render " + write("flat.tri", "0 0 1 0 0 1 1\n").string() + " --turntable 2 --out " +
                   (dir_ / "f.png").string()).exitCode, 2);
 }

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "apps/png_file.h"
+#include "render/frame_memory.h"
 #include "render/renderer.h"
 #include "scene/input_error.h"
 #include "tests/scene/gltf_builder.h"
@@ -164,6 +165,27 @@ TEST_F(Renderer, NormalsViewShowsEachSurfacesNormalAsItsColour) {
     }
     EXPECT_GT(covered, 200);
     EXPECT_EQ(r.stats.counters.lightEvaluations, 0u);
+}
+
+// A frame larger than the machine's free memory is refused before anything is allocated, with
+// the figure; 16384² at 16 samples needs 80 GiB of framebuffer alone.
+TEST_F(Renderer, AFrameLargerThanMemoryIsRefusedBeforeAllocating) {
+    render::FrameSettings frame;
+    frame.width = frame.height = 16384, frame.msaa = 16;
+    const render::FrameMemory need = render::frameMemory(frame);
+    EXPECT_EQ(need.framebufferBytes / (uint64_t(1) << 30), 80u);  // 2^28 pixels x 16 samples x 20 bytes, plus bounds
+    const uint64_t available = render::availableMemoryBytes();
+    if (available == 0 || available >= need.totalBytes()) GTEST_SKIP() << "this machine could hold the frame";
+    const render::LoadedScene scene("demo");
+    try {
+        render::render(scene, frame);
+        FAIL() << "the frame was rendered";
+    } catch (const scene::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("--width, --height, --msaa: a 16384x16384 frame at 16 samples needs about 86."),
+                  std::string::npos) << e.what();
+    }
+    frame.width = frame.height = 256, frame.msaa = 4;
+    EXPECT_NO_THROW(render::requireFrameMemory(frame));
 }
 
 TEST_F(Renderer, BadInputThrowsTheCliMessages) {
