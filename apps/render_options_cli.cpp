@@ -36,6 +36,8 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
                                        "source triangles yellow, occlusion-culled red) or shadow-pixels "
                                        "(the pixels the shadow stage traced rays for, red)")
         ->capture_default_str();
+    render->add_flag("--legend,!--no-legend", o.legend,
+                     "The tiles, overdraw, lod and visibility views: a legend of their colours in the lower-left corner");
     render->add_option("--detail", o.detail, "Tessellation scale of built-in scenes")
         ->capture_default_str();
     render->add_option("--azimuth", o.azimuth, "Camera azimuth for mesh files, degrees about +y")

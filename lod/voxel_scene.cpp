@@ -139,7 +139,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     }
     triangleTints_.resize(o.coloring == BlockColoring::Model ? 0 : triangleBlocks.size());
     for (size_t k = 0; k < triangleTints_.size(); ++k) {
-        const glm::vec3 tint = o.coloring == BlockColoring::Level ? levelColor(0) * 0.6f : glm::vec3(0.95f, 0.85f, 0.2f);
+        const glm::vec3 tint = o.coloring == BlockColoring::Level ? lodSourceTrianglesColor() : kSourceTrianglesColor;
         triangleTints_[k].assign(source.triangles(triangleBlocks[k]).positions.size(), tint);
     }
     stats.expandMs = raster::nowMs() - t0;
@@ -193,9 +193,9 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
             const voxel::BlockVoxels voxels = source.voxels(d.block);
             glm::vec3 tint = levelColor(voxels.level);
             if (o.coloring == BlockColoring::Visibility)
-                tint = roles[k] == kShowCulled    ? glm::vec3(0.9f, 0.15f, 0.1f)
-                       : roles[k] == kShowOutside ? glm::vec3(0.45f)
-                                                  : glm::vec3(0.2f, 0.8f, 0.3f);
+                tint = roles[k] == kShowCulled    ? kOcclusionCulledColor
+                       : roles[k] == kShowOutside ? kOutsideFrustumColor
+                                                  : kVisibleBlockColor;
             faces_[i].clear();
             voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[i],
                                     o.coloring == BlockColoring::Model ? nullptr : &tint,

@@ -64,6 +64,14 @@ struct VoxelFrameStats {
 /// The colour of a level in the `lod` view (level 0 first; repeats after 8).
 glm::vec3 levelColor(uint32_t level);
 
+/// The `visibility` view's colours: blocks drawn as voxels, blocks drawn from their source
+/// triangles, blocks culled by occlusion (drawn by their visibility test), and, seen from the
+/// debug camera, frustum-culled nodes.
+inline const glm::vec3 kVisibleBlockColor{0.2f, 0.8f, 0.3f}, kSourceTrianglesColor{0.95f, 0.85f, 0.2f},
+    kOcclusionCulledColor{0.9f, 0.15f, 0.1f}, kOutsideFrustumColor{0.45f};
+/// The `lod` view's colour of blocks drawn from source triangles (darker than level 0's).
+inline glm::vec3 lodSourceTrianglesColor() { return levelColor(0) * 0.6f; }
+
 class VoxelScene {
 public:
     /// Frames the model from the given angles, lit like a mesh file (a key light above the camera).

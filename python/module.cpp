@@ -57,6 +57,7 @@ render::FrameSettings frameSettings(int width, int height, int msaa, const py::k
         else if (k == "animation") f.animation = py::isinstance<py::int_>(value) ? std::to_string(value.cast<int>()) : value.cast<std::string>();
         else if (k == "zoom") f.zoom = value.cast<float>();
         else if (k == "orthographic") f.orthographic = value.cast<bool>();
+        else if (k == "legend") f.legend = value.cast<bool>();
         else if (k == "frustum_cull") f.frustumCull = value.cast<bool>();
         else if (k == "bvh_update") f.bvhUpdate = render::parseBvhUpdate(value.cast<std::string>());
         else if (k == "supersample") f.supersample = value.cast<int>();

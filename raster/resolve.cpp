@@ -136,6 +136,11 @@ void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane,
     });
 }
 
+glm::vec3 overdrawColor(float layers) {
+    // 8 full layers of depth-passing samples saturate the ramp.
+    return layers > 0.0f ? glm::vec3(heat(0.1f + 0.9f * layers / 8.0f)) : glm::vec3(0.0f);
+}
+
 void visualizeOverdraw(const Framebuffer& fb, Image& out) {
     prepare(fb, out);
     const auto& counts = fb.overdrawCounts();
@@ -150,8 +155,8 @@ void visualizeOverdraw(const Framebuffer& fb, Image& out) {
 
 void visualizeBlockClasses(const Framebuffer& fb, const Image& color, Image& out) {
     prepare(fb, out);
-    static const glm::vec3 kEmpty(0.02f), kPartial(0.9f, 0.35f, 0.02f), kFull(0.05f, 0.6f, 0.1f),
-        kBoth(0.85f, 0.8f, 0.1f);
+    const glm::vec3 &kEmpty = kBlockUntouchedColor, &kPartial = kBlockPartialColor, &kFull = kBlockFullColor,
+                    &kBoth = kBlockBothColor;
     const auto& partial = fb.blockPartial();
     const auto& full = fb.blockFull();
     for (int y = 0; y < fb.height(); ++y)

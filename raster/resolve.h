@@ -35,6 +35,15 @@ void resolveDepthPlane(const Framebuffer& fb, std::vector<float>& out);
 /// covers; alpha is the covered fraction. Uncovered pixels are 0 with alpha 0.
 void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane, Image& out, bool orthographic = false);
 /// Heat map of depth-passing samples per pixel, normalised by the sample count.
+/// The overdraw view's colour for a pixel where `layers` full layers of samples passed the depth
+/// test (a ramp from dark blue through red and yellow to white at 8 and more); black for 0.
+glm::vec3 overdrawColor(float layers);
+
+/// The tiles view's colours of a block the coarse stage found fully covered, partly covered,
+/// both (by different triangles) and never touched, before a quarter of the frame is mixed in.
+inline const glm::vec3 kBlockFullColor{0.05f, 0.6f, 0.1f}, kBlockPartialColor{0.9f, 0.35f, 0.02f},
+    kBlockBothColor{0.85f, 0.8f, 0.1f}, kBlockUntouchedColor{0.02f};
+
 void visualizeOverdraw(const Framebuffer& fb, Image& out);
 /// Each 8x8 block coloured by what the coarse stage decided for it: never touched, only
 /// partial, only full, or both; the pixel grid of the colour image is dimmed underneath.

@@ -66,6 +66,9 @@ struct FrameSettings {
     /// --background R,G,B[,A]: display (sRGB) values and opacity in [0, 1], instead of the
     /// scene's own; an opacity below 1 gives the image coverage alpha.
     std::optional<glm::vec4> background;
+    /// The tiles, overdraw, lod and visibility views carry a legend of their colours
+    /// (render/view_legend.h); --no-legend leaves it out.
+    bool legend = true;
 };
 
 /// Whether a frame's image carries alpha worth keeping: a background that is not opaque.

@@ -16,6 +16,7 @@
 #include "raster/texture.h"
 #include "render/display_image.h"
 #include "render/frame_memory.h"
+#include "render/view_legend.h"
 #include "render/scene_state.h"
 #include "scene/input_error.h"
 
@@ -44,6 +45,10 @@ RenderResult render(const LoadedScene& scene, const FrameSettings& f) {
     raster::resetThreadsThatRan();
     RenderResult r = f.supersample > 1 ? renderSupersampled(s, f) : renderAtScale(s, f, 1.0f);
     r.threadsRan = raster::threadsThatRan();
+    if (f.legend) {
+        drawLegend(r.image, legendFor(f.view, r.voxel ? r.voxel->selection.drawnPerLevel : std::vector<uint64_t>{},
+                                      f.debugCamera));
+    }
     return r;
 }
 

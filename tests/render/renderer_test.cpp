@@ -13,6 +13,7 @@
 #include "apps/png_file.h"
 #include "render/frame_memory.h"
 #include "render/renderer.h"
+#include "render/view_legend.h"
 #include "scene/input_error.h"
 #include "tests/scene/gltf_builder.h"
 #include "tests/temp_paths.h"
@@ -186,6 +187,40 @@ TEST_F(Renderer, AFrameLargerThanMemoryIsRefusedBeforeAllocating) {
     }
     frame.width = frame.height = 256, frame.msaa = 4;
     EXPECT_NO_THROW(render::requireFrameMemory(frame));
+}
+
+// The tiles and overdraw views carry a legend: each entry's swatch holds exactly its colour, and
+// nothing outside the legend's box differs from the view without it.
+TEST_F(Renderer, LegendsShowEachColourOfTheViewAndTouchNothingElse) {
+    const render::LoadedScene scene("field");
+    for (render::View view : {render::View::Tiles, render::View::Overdraw}) {
+        render::FrameSettings frame;
+        frame.width = 320, frame.height = 180, frame.view = view;
+        const raster::Image with = render::render(scene, frame).image;
+        frame.legend = false;
+        const raster::Image without = render::render(scene, frame).image;
+        const std::vector<render::LegendEntry> entries = render::legendFor(view, {}, false);
+        ASSERT_FALSE(entries.empty());
+        // drawLegend's geometry at this height: font pixels of 1, a 3-pixel margin, rows of 10.
+        const int pad = 3, row = 10, boxHeight = pad + int(entries.size()) * row - 3 + pad, top = frame.height - boxHeight;
+        int right = 0;
+        for (int y = 0; y < frame.height; ++y)
+            for (int x = 0; x < frame.width; ++x)
+                for (int c = 0; c < 4; ++c)
+                    if (with.pixel(x, y)[c] != without.pixel(x, y)[c]) {
+                        ASSERT_GE(y, top) << "view " << render::viewName(view) << " at " << x << "," << y;
+                        right = std::max(right, x);
+                    }
+        size_t longest = 0;
+        for (const render::LegendEntry& e : entries) longest = std::max(longest, e.label.size());
+        const int boxWidth = pad + 7 + 2 + 6 * int(longest) + pad;  // swatch, gap, 6-pixel glyphs
+        EXPECT_GT(right, boxWidth / 2) << "the labels were not drawn";
+        EXPECT_LT(right, boxWidth);
+        for (size_t i = 0; i < entries.size(); ++i) {
+            const float* swatch = with.pixel(pad + 3, top + pad + int(i) * row + 3);
+            EXPECT_EQ(glm::vec3(swatch[0], swatch[1], swatch[2]), entries[i].color) << entries[i].label;
+        }
+    }
 }
 
 TEST_F(Renderer, BadInputThrowsTheCliMessages) {
