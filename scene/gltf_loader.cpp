@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <deque>
 #include <map>
 #include <set>
 #include <string>
@@ -35,6 +36,7 @@ public:
           animation_(chooseAnimation(animation)) {}
 
     GltfScene read() {
+        refuseRequiredExtensions();
         warnAboutUnsupported();
         poseAnimation();
         if (!model_.scenes.empty()) {
@@ -72,13 +74,32 @@ private:
         if (warned_.insert(message).second) warn_(file_ + ": " + message);
     }
 
+    // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
+    // attribute is read through AccessorView, which takes any component type, normalised or not.
+    static bool supportedExtension(const std::string& name) {
+        static const std::set<std::string> kSupported = {"KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform",
+                                                         "KHR_mesh_quantization", "KHR_materials_emissive_strength"};
+        return kSupported.count(name) > 0;
+    }
+
+    // A file that requires an extension Cuberille cannot honour cannot be drawn as its author
+    // meant (glTF 2.0 §3.12): refused, naming every such extension, where one that is merely used
+    // falls back to the core data with a warning.
+    void refuseRequiredExtensions() const {
+        std::string missing;
+        for (const std::string& ext : model_.extensionsRequired)
+            if (!supportedExtension(ext)) missing += (missing.empty() ? "" : ", ") + ext;
+        if (!missing.empty())
+            throw InputError(file_ + ": requires " + missing + ", which Cuberille cannot read yet (it reads KHR_lights_punctual, "
+                             "KHR_materials_unlit, KHR_texture_transform, KHR_mesh_quantization and KHR_materials_emissive_strength)");
+    }
+
     void warnAboutUnsupported() {
         if (model_.animations.size() > 1 && animation_ == 0 && !animationChosen_)
             warnOnce("plays the first of " + std::to_string(model_.animations.size()) + " animations (" + animationNames() +
                      "); --animation NAME|INDEX chooses another");
         for (const auto& ext : model_.extensionsUsed)
-            if (ext != "KHR_lights_punctual" && ext != "KHR_materials_unlit" && ext != "KHR_texture_transform")
-                warnOnce("extension " + ext + " is not supported yet and was ignored");
+            if (!supportedExtension(ext)) warnOnce("extension " + ext + " is not supported yet and was ignored");
     }
 
     struct NodePose {
@@ -222,7 +243,12 @@ private:
         const std::string at = where + ", accessor " + std::to_string(accessorIndex);
         if (accessorIndex < 0 || accessorIndex >= int(model_.accessors.size())) fail(at, "does not exist");
         const tinygltf::Accessor& a = model_.accessors[accessorIndex];
-        if (a.sparse.isSparse) fail(at, "sparse accessors are not supported yet");
+        if (a.sparse.isSparse || a.bufferView < 0) return densified(a, at);
+        return denseView(a, at);
+    }
+
+    // An accessor with a buffer view, read in place.
+    AccessorView denseView(const tinygltf::Accessor& a, const std::string& at) const {
         if (a.bufferView < 0 || a.bufferView >= int(model_.bufferViews.size())) fail(at, "has no valid buffer view");
         const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
         if (bv.buffer < 0 || bv.buffer >= int(model_.buffers.size())) fail(at, "its buffer view has no valid buffer");
@@ -241,6 +267,57 @@ private:
             fail(at, std::to_string(a.count) + " elements do not fit in buffer view " + std::to_string(a.bufferView));
         return {buffer.data.data() + bv.byteOffset + a.byteOffset, stride, a.count, a.componentType, components,
                 a.normalized};
+    }
+
+    // A sparse accessor, or one without a buffer view (zeros), made dense (glTF 2.0 §3.6.2.3):
+    // the base values (or zeros), then each sparse index's element replaced by its value. The
+    // dense copy lives as long as this reader. Indices must be below the count (and, as the
+    // specification requires, strictly increasing).
+    AccessorView densified(const tinygltf::Accessor& a, const std::string& at) const {
+        const int componentBytes = tinygltf::GetComponentSizeInBytes(uint32_t(a.componentType));
+        const int components = tinygltf::GetNumComponentsInType(uint32_t(a.type));
+        if (componentBytes <= 0 || components <= 0) fail(at, "has an invalid component type or type");
+        const size_t elementBytes = size_t(componentBytes) * size_t(components);
+        if (a.count > (size_t(1) << 32) / elementBytes) fail(at, std::to_string(a.count) + " elements are too many");
+        std::vector<unsigned char>& dense = denseCopies_.emplace_back(a.count * elementBytes, 0);
+        if (a.bufferView >= 0) {
+            const AccessorView base = denseView(a, at);
+            for (size_t i = 0; i < a.count; ++i) std::memcpy(&dense[i * elementBytes], base.data + i * base.stride, elementBytes);
+        }
+        if (a.sparse.isSparse) {
+            const size_t n = size_t(a.sparse.count);
+            if (a.sparse.count < 1 || n > a.count) fail(at, "sparse count " + std::to_string(a.sparse.count) + " is not in 1.." + std::to_string(a.count));
+            const int indexType = a.sparse.indices.componentType;
+            const int indexBytes = tinygltf::GetComponentSizeInBytes(uint32_t(indexType));
+            if (indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+                indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+                fail(at, "sparse indices must be unsigned bytes, shorts or ints");
+            const unsigned char* indices = viewBytes(a.sparse.indices.bufferView, size_t(a.sparse.indices.byteOffset),
+                                                     n * size_t(indexBytes), at + ", sparse indices");
+            const unsigned char* values = viewBytes(a.sparse.values.bufferView, size_t(a.sparse.values.byteOffset),
+                                                    n * elementBytes, at + ", sparse values");
+            const AccessorView indexView{indices, size_t(indexBytes), n, indexType, 1, false};
+            for (size_t k = 0; k < n; ++k) {
+                const uint32_t i = indexView.index(k);
+                if (i >= a.count) fail(at, "sparse index " + std::to_string(i) + " is past its " + std::to_string(a.count) + " elements");
+                if (k > 0 && i <= indexView.index(k - 1)) fail(at, "sparse indices are not strictly increasing");
+                std::memcpy(&dense[size_t(i) * elementBytes], values + k * elementBytes, elementBytes);
+            }
+        }
+        return {dense.data(), elementBytes, a.count, a.componentType, components, a.normalized};
+    }
+
+    // `length` bytes at `offset` into a buffer view, checked to lie inside it and its buffer.
+    const unsigned char* viewBytes(int bufferView, size_t offset, size_t length, const std::string& at) const {
+        if (bufferView < 0 || bufferView >= int(model_.bufferViews.size())) fail(at, "has no valid buffer view");
+        const tinygltf::BufferView& bv = model_.bufferViews[size_t(bufferView)];
+        if (bv.buffer < 0 || bv.buffer >= int(model_.buffers.size())) fail(at, "its buffer view has no valid buffer");
+        const tinygltf::Buffer& buffer = model_.buffers[size_t(bv.buffer)];
+        if (bv.byteOffset > buffer.data.size() || bv.byteLength > buffer.data.size() - bv.byteOffset)
+            fail(at, "its buffer view runs past the end of buffer " + std::to_string(bv.buffer));
+        if (offset > bv.byteLength || length > bv.byteLength - offset)
+            fail(at, std::to_string(length) + " bytes do not fit in buffer view " + std::to_string(bufferView));
+        return buffer.data.data() + bv.byteOffset + offset;
     }
 
     // The first animation's node channels at timeSeconds_: keyframes found by binary search,
@@ -547,6 +624,15 @@ private:
         m.roughness = float(pbr.roughnessFactor);
         if (mat.emissiveFactor.size() >= 3)
             m.emissive = glm::vec3(mat.emissiveFactor[0], mat.emissiveFactor[1], mat.emissiveFactor[2]);
+        // KHR_materials_emissive_strength: the factor scaled past 1, for emitters brighter than white.
+        if (const auto it = mat.extensions.find("KHR_materials_emissive_strength"); it != mat.extensions.end()) {
+            const tinygltf::Value& strength = it->second.Get("emissiveStrength");
+            if (strength.IsNumber()) {
+                const double s = strength.GetNumberAsDouble();
+                if (!(s >= 0.0) || !std::isfinite(s)) fail(where, "emissiveStrength must be a finite number, 0 or more");
+                m.emissive *= float(s);
+            }
+        }
         m.normalScale = float(mat.normalTexture.scale);
         m.occlusionStrength = float(mat.occlusionTexture.strength);
         TexCoordSet uvs;
@@ -718,7 +804,8 @@ private:
     std::vector<raster::Light> lights_;
     LoadStats stats_;
     TextureCache& textures_;
-    std::set<std::pair<int, bool>> texturesUsed_;  // by this pose: its texturesDecoded
+    std::set<std::pair<int, bool>> texturesUsed_;
+    mutable std::deque<std::vector<unsigned char>> denseCopies_;  // sparse accessors made dense (view() keeps pointers)  // by this pose: its texturesDecoded
     float timeSeconds_;
     bool animationChosen_ = false;
     size_t animation_;  // the posed animation's index (0 when the file has none)

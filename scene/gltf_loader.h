@@ -11,8 +11,10 @@
 // Cameras (perspective and orthographic) and KHR_lights_punctual lights (directional, point,
 // spot) come from the nodes that carry them. Skins and morph targets (POSITION and NORMAL
 // deltas; weights animated, per node or per mesh) deform the meshes on the CPU at load.
-// Unsupported (each warns once, naming it): other extensions, texture slots on a second
-// TEXCOORD set.
+// Sparse accessors, quantized attributes (KHR_mesh_quantization) and
+// KHR_materials_emissive_strength are read. A file whose extensionsRequired names another
+// extension is refused (InputError naming them); other extensions merely used, and texture
+// slots on a second TEXCOORD set, each warn once, naming it.
 //
 // What we do with tinygltf's answer is checked: every accessor's range against its buffer
 // view and buffer, every index against the vertex count, the node depth (at most 256) and

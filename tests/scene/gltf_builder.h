@@ -94,19 +94,20 @@ public:
         std::ofstream(path) << json_.dump(1);
     }
 
+    /// Raw bytes as a buffer view (4-byte aligned), for accessors the helpers above do not make.
+    int view(const void* data, size_t size) {
+        while (bytes_.size() % 4) bytes_.push_back('\0');
+        const size_t offset = bytes_.size();
+        bytes_.append(static_cast<const char*>(data), size);
+        return push("bufferViews", {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", size}});
+    }
+
 private:
     template <class T>
     static std::vector<float> flatten(const std::vector<T>& v) {
         std::vector<float> f(v.size() * T::length());
         std::memcpy(f.data(), v.data(), f.size() * 4);
         return f;
-    }
-
-    int view(const void* data, size_t size) {
-        while (bytes_.size() % 4) bytes_.push_back('\0');
-        const size_t offset = bytes_.size();
-        bytes_.append(static_cast<const char*>(data), size);
-        return push("bufferViews", {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", size}});
     }
 
     nlohmann::json json_;

@@ -402,4 +402,120 @@ TEST(GltfLoader, TruncatedOrMissingFilesAreInputErrors) {
 }
 
 }  // namespace
+
+// glTF as exporters write it (issue 29): sparse accessors, quantized attributes
+// (KHR_mesh_quantization), required and merely used extensions, KHR_materials_emissive_strength.
+
+namespace {
+
+// A quad of two triangles whose POSITION accessor `positions` the caller made; one node, one mesh.
+std::filesystem::path writeQuad(testing::GltfBuilder& b, int positions, const std::string& name,
+                                const nlohmann::json& material = nullptr) {
+    nlohmann::json primitive = {{"attributes", {{"POSITION", positions}}}, {"indices", b.indices({0, 1, 2, 0, 2, 3})}};
+    if (!material.is_null()) primitive["material"] = b.push("materials", material);
+    b.push("nodes", {{"mesh", b.push("meshes", {{"primitives", {primitive}}})}});
+    b.json()["scenes"] = {{{"nodes", {0}}}};
+    b.json()["scene"] = 0;
+    const std::filesystem::path path = testing::uniqueTempPath(name + ".gltf");
+    b.write(path);
+    return path;
+}
+
+const std::vector<glm::vec3> kQuad = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+
+}  // namespace
+
+TEST(GltfLoader, SparseAccessorsReadAsTheirDenseEquivalent) {
+    for (bool withBase : {true, false}) {
+        testing::GltfBuilder b;
+        // Base: the quad moved to z = 5 (or no base: zeros); sparse: vertices 1 and 3 replaced.
+        std::vector<glm::vec3> base = kQuad;
+        for (glm::vec3& p : base) p.z = 5.0f;
+        const int accessor = b.positions(base);
+        nlohmann::json& a = b.json()["accessors"][size_t(accessor)];
+        if (!withBase) a.erase("bufferView");
+        const std::vector<uint16_t> indices = {1, 3};
+        const std::vector<float> values = {2, 0, 0, 0, 2, 0};
+        a["sparse"] = {{"count", 2},
+                       {"indices", {{"bufferView", b.view(indices.data(), 4)}, {"componentType", 5123}}},
+                       {"values", {{"bufferView", b.view(values.data(), 24)}}}};
+        a["min"] = {0, 0, 0}, a["max"] = {2, 2, 5};
+        const GltfScene s = loadGltf(writeQuad(b, accessor, withBase ? "sparse-base" : "sparse-zeros"), [](const std::string&) {});
+        ASSERT_EQ(s.meshes.size(), 1u);
+        const std::vector<glm::vec3> expected = withBase ? std::vector<glm::vec3>{{0, 0, 5}, {2, 0, 0}, {1, 1, 5}, {0, 2, 0}}
+                                                         : std::vector<glm::vec3>{{0, 0, 0}, {2, 0, 0}, {0, 0, 0}, {0, 2, 0}};
+        EXPECT_EQ(s.meshes[0].positions, expected) << "with base " << withBase;
+    }
+    // An index past the count, or out of order, is bad input naming the accessor.
+    testing::GltfBuilder b;
+    const int accessor = b.positions(kQuad);
+    const std::vector<uint16_t> indices = {2, 7};
+    const std::vector<float> values(6, 1.0f);
+    b.json()["accessors"][size_t(accessor)]["sparse"] = {
+        {"count", 2},
+        {"indices", {{"bufferView", b.view(indices.data(), 4)}, {"componentType", 5123}}},
+        {"values", {{"bufferView", b.view(values.data(), 24)}}}};
+    try {
+        loadGltf(writeQuad(b, accessor, "sparse-bad"), [](const std::string&) {});
+        FAIL() << "a sparse index past the count was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("accessor 0: sparse index 7 is past its 4 elements"), std::string::npos) << e.what();
+    }
+}
+
+// KHR_mesh_quantization: positions as normalised shorts, scaled back by the node's transform, as
+// gltfpack writes them.
+TEST(GltfLoader, QuantizedPositionsReadThroughTheirNodeTransform) {
+    testing::GltfBuilder b;
+    const std::vector<int16_t> quantized = {0, 0, 0, 0, 32767, 0, 0, 0, 32767, 32767, 0, 0, 0, 32767, 0, 0};
+    const int accessor = b.push("accessors", {{"bufferView", b.view(quantized.data(), quantized.size() * 2)},
+                                              {"componentType", 5122}, {"normalized", true}, {"count", 4}, {"type", "VEC3"},
+                                              {"byteOffset", 0}, {"min", {0, 0, 0}}, {"max", {1, 1, 0}}});
+    b.json()["bufferViews"][b.json()["bufferViews"].size() - 1]["byteStride"] = 8;  // 3 shorts and padding
+    b.json()["extensionsUsed"] = {"KHR_mesh_quantization"};
+    b.json()["extensionsRequired"] = {"KHR_mesh_quantization"};
+    const std::filesystem::path path = writeQuad(b, accessor, "quantized");
+    std::vector<std::string> warnings;
+    const GltfScene s = loadGltf(path, [&](const std::string& w) { warnings.push_back(w); });
+    EXPECT_TRUE(warnings.empty()) << warnings.front();
+    ASSERT_EQ(s.meshes.size(), 1u);
+    EXPECT_EQ(s.meshes[0].positions, kQuad);
+}
+
+TEST(GltfLoader, ARequiredExtensionItCannotReadIsRefusedAndAUsedOneWarnsOnce) {
+    testing::GltfBuilder b;
+    const int accessor = b.positions(kQuad);
+    b.json()["extensionsUsed"] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression"};
+    b.json()["extensionsRequired"] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression"};
+    const std::filesystem::path required = writeQuad(b, accessor, "required");
+    try {
+        loadGltf(required, [](const std::string&) {});
+        FAIL() << "a file requiring Draco was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(": requires KHR_draco_mesh_compression, EXT_meshopt_compression, which Cuberille "
+                                             "cannot read yet"),
+                  std::string::npos) << e.what();
+    }
+    testing::GltfBuilder used;
+    const int usedAccessor = used.positions(kQuad);
+    used.json()["extensionsUsed"] = {"EXT_texture_webp"};
+    std::vector<std::string> warnings;
+    const GltfScene s = loadGltf(writeQuad(used, usedAccessor, "used"), [&](const std::string& w) { warnings.push_back(w); });
+    EXPECT_EQ(s.meshes.size(), 1u);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("extension EXT_texture_webp is not supported yet and was ignored"), std::string::npos);
+}
+
+TEST(GltfLoader, EmissiveStrengthScalesTheEmissiveFactor) {
+    testing::GltfBuilder b;
+    const int accessor = b.positions(kQuad);
+    b.json()["extensionsUsed"] = {"KHR_materials_emissive_strength"};
+    const GltfScene s = loadGltf(writeQuad(b, accessor, "emissive-strength",
+                                           {{"emissiveFactor", {1.0, 0.5, 0.25}},
+                                            {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 4.0}}}}}}),
+                                 [](const std::string& w) { ADD_FAILURE() << w; });
+    ASSERT_EQ(s.meshes.size(), 1u);
+    EXPECT_EQ(s.meshes[0].emissive, glm::vec3(4.0f, 2.0f, 1.0f));
+}
+
 }  // namespace cuberille::scene
