@@ -463,9 +463,9 @@ TEST(GltfLoader, SparseAccessorsReadAsTheirDenseEquivalent) {
     }
 }
 
-// KHR_mesh_quantization: positions as normalised shorts, scaled back by the node's transform, as
-// gltfpack writes them.
-TEST(GltfLoader, QuantizedPositionsReadThroughTheirNodeTransform) {
+// KHR_mesh_quantization: positions as normalised shorts (32767 is 1), padded to 8-byte strides, as
+// gltfpack writes them (it then scales them back through the node's transform).
+TEST(GltfLoader, QuantizedPositionsReadAsTheirNormalisedValues) {
     testing::GltfBuilder b;
     const std::vector<int16_t> quantized = {0, 0, 0, 0, 32767, 0, 0, 0, 32767, 32767, 0, 0, 0, 32767, 0, 0};
     const int accessor = b.push("accessors", {{"bufferView", b.view(quantized.data(), quantized.size() * 2)},
