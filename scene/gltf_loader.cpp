@@ -14,6 +14,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <tiny_gltf.h>
+#include <webp/decode.h>
 
 #include "scene/input_error.h"
 #include "scene/ply_loader.h"  // readFileBytes
@@ -78,7 +79,8 @@ private:
     // attribute is read through AccessorView, which takes any component type, normalised or not.
     static bool supportedExtension(const std::string& name) {
         static const std::set<std::string> kSupported = {"KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform",
-                                                         "KHR_mesh_quantization", "KHR_materials_emissive_strength"};
+                                                         "KHR_mesh_quantization", "KHR_materials_emissive_strength",
+                                                         "EXT_texture_webp"};
         return kSupported.count(name) > 0;
     }
 
@@ -91,7 +93,8 @@ private:
             if (!supportedExtension(ext)) missing += (missing.empty() ? "" : ", ") + ext;
         if (!missing.empty())
             throw InputError(file_ + ": requires " + missing + ", which Cuberille cannot read yet (it reads KHR_lights_punctual, "
-                             "KHR_materials_unlit, KHR_texture_transform, KHR_mesh_quantization and KHR_materials_emissive_strength)");
+                             "KHR_materials_unlit, KHR_texture_transform, KHR_mesh_quantization, KHR_materials_emissive_strength and "
+                             "EXT_texture_webp)");
     }
 
     void warnAboutUnsupported() {
@@ -737,8 +740,9 @@ private:
         std::shared_ptr<const raster::Texture> result;
         if (index >= int(model_.textures.size())) fail(where, "texture " + std::to_string(index) + " does not exist");
         const tinygltf::Texture& tex = model_.textures[index];
-        const bool validImage = tex.source >= 0 && tex.source < int(model_.images.size());
-        const tinygltf::Image* image = validImage ? &model_.images[tex.source] : nullptr;
+        const int source = textureSource(tex);
+        const bool validImage = source >= 0 && source < int(model_.images.size());
+        const tinygltf::Image* image = validImage ? &model_.images[source] : nullptr;
         const bool decoded = image && image->width > 0 && image->height > 0 && image->component >= 1 &&
                              image->component <= 4 && (image->bits == 8 || image->bits == 16) &&
                              image->image.size() == size_t(image->width) * image->height * image->component * (image->bits / 8);
@@ -777,6 +781,16 @@ private:
         textures_[key] = result;
         texturesUsed_.insert(key);
         return result;
+    }
+
+    // The image a texture reads: EXT_texture_webp's source where the texture names one (a reader
+    // that has WebP takes it over the core source, which is the fallback for readers without).
+    static int textureSource(const tinygltf::Texture& tex) {
+        if (const auto it = tex.extensions.find("EXT_texture_webp"); it != tex.extensions.end()) {
+            const tinygltf::Value& source = it->second.Get("source");
+            if (source.IsInt()) return source.GetNumberAsInt();
+        }
+        return tex.source;
     }
 
     // Lists, strips (alternating order keeps the winding) and fans as triangle lists; a mirrored
@@ -859,6 +873,28 @@ std::string glbContainerProblem(const std::string& bytes) {
     return "";
 }
 
+/// tinygltf's image callback: WebP (EXT_texture_webp) through libwebp as 8-bit RGBA, every other
+/// format through tinygltf's own loader (stb_image: PNG, JPEG, ...).
+bool loadImageData(tinygltf::Image* image, int index, std::string* error, std::string* warning, int width, int height,
+                   const unsigned char* bytes, int size, void*) {
+    const bool webp = size >= 12 && std::memcmp(bytes, "RIFF", 4) == 0 && std::memcmp(bytes + 8, "WEBP", 4) == 0;
+    if (!webp) return tinygltf::LoadImageData(image, index, error, warning, width, height, bytes, size, nullptr);
+    int w = 0, h = 0;
+    uint8_t* rgba = WebPDecodeRGBA(bytes, size_t(size), &w, &h);
+    if (!rgba) {
+        if (error) *error += "image " + std::to_string(index) + ": not a WebP image libwebp can decode\n";
+        return false;
+    }
+    image->width = w;
+    image->height = h;
+    image->component = 4;
+    image->bits = 8;
+    image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+    image->image.assign(rgba, rgba + size_t(w) * size_t(h) * 4);
+    WebPFree(rgba);
+    return true;
+}
+
 }  // namespace
 
 struct GltfDocument::Parsed {
@@ -873,6 +909,7 @@ GltfDocument::GltfDocument(const std::filesystem::path& path, const WarningSink&
     parsed_->file = file;
     if (!std::filesystem::exists(path)) throw InputError(file + ": cannot open file");
     tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(loadImageData, nullptr);
     tinygltf::Model& model = parsed_->model;
     std::string error, warning;
     const bool binary = fileKindOf(path) == FileKind::Glb;

@@ -11,8 +11,8 @@
 // Cameras (perspective and orthographic) and KHR_lights_punctual lights (directional, point,
 // spot) come from the nodes that carry them. Skins and morph targets (POSITION and NORMAL
 // deltas; weights animated, per node or per mesh) deform the meshes on the CPU at load.
-// Sparse accessors, quantized attributes (KHR_mesh_quantization) and
-// KHR_materials_emissive_strength are read. A file whose extensionsRequired names another
+// Sparse accessors, quantized attributes (KHR_mesh_quantization),
+// KHR_materials_emissive_strength and WebP textures (EXT_texture_webp, through libwebp) are read. A file whose extensionsRequired names another
 // extension is refused (InputError naming them); other extensions merely used, and texture
 // slots on a second TEXCOORD set, each warn once, naming it.
 //

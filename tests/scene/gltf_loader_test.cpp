@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <webp/encode.h>
+
 #include "apps/image_io.h"
 #include "scene/gltf_loader.h"
 #include "scene/input_error.h"
@@ -235,6 +237,40 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     // Clamp in u: far right samples the last texel; mirrored in v (one row: always that row).
     EXPECT_EQ(t.sampleBilinear(0, glm::vec2(7.0f, 0.5f)), t.texel(0, 1, 0));
     EXPECT_FALSE(scene.meshes[0].textures.baseColor) << "untextured primitives stay untextured";
+}
+
+// EXT_texture_webp: a texture naming a WebP source reads it (lossless here: the texels exactly)
+// in place of its core source, which stays the fallback for readers without WebP; a WebP-only
+// texture (the extension required) reads too.
+TEST(GltfLoader, WebPTexturesReadInPlaceOfTheirFallback) {
+    const fs::path dir = cuberille::testing::uniqueTempPath("gltf-webp");
+    std::string text = texturedGltf(dir, R"("baseColorTexture": {"index": 0}})");
+    const uint8_t greens[8] = {0, 255, 0, 255, 0, 128, 0, 255};  // the PNG fallback holds reds
+    uint8_t* encoded = nullptr;
+    const size_t size = WebPEncodeLosslessRGBA(greens, 2, 1, 8, &encoded);
+    ASSERT_GT(size, 0u);
+    std::ofstream(dir / "tex.webp", std::ios::binary).write(reinterpret_cast<const char*>(encoded), std::streamsize(size));
+    WebPFree(encoded);
+    for (bool fallback : {true, false}) {
+        std::string variant = text;
+        replaceOnce(variant, R"("textures": [{"source": 0, "sampler": 0}], "images": [{"uri": "tex.png"}],)",
+                    fallback ? R"("textures": [{"source": 0, "sampler": 0, "extensions": {"EXT_texture_webp": {"source": 1}}}],
+  "images": [{"uri": "tex.png"}, {"uri": "tex.webp"}], "extensionsUsed": ["EXT_texture_webp"],)"
+                             : R"("textures": [{"sampler": 0, "extensions": {"EXT_texture_webp": {"source": 0}}}],
+  "images": [{"uri": "tex.webp"}], "extensionsUsed": ["EXT_texture_webp"], "extensionsRequired": ["EXT_texture_webp"],)");
+        std::ofstream(dir / "t.gltf") << variant;
+        std::vector<std::string> warnings;
+        const GltfScene scene = loadGltf(dir / "t.gltf", [&](const std::string& w) { warnings.push_back(w); });
+        for (const std::string& w : warnings)  // the shared test file's points and lines warn; nothing else may
+            if (w.find("points and lines") == std::string::npos) ADD_FAILURE() << "fallback " << fallback << ": " << w;
+        ASSERT_TRUE(scene.meshes[1].textures.baseColor) << "fallback " << fallback;
+        const raster::Texture& t = *scene.meshes[1].textures.baseColor.texture;
+        ASSERT_EQ(t.width(), 2);
+        EXPECT_EQ(t.texel(0, 0, 0), glm::vec4(0, 1, 0, 1)) << "fallback " << fallback;
+        EXPECT_NEAR(t.texel(0, 1, 0).g, 0.2158f, 1e-3f);  // sRGB 128 decoded
+        EXPECT_EQ(t.texel(0, 1, 0).r, 0.0f);
+    }
+    fs::remove_all(dir);
 }
 
 TEST(GltfLoader, MaterialFactorsTextureSlotsAndTextureTransform) {
@@ -498,12 +534,12 @@ TEST(GltfLoader, ARequiredExtensionItCannotReadIsRefusedAndAUsedOneWarnsOnce) {
     }
     testing::GltfBuilder used;
     const int usedAccessor = used.positions(kQuad);
-    used.json()["extensionsUsed"] = {"EXT_texture_webp"};
+    used.json()["extensionsUsed"] = {"KHR_materials_sheen"};
     std::vector<std::string> warnings;
     const GltfScene s = loadGltf(writeQuad(used, usedAccessor, "used"), [&](const std::string& w) { warnings.push_back(w); });
     EXPECT_EQ(s.meshes.size(), 1u);
     ASSERT_EQ(warnings.size(), 1u);
-    EXPECT_NE(warnings[0].find("extension EXT_texture_webp is not supported yet and was ignored"), std::string::npos);
+    EXPECT_NE(warnings[0].find("extension KHR_materials_sheen is not supported yet and was ignored"), std::string::npos);
 }
 
 TEST(GltfLoader, EmissiveStrengthScalesTheEmissiveFactor) {
