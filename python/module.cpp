@@ -14,6 +14,8 @@
 #include <pybind11/stl.h>
 
 #include "apps/png_file.h"
+#include "render/display_image.h"
+#include "render/fly.h"
 #include "render/renderer.h"
 #include "scene/input_error.h"
 
@@ -136,6 +138,39 @@ private:
     std::string stats_;
 };
 
+// A flight through a streamed voxel model (render/fly.h): every frame's statistics as a dict, and
+// the settled last view as uint8 sRGB RGBA.
+py::dict fly(const std::string& model, const std::string& path, int frames, int width, int height, int msaa, int threads,
+             double budgetMib, double uploadLimitMib, const std::string& refine, float pixelError, int settleFrames) {
+    render::FlySettings s;
+    s.model = model, s.path = path, s.frames = frames, s.width = width, s.height = height, s.msaa = msaa;
+    s.threads = threads, s.budgetMib = budgetMib, s.uploadLimitMib = uploadLimitMib, s.refine = refine;
+    s.pixelError = pixelError, s.settleFrames = settleFrames;
+    render::FlyResult r;
+    std::vector<uint8_t> pixels;
+    {
+        py::gil_scoped_release release;
+        r = render::fly(s);
+        pixels = render::displayRgba8(r.finalImage, false);
+    }
+    py::list perFrame;
+    for (const lod::FlightFrame& f : r.frames) {
+        py::dict d;
+        d["index"] = f.index, d["settling"] = f.settling, d["frame_ms"] = f.frameMs, d["traversal_ms"] = f.traversalMs;
+        d["io_wait_ms"] = f.ioWaitMs, d["upload_ms"] = f.uploadMs, d["raster_ms"] = f.rasterMs;
+        d["faces"] = f.voxel.facesEmitted, d["loaded_bytes"] = f.streaming.loadedBytes;
+        d["missing_blocks"] = f.voxel.missingBlocks, d["occlusion_culled"] = f.voxel.occlusionCulled;
+        perFrame.append(d);
+    }
+    py::array_t<uint8_t> image({r.finalImage.height, r.finalImage.width, 4});
+    std::memcpy(image.mutable_data(), pixels.data(), pixels.size());
+    py::dict result;
+    result["frames"] = perFrame, result["final_image"] = image, result["settled"] = r.settled;
+    result["bytes_read_from_disk"] = r.bytesReadFromDisk, result["peak_held_bytes"] = r.peakHeldBytes;
+    result["budget_bytes"] = r.budgetBytes, result["open_ms"] = r.openMs, result["warnings"] = r.warnings;
+    return result;
+}
+
 py::array_t<uint8_t> readPng8(const std::string& path) {
     const raster::Image image = apps::readPng(path);
     py::array_t<uint8_t> out({image.height, image.width, 4});
@@ -174,6 +209,10 @@ PYBIND11_MODULE(_cuberille, m) {
         .def_property_readonly("warnings", &PyScene::warnings)
         .def_property_readonly("cameras", &PyScene::cameras)
         .def_property_readonly("load_ms", &PyScene::loadMs);
+    m.def("fly", &fly, py::arg("model"), py::arg("path") = "orbit", py::arg("frames") = 120, py::arg("width") = 1280,
+          py::arg("height") = 720, py::arg("msaa") = 4, py::arg("threads") = 0, py::arg("budget_mib") = 1024.0,
+          py::arg("upload_limit_mib") = 0.0, py::arg("refine") = "full", py::arg("pixel_error") = 1.0f,
+          py::arg("settle_frames") = 1000);
     m.def("read_png", &readPng8, py::arg("path"), "A PNG as a (height, width, 4) uint8 array (8-bit files exactly).");
     m.def("write_png", &writePng8, py::arg("path"), py::arg("pixels"), "An (h, w, 3|4) uint8 array as an sRGB PNG.");
 }

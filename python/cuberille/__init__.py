@@ -15,7 +15,7 @@ import os
 from ._cuberille import InputError, read_png, write_png
 from . import _cuberille
 
-__all__ = ["InputError", "Scene", "render", "read_png", "write_png"]
+__all__ = ["InputError", "Scene", "fly", "render", "read_png", "write_png"]
 
 
 class Scene:
@@ -62,3 +62,15 @@ class Scene:
 def render(path, width=1280, height=720, msaa=1, *, detail=1.0, up_axis="y", **options):
     """Loads `path` and renders one frame: Scene(path).render(width, height, msaa, **options)."""
     return Scene(path, detail=detail, up_axis=up_axis).render(width, height, msaa, **options)
+
+
+def fly(model, path="orbit", frames=120, width=1280, height=720, msaa=4, *, threads=0, budget_mib=1024.0,
+        upload_limit_mib=0.0, refine="full", pixel_error=1.0, settle_frames=1000):
+    """A flight through a voxel model (.cvox) streamed under `budget_mib` along `path` (orbit, zoom
+    or a keyframe file), as `cuberille fly` runs it. Returns a dict: "frames" (a dict of times and
+    counts per frame, the settling frames after the path's), "final_image" (the settled last view,
+    uint8 sRGB RGBA), "settled", "bytes_read_from_disk", "peak_held_bytes", "budget_bytes",
+    "open_ms", "warnings". Releases the GIL while it flies."""
+    return _cuberille.fly(os.fspath(model), os.fspath(path) if path not in ("orbit", "zoom") else path, int(frames),
+                          int(width), int(height), int(msaa), int(threads), float(budget_mib), float(upload_limit_mib),
+                          refine, float(pixel_error), int(settle_frames))

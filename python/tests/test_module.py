@@ -183,3 +183,19 @@ def test_sequences_show_progress_on_a_terminal_only(cli, tmp_path):
     assert run.returncode == 0
     assert b"frame 3 of 3" in shown and shown.endswith(b"\r\x1b[K"), shown
     assert "\r" not in run.stdout and run.stdout.startswith("wrote ")
+
+
+def test_fly_streams_a_voxel_model_and_settles_on_the_cli_final_image(examples, cli, tmp_path):
+    model = tmp_path / "torus.cvox"
+    subprocess.run([cli, "voxelize", str(examples / "torus.ply"), "--resolution", "128", "-o", str(model), "--quiet"], check=True)
+    result = cuberille.fly(model, "orbit", frames=6, width=160, height=120, msaa=1, budget_mib=4)
+    assert len(result["frames"]) >= 6 and result["settled"]
+    assert result["final_image"].shape == (120, 160, 4)
+    image = result["final_image"]
+    assert (image[:, :, :3] != image[0, 0, :3]).any(axis=2).sum() > 1000  # the torus, not the background
+    out = tmp_path / "flight"
+    subprocess.run([cli, "fly", str(model), "--path", "orbit", "--frames", "6", "--width", "160", "--height", "120",
+                    "--msaa", "1", "--budget-mib", "4", "--out-dir", str(out), "--quiet"], check=True)
+    assert np.array_equal(result["final_image"], cuberille.read_png(str(out / "final.png")))
+    with pytest.raises(cuberille.InputError, match="fly needs a voxel model"):
+        cuberille.fly(examples / "torus.ply")
