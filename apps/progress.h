@@ -3,6 +3,7 @@
 // erased when the work ends. Nothing is printed when stderr is not a terminal (CI logs, pipes,
 // files) or with --quiet, so captured output never holds carriage returns.
 
+#include <memory>
 #include <string>
 
 namespace cuberille::apps {
@@ -26,6 +27,21 @@ private:
     int total_;
     bool shown_;
     double lastDrawMs_ = -1e300, startMs_;
+};
+
+/// A single piece of work that cannot count its steps (one frame): after kQuietStartMs on a
+/// terminal, "rendering, 1.5 s" redrawn on stderr until it ends, then erased. Runs a thread that
+/// sleeps between redraws; nothing at all when stderr is not a terminal or with --quiet.
+class ElapsedLine {
+public:
+    ElapsedLine(std::string what, bool quiet);
+    ~ElapsedLine();  // erases the line; call before printing a summary
+    ElapsedLine(const ElapsedLine&) = delete;
+    ElapsedLine& operator=(const ElapsedLine&) = delete;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace cuberille::apps

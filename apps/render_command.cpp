@@ -183,7 +183,10 @@ int renderFrames(const render::LoadedScene& scene, const RenderOptions& o) {
         render::FrameSettings frame = o;
         if (o.turntable > 0) frame.orbitDegrees = 360.0f * float(i) / float(o.turntable);
         if (o.animate > 0) frame.timeSeconds = o.timeSeconds + float(i) / o.fps;
+        std::optional<ElapsedLine> elapsed;
+        if (!sequence) elapsed.emplace("rendering", o.quiet);  // a sequence counts its frames instead
         RenderResult r = render::render(scene, frame);
+        elapsed.reset();
         if (i == 0) r.loadMs += scene.loadMs();
         RenderOptions written = o;
         static_cast<render::FrameSettings&>(written) = frame;
@@ -211,6 +214,7 @@ int runRenderCommand(const RenderOptions& o, const render::LoadedScene& scene) {
 
 void checkRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png, .exr or .jpg)");
+    requireOutputPath(o.out, "--out");  // first: a folder given as --out is named as one
     // Refuse what cannot be written before any work: a bad extension, alpha in a JPEG.
     const ImageFormat format = imageFormatFor(o.out);
     if (format == ImageFormat::Jpeg && imageWriteOptions(o).alpha)
@@ -218,7 +222,6 @@ void checkRenderCommand(const RenderOptions& o) {
     if (o.pngBits != 8 && o.pngBits != 16) throw scene::InputError("--png-bits: 8 or 16");
     if (o.pngBits != 8 && format != ImageFormat::Png)
         throw scene::InputError("--png-bits: only for .png outputs");
-    requireOutputPath(o.out, "--out");
     requireOutputPath(o.statsPath, "--stats");
     validateSequence(o);
 }

@@ -161,13 +161,14 @@ def test_the_readme_python_example_runs_as_written(examples, tmp_path, monkeypat
     assert namespace["image"].shape == (480, 640, 4) and len(namespace["frames"]) == 3
 
 
-def test_sequences_show_progress_on_a_terminal_only(cli, tmp_path):
+def on_a_terminal(command):
+    """Runs `command` with stderr on a pseudo-terminal: (the run, what the terminal showed)."""
     import os
     import pty
     controller, terminal = pty.openpty()
     try:
-        run = subprocess.run([cli, "render", "demo", "--turntable", "3", "--width", "64", "--height", "36",
-                              "--out", str(tmp_path / "t.png")], stdout=subprocess.PIPE, stderr=terminal, text=True)
+        run = subprocess.run(command, stdout=subprocess.PIPE, stderr=terminal, text=True,
+                             env={**os.environ, "CUBERILLE_PROGRESS_AFTER_MS": "0"})
         os.close(terminal)
         shown = b""
         while True:
@@ -180,8 +181,19 @@ def test_sequences_show_progress_on_a_terminal_only(cli, tmp_path):
             shown += chunk
     finally:
         os.close(controller)
+    return run, shown
+
+
+def test_long_work_shows_progress_on_a_terminal_only(cli, tmp_path):
+    run, shown = on_a_terminal([cli, "render", "demo", "--turntable", "3", "--width", "64", "--height", "36",
+                                "--out", str(tmp_path / "t.png")])
     assert run.returncode == 0
     assert b"frame 3 of 3" in shown and shown.endswith(b"\r\x1b[K"), shown
+    assert "\r" not in run.stdout and run.stdout.startswith("wrote ")
+    # One frame: its elapsed time (here from the start; by default after a second).
+    run, shown = on_a_terminal([cli, "render", "field", "--width", "640", "--height", "360", "--out", str(tmp_path / "f.png")])
+    assert run.returncode == 0
+    assert b"rendering, " in shown and shown.endswith(b"\r\x1b[K"), shown
     assert "\r" not in run.stdout and run.stdout.startswith("wrote ")
 
 
