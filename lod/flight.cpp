@@ -1,5 +1,7 @@
 #include "lod/flight.h"
 
+#include "raster/resolve.h"
+
 #include "raster/clock.h"
 
 namespace cuberille::lod {
@@ -19,6 +21,7 @@ FlightFrame Flight::frame(const scene::Camera& camera, bool settling) {
     pipeline_.endFrame();
     if (options_.occlusion && !options_.viewFrom) scene_.readOcclusion(pipeline_.stats());
     f.frameMs = raster::nowMs() - t0;
+    f.voxel.coveredPixels = raster::coveredPixels(pipeline_.framebuffer());
     f.streaming = blocks_.frameStats();
     f.uploadMs = f.streaming.uploadMs;
     f.traversalMs = f.voxel.selectMs - f.uploadMs;  // the upload happens inside the draw's selection step

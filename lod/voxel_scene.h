@@ -59,6 +59,10 @@ struct VoxelFrameStats {
     uint64_t standIns = 0;       // missing blocks an ancestor was drawn for
     uint64_t holes = 0;          // missing blocks nothing was drawn for (partial refinement)
     double selectMs = 0, expandMs = 0;
+    /// Pixels the frame covered (raster::coveredPixels, counted after the frame, outside its
+    /// time): facesEmitted / coveredPixels is how many faces were drawn for each pixel seen.
+    uint64_t coveredPixels = 0;
+    double facesPerCoveredPixel() const { return coveredPixels ? double(facesEmitted) / double(coveredPixels) : 0.0; }
 };
 
 /// The colour of a level in the `lod` view (level 0 first; repeats after 8).

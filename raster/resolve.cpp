@@ -136,6 +136,31 @@ void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane,
     });
 }
 
+uint64_t coveredPixels(const Framebuffer& fb) {
+    const float clear = clearDepthKey(fb.desc());
+    const int n = fb.samples();
+    std::vector<uint64_t> perTile(size_t(fb.tileCount()), 0);
+    raster::parallelFor(size_t(fb.tileCount()), [&](size_t tile) {
+        if (!fb.tileTouched(int(tile))) return;
+        const float* depth = fb.tileDepth(int(tile));
+        const int tx = int(tile) % fb.tilesX(), ty = int(tile) / fb.tilesX();
+        const int w = std::min(kTileSizePixels, fb.width() - tx * kTileSizePixels);
+        const int h = std::min(kTileSizePixels, fb.height() - ty * kTileSizePixels);
+        uint64_t covered = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const float* samples = depth + (size_t(y) * kTileSizePixels + size_t(x)) * size_t(n);
+                bool any = false;
+                for (int s = 0; s < n; ++s) any = any || samples[s] != clear;
+                covered += any;
+            }
+        perTile[tile] = covered;
+    });
+    uint64_t total = 0;
+    for (uint64_t c : perTile) total += c;
+    return total;
+}
+
 glm::vec3 overdrawColor(float layers) {
     // 8 full layers of depth-passing samples saturate the ramp.
     return layers > 0.0f ? glm::vec3(heat(0.1f + 0.9f * layers / 8.0f)) : glm::vec3(0.0f);

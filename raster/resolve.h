@@ -35,6 +35,10 @@ void resolveDepthPlane(const Framebuffer& fb, std::vector<float>& out);
 /// covers; alpha is the covered fraction. Uncovered pixels are 0 with alpha 0.
 void resolveViewDistance(const Framebuffer& fb, float nearPlane, float farPlane, Image& out, bool orthographic = false);
 /// Heat map of depth-passing samples per pixel, normalised by the sample count.
+/// Pixels where some sample holds a surface (its depth key is not the clear value): what a frame
+/// covered, the denominator of "faces drawn per covered pixel" (issue 25's measure of waste).
+uint64_t coveredPixels(const Framebuffer& fb);
+
 /// The overdraw view's colour for a pixel where `layers` full layers of samples passed the depth
 /// test (a ramp from dark blue through red and yellow to white at 8 and more); black for 0.
 glm::vec3 overdrawColor(float layers);

@@ -171,6 +171,7 @@ void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::C
     submit(pipeline);
     pipeline.endFrame();
     result.stats = pipeline.stats();
+    if (result.voxel) result.voxel->coveredPixels = raster::coveredPixels(pipeline.framebuffer());
     finishView(pipeline, o.view, camera, result.image, result.stats.times.resolveMs);
 }
 
@@ -446,6 +447,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                       {"hybridTriangles", v.hybridTriangles},
                       {"voxelsExpanded", v.voxelsExpanded},
                       {"facesEmitted", v.facesEmitted},
+                      {"coveredPixels", v.coveredPixels},
+                      {"facesPerCoveredPixel", v.facesPerCoveredPixel()},
                       {"selectMs", v.selectMs},
                       {"expandMs", v.expandMs}};
     }

@@ -35,6 +35,30 @@ TEST(Resolve, PartialCoverageGivesExactFraction) {
     }
 }
 
+// coveredPixels counts each pixel where some sample took a surface: checked against the samples'
+// colours (a red triangle over a clear of transparent black) at every sample count, on a frame
+// of several tiles with a ragged last row and column.
+TEST(Resolve, CoveredPixelsCountsEveryPixelWithASurfaceSample) {
+    for (int samples : {1, 4, 16}) {
+        scene::TriScene s;
+        s.positions = {{3.3f, 2.2f, 0}, {150.7f, 20.9f, 0}, {40.1f, 97.6f, 0}, {100, 90, 0}, {139.5f, 99.5f, 0}, {120, 60, 0}};
+        s.colors = {glm::vec4(1, 0, 0, 1), glm::vec4(1, 0, 0, 1)};
+        raster::DrawCall draw = s.drawCall();
+        draw.state.depthTest = draw.state.depthWrite = true;  // coverage is read from the depth samples
+        raster::Pipeline p;
+        drawFrame(p, frame(150, 100, samples), draw);
+        uint64_t expected = 0;
+        for (int y = 0; y < 100; ++y)
+            for (int x = 0; x < 150; ++x) {
+                bool any = false;
+                for (int i = 0; i < samples; ++i) any = any || sampleColor(p.framebuffer(), x, y, i).r == 1.0f;
+                expected += any;
+            }
+        EXPECT_GT(expected, 5000u);
+        EXPECT_EQ(raster::coveredPixels(p.framebuffer()), expected) << samples << " samples";
+    }
+}
+
 TEST(Resolve, UntouchedTilesResolveToClearColor) {
     raster::Pipeline p;
     raster::FramebufferDesc d = frame(200, 100, 4);
