@@ -21,6 +21,12 @@ namespace {
 RenderOptions parseJob(const std::string& line, bool quiet);
 std::vector<std::string> renderArguments(const nlohmann::json& job);
 
+// A job's key as render's long option: "pixel_error" and "pixel-error" are --pixel-error.
+std::string optionName(std::string key) {
+    std::replace(key.begin(), key.end(), '_', '-');
+    return key;
+}
+
 // Scenes by what they were loaded from and how: a job reuses one loaded for an earlier job.
 using SceneKey = std::tuple<std::string, float, bool>;
 
@@ -86,8 +92,7 @@ RenderOptions parseJob(const std::string& line, bool quiet) {
     RenderNames names;
     const CLI::App* render = addRenderCommand(app, o, names);
     for (const auto& [key, value] : job.items()) {
-        std::string name = key;
-        std::replace(name.begin(), name.end(), '_', '-');
+        const std::string name = optionName(key);
         bool known = key == "scene";
         for (const CLI::Option* option : render->get_options())
             for (const std::string& n : option->get_lnames()) known = known || n == name;
@@ -109,10 +114,9 @@ std::vector<std::string> renderArguments(const nlohmann::json& job) {
     std::vector<std::string> arguments{"render", job["scene"].get<std::string>()};
     for (const auto& [key, value] : job.items()) {
         if (key == "scene") continue;
-        std::string option = "--" + key;
-        std::replace(option.begin(), option.end(), '_', '-');
-        if (value.is_boolean()) {
-            if (value.get<bool>()) arguments.push_back(option);  // a flag; false leaves it off
+        const std::string option = "--" + optionName(key);
+        if (value.is_boolean()) {  // a flag, set either way: "legend": false turns a default-on flag off
+            arguments.push_back(option + (value.get<bool>() ? "=true" : "=false"));
             continue;
         }
         std::string text;

@@ -188,9 +188,7 @@ int renderFrames(const render::LoadedScene& scene, const RenderOptions& o) {
         RenderResult r = render::render(scene, frame);
         elapsed.reset();
         if (i == 0) r.loadMs += scene.loadMs();
-        RenderOptions written = o;
-        static_cast<render::FrameSettings&>(written) = frame;
-        writeFrame(written, sequence ? i : -1, r, frames);
+        writeFrame(o, sequence ? i : -1, r, frames);  // what it writes does not depend on the orbit or time
         addToTotals(r, totals);
         progress.update(i + 1);
     }
@@ -207,10 +205,7 @@ int runRenderCommand(const RenderOptions& o) {
     return renderFrames(loadScene(o), o);
 }
 
-int runRenderCommand(const RenderOptions& o, const render::LoadedScene& scene) {
-    checkRenderCommand(o);
-    return renderFrames(scene, o);
-}
+int runRenderCommand(const RenderOptions& o, const render::LoadedScene& scene) { return renderFrames(scene, o); }
 
 void checkRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png, .exr or .jpg)");

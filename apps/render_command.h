@@ -62,7 +62,8 @@ nlohmann::json statsToJson(const RenderOptions& options, const RenderResult& res
 /// The whole subcommand: render, write the image and stats, print a summary. Returns the
 /// exit code.
 int runRenderCommand(const RenderOptions& options);
-/// The same with the scene already loaded (options.scene, .detail and .zUp as it was loaded with).
+/// The same with the scene already loaded (options.scene, .detail and .zUp as it was loaded with)
+/// and the options already checked by checkRenderCommand (batch checks each job before loading).
 int runRenderCommand(const RenderOptions& options, const render::LoadedScene& scene);
 /// What the command refuses before any work: no --out, an unwritable output, a bad sequence.
 void checkRenderCommand(const RenderOptions& options);

@@ -31,12 +31,10 @@ uint64_t readNumber(const char* path) {
 }  // namespace
 
 FrameMemory frameMemory(const FrameSettings& f) {
-    raster::FramebufferDesc d;
-    d.widthPixels = f.width * f.supersample;
-    d.heightPixels = f.height * f.supersample;
-    d.samples = f.msaa;
-    d.recordOverdraw = f.view == View::Overdraw;
-    d.recordBlockClasses = f.view == View::Tiles;
+    FrameSettings drawn = f;  // a supersampled frame draws N x N times the pixels
+    drawn.width *= f.supersample;
+    drawn.height *= f.supersample;
+    const raster::FramebufferDesc d = framebufferDesc(drawn);
     FrameMemory m;
     m.framebufferBytes = raster::Framebuffer::bytesFor(d);
     const uint64_t resolved = uint64_t(d.widthPixels) * uint64_t(d.heightPixels) * 16;  // float RGBA

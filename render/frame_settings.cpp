@@ -20,6 +20,17 @@ void validateFrameOptions(int width, int height, int msaa, int threads) {
     if (threads < 0) throw InputError("--threads: must be 0 (all cores) or more");
 }
 
+raster::FramebufferDesc framebufferDesc(const FrameSettings& o) {
+    raster::FramebufferDesc d;
+    d.widthPixels = o.width;
+    d.heightPixels = o.height;
+    d.samples = o.msaa;
+    d.depthConvention = o.depth;
+    d.recordOverdraw = o.view == View::Overdraw;
+    d.recordBlockClasses = o.view == View::Tiles;
+    return d;
+}
+
 glm::vec4 clearColorFor(const glm::vec4& display) {
     const float a = display.a;
     return {float(raster::decodeSrgb(display.r)) * a, float(raster::decodeSrgb(display.g)) * a,

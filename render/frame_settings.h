@@ -74,6 +74,10 @@ struct FrameSettings {
 /// Whether a frame's image carries alpha worth keeping: a background that is not opaque.
 inline bool hasAlpha(const FrameSettings& f) { return f.background && f.background->a < 1.0f; }
 
+/// The framebuffer a frame of these settings draws into (its size, samples, depth convention and
+/// the records its view needs); the clear colour is the scene's or clearColorFor(background).
+raster::FramebufferDesc framebufferDesc(const FrameSettings& settings);
+
 /// The framebuffer's clear colour for a --background: linear and premultiplied by its opacity.
 glm::vec4 clearColorFor(const glm::vec4& displayBackground);
 

@@ -12,8 +12,9 @@
 // refit instead of a build), and --stats says which. Occlusion culling of voxel models starts
 // from nothing each render, so its counts do not depend on the order of calls either.
 //
-// Frames of one LoadedScene are drawn one at a time (a second thread's render waits); separate
-// LoadedScenes render concurrently.
+// Frames are drawn one at a time in a process, of one LoadedScene or several (a second thread's
+// render waits): each frame already runs on every core it may, and its thread limit is the
+// process's (render/renderer.cpp).
 
 #include <memory>
 #include <string>

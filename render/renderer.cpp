@@ -65,8 +65,7 @@ raster::Image displayImage(const LoadedScene& scene, const FrameSettings& f, con
 }
 
 std::vector<uint8_t> displayPixels(const LoadedScene& scene, const FrameSettings& f, const RenderResult& r) {
-    if (f.view == View::Depth && !scene.isTriangleList()) return displayRgba8(legibleDepth(r.image), hasAlpha(f));
-    return displayRgba8(r.image, hasAlpha(f));
+    return displayRgba8(displayImage(scene, f, r), hasAlpha(f));
 }
 
 namespace {
@@ -123,18 +122,6 @@ void validate(const State& s, const FrameSettings& o) {
                          std::to_string(n) + " exceeds " + std::to_string(raster::kMaxFramebufferPixels) + " pixels a side");
 }
 
-raster::FramebufferDesc frameDesc(const FrameSettings& o, glm::vec4 background) {
-    raster::FramebufferDesc d;
-    d.widthPixels = o.width;
-    d.heightPixels = o.height;
-    d.samples = o.msaa;
-    d.depthConvention = o.depth;
-    d.clearColor = background;
-    d.recordOverdraw = o.view == View::Overdraw;
-    d.recordBlockClasses = o.view == View::Tiles;
-    return d;
-}
-
 // Resolves only what the view shows: the colour resolve runs for color and tiles alone.
 // camera: the frame's, for the depth view's distances; null for 2D .tri scenes, whose depth view
 // is the stored depth itself.
@@ -167,7 +154,9 @@ template <class Submit>
 void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::Camera* camera, Submit&& submit,
                RenderResult& result) {
     raster::Pipeline pipeline;
-    pipeline.beginFrame(frameDesc(o, o.background ? clearColorFor(*o.background) : sceneBackground));
+    raster::FramebufferDesc desc = framebufferDesc(o);
+    desc.clearColor = o.background ? clearColorFor(*o.background) : sceneBackground;
+    pipeline.beginFrame(desc);
     submit(pipeline);
     pipeline.endFrame();
     result.stats = pipeline.stats();
@@ -349,17 +338,16 @@ void renderVoxelModel(State& st, const FrameSettings& o, RenderResult& result) {
     vo.occlusion = !o.noOcclusion;
     // Occlusion culling learns from the frame before: the warm-up frames give it that history
     // (the image is the same with or without it; only the work differs).
+    const auto submit = [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); };
     const int frames = vo.occlusion ? 1 + o.warmup : 1;
     for (int f = 0; f < frames; ++f) {
-        drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
-                  result);
+        drawFrame(o, s.background, &s.camera, submit, result);
         s.readOcclusion(result.stats);
     }
     if (o.debugCamera) {  // what the main camera's frame selected, seen from its side
         const scene::Camera debug = lod::debugCameraFor(s.camera);
         vo.viewFrom = &debug;
-        drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); },
-                  result);
+        drawFrame(o, s.background, &s.camera, submit, result);
     }
 }
 

@@ -3,7 +3,6 @@
 // between frames. Only render/ includes this; it is not installed.
 
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,7 +25,6 @@ struct LoadedScene::State {
     scene::FileKind kind = scene::FileKind::Unknown;
     bool procedural = false;
     double loadMs = 0.0;
-    std::mutex frameMutex;  // one frame at a time draws from this state
 
     scene::TriScene tri;                       // a .tri file
     std::unique_ptr<lod::VoxelScene> voxel;    // a .cvox model

@@ -196,18 +196,22 @@ TEST_F(Cli, BatchRendersEachJobAsRenderDoesAndReportsFailuresByLine) {
          gltf.string() + " --width 96 --height 64 --time 0.75 --frustum-cull --eye 0,3,9"},
         {"{\"scene\": \"" + tri.string() + "\", \"out\": \"" + (dir_ / "c.png").string() + "\", \"width\": 128, \"height\": 128}",
          tri.string() + " --width 128 --height 128"},
+        // false turns a flag off even where it is on by default (the legend)
+        {"{\"scene\": \"" + gltf.string() + "\", \"out\": \"" + (dir_ / "e.png").string() +
+             "\", \"width\": 320, \"height\": 180, \"view\": \"tiles\", \"legend\": false, \"frustum-cull\": false}",
+         gltf.string() + " --width 320 --height 180 --view tiles --no-legend"},
     };
     std::string jobs = "# three good jobs and two bad ones\n" + good[0].first + "\n" + good[1].first + "\n" +
                        "{\"scene\": \"" + gltf.string() + "\", \"out\": \"" + (dir_ / "d.png").string() + "\", \"view\": \"sideways\"}\n" +
-                       good[2].first + "\n{\"scene\": \"" + tri.string() + "\", \"colour\": \"red\"}\n";
+                       good[2].first + "\n{\"scene\": \"" + tri.string() + "\", \"colour\": \"red\"}\n" + good[3].first + "\n";
     const fs::path file = write("jobs.jsonl", jobs);
     const CommandRun batch = run("batch " + file.string());
     EXPECT_EQ(batch.exitCode, 1) << batch.output;
     EXPECT_NE(batch.output.find("jobs.jsonl:4: --view: 'sideways' is not"), std::string::npos) << batch.output;
     EXPECT_NE(batch.output.find("jobs.jsonl:6: \"colour\": render has no option --colour"), std::string::npos) << batch.output;
-    EXPECT_NE(batch.output.find("5 jobs, 2 failed, 2 scenes loaded"), std::string::npos) << batch.output;
+    EXPECT_NE(batch.output.find("6 jobs, 2 failed, 2 scenes loaded"), std::string::npos) << batch.output;
     EXPECT_FALSE(fs::exists(dir_ / "d.png"));
-    const char* names[] = {"a.png", "b.png", "c.png"};
+    const char* names[] = {"a.png", "b.png", "c.png", "e.png"};
     for (size_t i = 0; i < good.size(); ++i) {
         const fs::path single = dir_ / ("single-" + std::string(names[i]));
         const CommandRun r = run("render " + good[i].second + " --quiet --out " + single.string());
