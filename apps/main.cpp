@@ -16,6 +16,7 @@
 #include "apps/render_command.h"
 #include "apps/render_options_cli.h"
 #include "apps/voxel_commands.h"
+#include "apps/worker_threads.h"
 #include "raster/instruction_set.h"
 #include "scene/input_error.h"
 #include "scene/procedural.h"
@@ -215,6 +216,7 @@ void reportUnknownOptions(CLI::App& app, int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    const cuberille::apps::WorkerThreadsJoinedAtExit workerThreads;  // first in, last out
     CLI::App app{"cuberille: a CPU renderer modelled on the GPU rasterization pipeline", "cuberille"};
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("cuberille ") + CUBERILLE_VERSION);

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "apps/worker_threads.h"
 #include "raster/instruction_set.h"
 
 namespace {
@@ -19,6 +20,7 @@ constexpr int kExitSkipped = 77;
 }  // namespace
 
 int main(int argc, char** argv) {
+    const cuberille::apps::WorkerThreadsJoinedAtExit workerThreads;  // first in, last out
     ::testing::InitGoogleTest(&argc, argv);
     try {
         cuberille::raster::useInstructionSetFromEnvironment();
