@@ -8,6 +8,7 @@
 #include "raster/clip.h"
 #include "raster/parallel.h"
 #include "raster/setup.h"
+#include "raster/triangle_cull.h"
 
 namespace cuberille::raster {
 namespace {
@@ -83,6 +84,67 @@ void clipAndSetup(const TriangleInput& in, const size_t (&index)[3], uint32_t pl
                                    polygon.vertices[i - 1].varyings.data(),
                                    polygon.vertices[i].varyings.data()};
         setupInto(in, w, v, color, batch);
+    }
+}
+
+// One chunk of triangles, in submission order: assembly (indices, outcodes), the set-up's
+// rejections in lanes for the triangles no clip plane cuts (raster/triangle_cull.h), then set-up
+// proper for those that may survive and clipping for those that cross a plane.
+void assembleAndSetUp(const DrawCall& call, const TriangleInput& in, size_t first, int count,
+                      TriangleBatch& batch) {
+    const VertexStageOutput& vertices = in.vertices;
+    const size_t vertexCount = vertices.clipPositions.size();
+    size_t index[kCullChunkTriangles][3];
+    uint8_t codes[kCullChunkTriangles];  // the corners' outcodes or'ed, kInvalidVertex for a bad index
+    TriangleLanes lanes{};  // lanes past `count` are never read; zeroed so no compiler doubts it
+    for (int j = 0; j < count; ++j) {
+        const size_t tri = first + size_t(j);
+        uint8_t code = 0;
+        for (int i = 0; i < 3; ++i) {
+            const size_t v = call.indices.empty() ? tri * 3 + i : call.indices[tri * 3 + i];
+            index[j][i] = v;
+            code |= v < vertexCount ? vertices.outcodes[v] : kInvalidVertex;
+        }
+        codes[j] = code;
+        for (int i = 0; i < 3; ++i) {
+            lanes.x[i][j] = code == 0 ? vertices.window[index[j][i]].x : 0;
+            lanes.y[i][j] = code == 0 ? vertices.window[index[j][i]].y : 0;
+        }
+    }
+    CullVerdict verdicts[kCullChunkTriangles];
+    cullTriangles(lanes, count, in.setup, verdicts);
+
+    StageCounters& k = batch.counters;
+    for (int j = 0; j < count; ++j) {
+        const size_t tri = first + size_t(j);
+        ++k.trianglesIn;
+        if (codes[j] & kInvalidVertex) {
+            ++k.trianglesInvalid;
+            continue;
+        }
+        const glm::vec4 color =
+            call.triangleColors.size() > tri ? call.triangleColors[tri] : call.state.constantColor;
+        const size_t (&corner)[3] = index[j];
+        if (codes[j] == 0) {
+            switch (verdicts[j]) {
+                case CullVerdict::Degenerate: ++k.trianglesDegenerate; continue;
+                case CullVerdict::Culled: ++k.trianglesCulled; continue;
+                case CullVerdict::NoSamples: ++k.trianglesNoSamples; continue;
+                case CullVerdict::MaySurvive: break;
+            }
+            const WindowVertex w[3] = {vertices.window[corner[0]], vertices.window[corner[1]],
+                                       vertices.window[corner[2]]};
+            const float* base = vertices.varyings.data();
+            const float* const v[3] = {base + corner[0] * batch.layout.count, base + corner[1] * batch.layout.count,
+                                       base + corner[2] * batch.layout.count};
+            setupInto(in, w, v, color, batch);
+            continue;
+        }
+        const uint8_t* outcodes = vertices.outcodes.data();
+        if (classifyTriangle(outcodes[corner[0]], outcodes[corner[1]], outcodes[corner[2]]) == ClipOutcome::Rejected)
+            ++k.trianglesClipRejected;
+        else
+            clipAndSetup(in, corner, codes[j], color, batch);
     }
 }
 
@@ -162,42 +224,9 @@ void Pipeline::frontEnd(const BatchRef& ref, TriangleBatch& batch) const {
     batch.layout = vertices.layout;
     const TriangleInput in{vertices, clipVolumeFor(call, framebuffer_),
                            setupContextFor(call, framebuffer_, vertices.layout)};
-    const size_t vertexCount = vertices.clipPositions.size();
     const size_t end = std::min(call.triangleCount(), ref.firstTriangle + kTrianglesPerBatch);
-    StageCounters& k = batch.counters;
-    for (size_t tri = ref.firstTriangle; tri < end; ++tri) {
-        ++k.trianglesIn;
-        size_t index[3];
-        uint8_t code[3];
-        bool valid = true;
-        for (int i = 0; i < 3; ++i) {
-            index[i] = call.indices.empty() ? tri * 3 + i : call.indices[tri * 3 + i];
-            valid = valid && index[i] < vertexCount;
-            code[i] = valid ? vertices.outcodes[index[i]] : kInvalidVertex;
-        }
-        if (!valid || ((code[0] | code[1] | code[2]) & kInvalidVertex)) {
-            ++k.trianglesInvalid;
-            continue;
-        }
-        const glm::vec4 color =
-            call.triangleColors.size() > tri ? call.triangleColors[tri] : call.state.constantColor;
-        switch (classifyTriangle(code[0], code[1], code[2])) {
-            case ClipOutcome::Rejected: ++k.trianglesClipRejected; break;
-            case ClipOutcome::Inside: {
-                const WindowVertex w[3] = {vertices.window[index[0]], vertices.window[index[1]],
-                                           vertices.window[index[2]]};
-                const float* base = vertices.varyings.data();
-                const float* const v[3] = {base + index[0] * batch.layout.count,
-                                           base + index[1] * batch.layout.count,
-                                           base + index[2] * batch.layout.count};
-                setupInto(in, w, v, color, batch);
-                break;
-            }
-            case ClipOutcome::Clipped:
-                clipAndSetup(in, index, code[0] | code[1] | code[2], color, batch);
-                break;
-        }
-    }
+    for (size_t first = ref.firstTriangle; first < end; first += kCullChunkTriangles)
+        assembleAndSetUp(call, in, first, int(std::min(end - first, size_t(kCullChunkTriangles))), batch);
     binTriangles(batch, TileGrid{framebuffer_.tilesX(), framebuffer_.tilesY()},
                  standardSamplePattern(framebuffer_.samples()));
 }
