@@ -8,7 +8,7 @@
 #include "raster/clip.h"
 #include "raster/parallel.h"
 #include "raster/setup.h"
-#include "raster/triangle_cull.h"
+#include "raster/setup_lanes.h"
 
 namespace cuberille::raster {
 namespace {
@@ -38,27 +38,40 @@ ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {
     return c;
 }
 
-// Set-up of one (possibly clipped) triangle into the batch, counting the outcome. Varyings
-// are copied only for triangles that survive.
-void setupInto(const TriangleInput& in, const WindowVertex (&w)[3], const float* const (&varyings)[3],
-               const glm::vec4& color, TriangleBatch& batch) {
-    TriangleSetup t;
-    int order[3];
-    StageCounters& k = batch.counters;
-    switch (setupTriangle(w[0], w[1], w[2], in.setup, t, order)) {
-        case SetupResult::Accepted:
-            t.varyingOffset = uint32_t(batch.varyings.size());
-            for (int v = 0; v < 3; ++v)
-                batch.varyings.insert(batch.varyings.end(), varyings[order[v]],
-                                      varyings[order[v]] + batch.layout.count);
-            t.flatColor = color;
-            batch.triangles.push_back(t);
-            ++k.trianglesSetUp;
-            return;
+// An accepted triangle into the batch: its set-up and its vertices' varyings in set-up order.
+void appendTriangle(const TriangleSetup& setup, const int (&order)[3], const float* const (&varyings)[3],
+                    const glm::vec4& color, TriangleBatch& batch) {
+    const int count = batch.layout.count;
+    const size_t at = batch.varyings.size();
+    batch.varyings.resize(at + size_t(3 * count));
+    float* out = batch.varyings.data() + at;
+    for (int v = 0; v < 3; ++v)
+        for (int i = 0; i < count; ++i) out[v * count + i] = varyings[order[v]][i];
+    TriangleSetup& t = batch.triangles.emplace_back(setup);
+    t.varyingOffset = uint32_t(at);
+    t.flatColor = color;
+    ++batch.counters.trianglesSetUp;
+}
+
+void countRejection(SetupResult result, StageCounters& k) {
+    switch (result) {
+        case SetupResult::Accepted: return;
         case SetupResult::Degenerate: ++k.trianglesDegenerate; return;
         case SetupResult::Culled: ++k.trianglesCulled; return;
         case SetupResult::NoSamples: ++k.trianglesNoSamples; return;
     }
+}
+
+// Set-up of one clipped triangle into the batch, counting the outcome.
+void setupInto(const TriangleInput& in, const WindowVertex (&w)[3], const float* const (&varyings)[3],
+               const glm::vec4& color, TriangleBatch& batch) {
+    TriangleSetup t;
+    int order[3];
+    const SetupResult result = setupTriangle(w[0], w[1], w[2], in.setup, t, order);
+    if (result == SetupResult::Accepted)
+        appendTriangle(t, order, varyings, color, batch);
+    else
+        countRejection(result, batch.counters);
 }
 
 // A triangle that crosses a clip plane: clip in homogeneous space, then set up the fan.
@@ -87,15 +100,15 @@ void clipAndSetup(const TriangleInput& in, const size_t (&index)[3], uint32_t pl
     }
 }
 
-// One chunk of triangles, in submission order: assembly (indices, outcodes), the set-up's
-// rejections in lanes for the triangles no clip plane cuts (raster/triangle_cull.h), then set-up
-// proper for those that may survive and clipping for those that cross a plane.
+// One chunk of triangles, in submission order: assembly (indices, outcodes), set-up in lanes for
+// the triangles no clip plane cuts (raster/setup_lanes.h), then into the batch in order, with
+// clipping for those that cross a plane.
 void assembleAndSetUp(const DrawCall& call, const TriangleInput& in, size_t first, int count,
                       TriangleBatch& batch) {
     const VertexStageOutput& vertices = in.vertices;
     const size_t vertexCount = vertices.clipPositions.size();
-    size_t index[kCullChunkTriangles][3];
-    uint8_t codes[kCullChunkTriangles];  // the corners' outcodes or'ed, kInvalidVertex for a bad index
+    size_t index[kSetupChunkTriangles][3];
+    uint8_t codes[kSetupChunkTriangles];  // the corners' outcodes or'ed, kInvalidVertex for a bad index
     TriangleLanes lanes{};  // lanes past `count` are never read; zeroed so no compiler doubts it
     for (int j = 0; j < count; ++j) {
         const size_t tri = first + size_t(j);
@@ -106,15 +119,25 @@ void assembleAndSetUp(const DrawCall& call, const TriangleInput& in, size_t firs
             code |= v < vertexCount ? vertices.outcodes[v] : kInvalidVertex;
         }
         codes[j] = code;
+        if (code != 0) continue;
         for (int i = 0; i < 3; ++i) {
-            lanes.x[i][j] = code == 0 ? vertices.window[index[j][i]].x : 0;
-            lanes.y[i][j] = code == 0 ? vertices.window[index[j][i]].y : 0;
+            const WindowVertex& w = vertices.window[index[j][i]];
+            lanes.x[i][j] = w.x, lanes.y[i][j] = w.y, lanes.z[i][j] = w.z, lanes.invW[i][j] = w.invW;
         }
     }
-    CullVerdict verdicts[kCullChunkTriangles];
-    cullTriangles(lanes, count, in.setup, verdicts);
+    SetupLanes setup;
+    setUpLanes(lanes, count, in.setup, setup);
 
     StageCounters& k = batch.counters;
+    const float* varyingBase = vertices.varyings.data();
+    const int varyingCount = batch.layout.count;
+    // The accepted triangles' varyings are read by vertex index, scattered over the vertex
+    // stage's output: asking for all of them before copying any lets the cache misses overlap
+    // (they were most of the copy's time on the dragon).
+    if (varyingCount > 0)
+        for (int j = 0; j < count; ++j)
+            if (codes[j] == 0 && setup.verdict[j] == SetupResult::Accepted)
+                for (int i = 0; i < 3; ++i) __builtin_prefetch(varyingBase + index[j][i] * varyingCount);
     for (int j = 0; j < count; ++j) {
         const size_t tri = first + size_t(j);
         ++k.trianglesIn;
@@ -122,22 +145,20 @@ void assembleAndSetUp(const DrawCall& call, const TriangleInput& in, size_t firs
             ++k.trianglesInvalid;
             continue;
         }
+        const size_t (&corner)[3] = index[j];
+        if (codes[j] == 0 && setup.verdict[j] != SetupResult::Accepted) {
+            countRejection(setup.verdict[j], k);
+            continue;
+        }
         const glm::vec4 color =
             call.triangleColors.size() > tri ? call.triangleColors[tri] : call.state.constantColor;
-        const size_t (&corner)[3] = index[j];
         if (codes[j] == 0) {
-            switch (verdicts[j]) {
-                case CullVerdict::Degenerate: ++k.trianglesDegenerate; continue;
-                case CullVerdict::Culled: ++k.trianglesCulled; continue;
-                case CullVerdict::NoSamples: ++k.trianglesNoSamples; continue;
-                case CullVerdict::MaySurvive: break;
-            }
-            const WindowVertex w[3] = {vertices.window[corner[0]], vertices.window[corner[1]],
-                                       vertices.window[corner[2]]};
-            const float* base = vertices.varyings.data();
-            const float* const v[3] = {base + corner[0] * batch.layout.count, base + corner[1] * batch.layout.count,
-                                       base + corner[2] * batch.layout.count};
-            setupInto(in, w, v, color, batch);
+            TriangleSetup t;
+            int order[3];
+            setupRecord(lanes, setup, j, in.setup, t, order);
+            const float* const v[3] = {varyingBase + corner[0] * varyingCount, varyingBase + corner[1] * varyingCount,
+                                       varyingBase + corner[2] * varyingCount};
+            appendTriangle(t, order, v, color, batch);
             continue;
         }
         const uint8_t* outcodes = vertices.outcodes.data();
@@ -225,8 +246,8 @@ void Pipeline::frontEnd(const BatchRef& ref, TriangleBatch& batch) const {
     const TriangleInput in{vertices, clipVolumeFor(call, framebuffer_),
                            setupContextFor(call, framebuffer_, vertices.layout)};
     const size_t end = std::min(call.triangleCount(), ref.firstTriangle + kTrianglesPerBatch);
-    for (size_t first = ref.firstTriangle; first < end; first += kCullChunkTriangles)
-        assembleAndSetUp(call, in, first, int(std::min(end - first, size_t(kCullChunkTriangles))), batch);
+    for (size_t first = ref.firstTriangle; first < end; first += kSetupChunkTriangles)
+        assembleAndSetUp(call, in, first, int(std::min(end - first, size_t(kSetupChunkTriangles))), batch);
     binTriangles(batch, TileGrid{framebuffer_.tilesX(), framebuffer_.tilesY()},
                  standardSamplePattern(framebuffer_.samples()));
 }

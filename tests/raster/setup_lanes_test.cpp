@@ -1,5 +1,5 @@
-// The triangle cull (raster/triangle_cull.h) decides set-up's rejections in lanes; the property
-// that makes it safe is that its verdict is setupTriangle()'s for every triangle. Checked here
+// Set-up in lanes (raster/setup_lanes.h) must be setupTriangle() bit for bit: the same verdict
+// for every triangle and, for an accepted one, the same record and vertex order. Checked here
 // on every sample count and cull mode, on random triangles of every size and on the hard ones:
 // vertices on sample positions (edges through samples, the fill rule decides), axis-aligned
 // edges, collinear vertices, slivers, and coordinates at the guard band's limit where an
@@ -8,32 +8,52 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <bit>
+#include <string>
 #include <random>
 
 #include "raster/limits.h"
 #include "raster/sample_pattern.h"
 #include "raster/setup.h"
-#include "raster/triangle_cull.h"
+#include "raster/setup_lanes.h"
 
 namespace cuberille::testing {
 namespace {
 
-using raster::CullVerdict;
 using raster::SetupResult;
 using raster::WindowVertex;
 using Triangle = std::array<WindowVertex, 3>;
 
-CullVerdict verdictOf(SetupResult r) {
-    switch (r) {
-        case SetupResult::Accepted: return CullVerdict::MaySurvive;
-        case SetupResult::Degenerate: return CullVerdict::Degenerate;
-        case SetupResult::Culled: return CullVerdict::Culled;
-        case SetupResult::NoSamples: return CullVerdict::NoSamples;
-    }
-    return CullVerdict::MaySurvive;
+/// Depths and 1/w vary with the position, so the depth plane and the vertex order are checked
+/// too (a swap of v1 and v2 shows in them).
+WindowVertex at(int32_t xSubpixels, int32_t ySubpixels) {
+    const float z = float((uint32_t(xSubpixels) * 2654435761u + uint32_t(ySubpixels)) % 1000003u) / 1000003.0f;
+    return {xSubpixels, ySubpixels, z, 1.0f / (1.0f + z)};
 }
 
-WindowVertex at(int32_t xSubpixels, int32_t ySubpixels) { return {xSubpixels, ySubpixels, 0.5f, 1.0f}; }
+void expectSameRecord(const raster::TriangleSetup& a, const int (&orderA)[3], const raster::TriangleSetup& b,
+                      const int (&orderB)[3], const std::string& where) {
+    for (int k = 0; k < 3; ++k) {
+        ASSERT_EQ(a.edgeA[k], b.edgeA[k]) << where;
+        ASSERT_EQ(a.edgeB[k], b.edgeB[k]) << where;
+        ASSERT_EQ(a.edgeC[k], b.edgeC[k]) << where;
+        ASSERT_EQ(a.fillBias[k], b.fillBias[k]) << where;
+        ASSERT_EQ(std::bit_cast<uint32_t>(a.invW[k]), std::bit_cast<uint32_t>(b.invW[k])) << where;
+        ASSERT_EQ(orderA[k], orderB[k]) << where;
+    }
+    ASSERT_EQ(a.backFacing, b.backFacing) << where;
+    ASSERT_EQ(a.pixelMinX, b.pixelMinX) << where;
+    ASSERT_EQ(a.pixelMinY, b.pixelMinY) << where;
+    ASSERT_EQ(a.pixelMaxX, b.pixelMaxX) << where;
+    ASSERT_EQ(a.pixelMaxY, b.pixelMaxY) << where;
+    ASSERT_EQ(a.originXSubpixels, b.originXSubpixels) << where;
+    ASSERT_EQ(a.originYSubpixels, b.originYSubpixels) << where;
+    ASSERT_EQ(std::bit_cast<uint32_t>(a.depthAtOrigin), std::bit_cast<uint32_t>(b.depthAtOrigin)) << where;
+    ASSERT_EQ(std::bit_cast<uint32_t>(a.depthPerSubpixelX), std::bit_cast<uint32_t>(b.depthPerSubpixelX)) << where;
+    ASSERT_EQ(std::bit_cast<uint32_t>(a.depthPerSubpixelY), std::bit_cast<uint32_t>(b.depthPerSubpixelY)) << where;
+    ASSERT_EQ(std::bit_cast<uint32_t>(a.depthKeySign), std::bit_cast<uint32_t>(b.depthKeySign)) << where;
+    ASSERT_EQ(std::bit_cast<uint64_t>(a.invDoubleArea), std::bit_cast<uint64_t>(b.invDoubleArea)) << where;
+}
 
 /// Triangles of every kind the cull must agree on, for a scissor of width x height pixels.
 std::vector<Triangle> hardAndRandomTriangles(int width, int height, const raster::SamplePattern& sp, std::mt19937& rng) {
@@ -83,7 +103,7 @@ std::vector<Triangle> hardAndRandomTriangles(int width, int height, const raster
     return out;
 }
 
-TEST(TriangleCull, VerdictsAreSetupsOnRandomAndHardTriangles) {
+TEST(SetupLanes, VerdictsAndRecordsAreSetupsOnRandomAndHardTriangles) {
     std::mt19937 rng(20261202);
     size_t seen[4] = {};
     for (int samples : {1, 2, 4, 8, 16}) {
@@ -92,33 +112,42 @@ TEST(TriangleCull, VerdictsAreSetupsOnRandomAndHardTriangles) {
             for (auto [width, height] : {std::pair{1, 1}, std::pair{7, 3}, std::pair{64, 48}, std::pair{1920, 1080}}) {
                 raster::SetupContext context = raster::SetupContext::forDraw(raster::PositionSpace::Window, width, height,
                                                                              sp, cull, 0);
+                context.depthKeySign = width == 7 ? -1.0f : 1.0f;  // reversed depth on one size
                 const std::vector<Triangle> triangles = hardAndRandomTriangles(width, height, sp, rng);
-                for (size_t first = 0; first < triangles.size(); first += raster::kCullChunkTriangles) {
-                    const int count = int(std::min(triangles.size() - first, size_t(raster::kCullChunkTriangles)));
+                for (size_t first = 0; first < triangles.size(); first += raster::kSetupChunkTriangles) {
+                    const int count = int(std::min(triangles.size() - first, size_t(raster::kSetupChunkTriangles)));
                     raster::TriangleLanes lanes{};
                     for (int j = 0; j < count; ++j)
                         for (int v = 0; v < 3; ++v) {
-                            lanes.x[v][j] = triangles[first + j][v].x;
-                            lanes.y[v][j] = triangles[first + j][v].y;
+                            const WindowVertex& w = triangles[first + j][v];
+                            lanes.x[v][j] = w.x, lanes.y[v][j] = w.y, lanes.z[v][j] = w.z, lanes.invW[v][j] = w.invW;
                         }
-                    CullVerdict verdicts[raster::kCullChunkTriangles];
-                    raster::cullTriangles(lanes, count, context, verdicts);
+                    raster::SetupLanes setup;
+                    raster::setUpLanes(lanes, count, context, setup);
                     for (int j = 0; j < count; ++j) {
                         const Triangle& t = triangles[first + j];
-                        raster::TriangleSetup setup;
+                        const std::string where = std::to_string(samples) + " samples, cull " + std::to_string(int(cull)) +
+                                                  ", " + std::to_string(width) + "x" + std::to_string(height) + ": (" +
+                                                  std::to_string(t[0].x) + "," + std::to_string(t[0].y) + ") (" +
+                                                  std::to_string(t[1].x) + "," + std::to_string(t[1].y) + ") (" +
+                                                  std::to_string(t[2].x) + "," + std::to_string(t[2].y) + ")";
+                        raster::TriangleSetup expected;
+                        int expectedOrder[3];
+                        const SetupResult result = raster::setupTriangle(t[0], t[1], t[2], context, expected, expectedOrder);
+                        ASSERT_EQ(int(setup.verdict[j]), int(result)) << where;
+                        ++seen[int(result)];
+                        if (result != SetupResult::Accepted) continue;
+                        raster::TriangleSetup record;
                         int order[3];
-                        const CullVerdict expected = verdictOf(raster::setupTriangle(t[0], t[1], t[2], context, setup, order));
-                        ASSERT_EQ(int(verdicts[j]), int(expected))
-                            << samples << " samples, cull " << int(cull) << ", " << width << "x" << height << ": ("
-                            << t[0].x << "," << t[0].y << ") (" << t[1].x << "," << t[1].y << ") (" << t[2].x << ","
-                            << t[2].y << ")";
-                        ++seen[int(expected)];
+                        raster::setupRecord(lanes, setup, j, context, record, order);
+                        expectSameRecord(record, order, expected, expectedOrder, where);
+                        if (::testing::Test::HasFatalFailure()) return;
                     }
                 }
             }
         }
     }
-    // Every verdict occurred, so none of the cull's paths went unchecked.
+    // Every verdict occurred, so none of the paths went unchecked.
     for (size_t n : seen) EXPECT_GT(n, 1000u);
 }
 
