@@ -6,6 +6,8 @@
 #include <GL/glext.h>
 
 #include <chrono>
+#include <cstdint>
+#include <map>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -31,6 +33,13 @@ namespace {
     X(PFNGLGETUNIFORMLOCATIONPROC, glGetUniformLocation)                                      \
     X(PFNGLUNIFORMMATRIX4FVPROC, glUniformMatrix4fv)                                          \
     X(PFNGLUNIFORM3FVPROC, glUniform3fv)                                                      \
+    X(PFNGLUNIFORM4FVPROC, glUniform4fv)                                                      \
+    X(PFNGLUNIFORM1IPROC, glUniform1i)                                                        \
+    X(PFNGLUNIFORM1IVPROC, glUniform1iv)                                                      \
+    X(PFNGLUNIFORM1FPROC, glUniform1f)                                                        \
+    X(PFNGLUNIFORM1FVPROC, glUniform1fv)                                                      \
+    X(PFNGLACTIVETEXTUREPROC, glActiveTexture)                                                \
+    X(PFNGLDISABLEVERTEXATTRIBARRAYPROC, glDisableVertexAttribArray)                          \
     X(PFNGLGENBUFFERSPROC, glGenBuffers)                                                      \
     X(PFNGLBINDBUFFERPROC, glBindBuffer)                                                      \
     X(PFNGLBUFFERDATAPROC, glBufferData)                                                      \
@@ -48,19 +57,149 @@ namespace {
 #define CUB_DECLARE(type, name) type p_##name = nullptr;
 CUB_GL_FUNCTIONS(CUB_DECLARE)
 
-const char* kVertexShader = R"(#version 120
-attribute vec3 position; attribute vec3 normal;
+// The shaders are raster/shade.h written in GLSL 1.20, so the peer does the work Cuberille does:
+// the same varyings, Lambert or glTF's metallic-roughness BRDF (GGX, height-correlated Smith,
+// Schlick) over every light of the scene, base-colour, metallic-roughness, normal, occlusion and
+// emissive textures sampled with the same filters from the same texels (Cuberille's own mip
+// chain, uploaded level by level in its texel format), alpha masks and double-sided normals. One
+// program per combination of features, compiled once, as an engine's shader variants are; the
+// bench scenes' one directional light has its own variant without the light loop, as Cuberille
+// has its fused Lambert loop. Not mirrored: KHR_texture_transform's UV transform and blending's
+// back-to-front sort of meshes (docs/performance.md says where this matters).
+const char* kVertexShader = R"(
+attribute vec3 position; attribute vec3 normal; attribute vec3 color; attribute vec2 uv; attribute vec4 tangent;
 uniform mat4 clipFromWorld;
-varying vec3 vNormal;
-void main() { vNormal = normal; gl_Position = clipFromWorld * vec4(position, 1.0); })";
-
-// The same Lambert as raster/shade.h: albedo * (ambient + radiance * max(0, n.l)).
-const char* kFragmentShader = R"(#version 120
-uniform vec3 albedo, lightDir, radiance, ambient;
-varying vec3 vNormal;
+varying vec3 vNormal, vPosition, vColor; varying vec2 vUV; varying vec4 vTangent;
 void main() {
-  float c = max(0.0, dot(normalize(vNormal), lightDir));
-  gl_FragColor = vec4(albedo * (ambient + radiance * c), 1.0);
+  vNormal = normal;
+#ifdef WORLD_POSITION
+  vPosition = position;
+#endif
+#ifdef VERTEX_COLOR
+  vColor = color;
+#endif
+#ifdef TEXTURED
+  vUV = uv;
+#endif
+#ifdef NORMAL_TEX
+  vTangent = tangent;
+#endif
+  gl_Position = clipFromWorld * vec4(position, 1.0);
+})";
+
+const char* kFragmentShader = R"(
+uniform vec4 baseColor; uniform float metallicFactor, roughnessFactor, normalScale, occlusionStrength, alphaCutoff;
+uniform vec3 emissiveFactor, cameraPosition, ambient;
+uniform int lightCount; uniform int lightType[8];
+uniform vec3 lightPosition[8], lightDirection[8], lightIntensity[8];
+uniform float lightRange[8], lightCosInner[8], lightCosOuter[8];
+uniform sampler2D baseColorTex, metallicRoughnessTex, normalTex, occlusionTex, emissiveTex;
+varying vec3 vNormal, vPosition, vColor; varying vec2 vUV; varying vec4 vTangent;
+
+vec3 safeNormalize(vec3 x) { float l2 = dot(x, x); return l2 > 0.0 ? x / sqrt(l2) : vec3(0.0, 0.0, 1.0); }
+
+// Direction to light i and the intensity arriving (shade.h, incident()).
+void incident(int i, vec3 p, out vec3 l, out vec3 e) {
+  if (lightType[i] == 0) { l = -lightDirection[i]; e = lightIntensity[i]; return; }
+  vec3 d = lightPosition[i] - p;
+  float distance2 = max(dot(d, d), 1e-12);
+  l = d / sqrt(distance2);
+  float attenuation = 1.0 / distance2;
+  if (lightRange[i] > 0.0) {
+    float r = distance2 / (lightRange[i] * lightRange[i]);
+    float window = clamp(1.0 - r * r, 0.0, 1.0);
+    attenuation *= window * window;
+  }
+  if (lightType[i] == 2) {
+    float scale = 1.0 / max(0.001, lightCosInner[i] - lightCosOuter[i]);
+    float cone = clamp((dot(lightDirection[i], -l) - lightCosOuter[i]) * scale, 0.0, 1.0);
+    attenuation *= cone * cone;
+  }
+  e = lightIntensity[i] * attenuation;
+}
+
+void main() {
+  vec4 albedo = baseColor;
+#ifdef VERTEX_COLOR
+  albedo.rgb *= vColor;
+#endif
+#ifdef BASE_TEX
+  albedo *= texture2D(baseColorTex, vUV);
+#endif
+#ifdef MASK
+  if (!(albedo.a >= alphaCutoff)) discard;
+  albedo.a = 1.0;
+#endif
+#ifdef UNLIT
+  gl_FragColor = albedo;
+#else
+  vec3 n = vNormal;
+#ifdef NORMAL_TEX
+  vec3 nrm = safeNormalize(n);
+  vec3 t = safeNormalize(vTangent.xyz - nrm * dot(nrm, vTangent.xyz));
+  vec3 b = cross(nrm, t) * (vTangent.w < 0.0 ? -1.0 : 1.0);
+  vec3 texel = texture2D(normalTex, vUV).rgb;
+  vec3 m = vec3(normalScale * (2.0 * texel.r - 1.0), normalScale * (2.0 * texel.g - 1.0), 2.0 * texel.b - 1.0);
+  n = t * m.x + b * m.y + nrm * m.z;
+#endif
+  float len2 = dot(n, n);
+  n = len2 > 0.0 ? n * ((gl_FrontFacing ? 1.0 : -1.0) / sqrt(len2)) : vec3(0.0);
+  float occlusion = 1.0;
+#ifdef OCCLUSION_TEX
+  occlusion = 1.0 + occlusionStrength * (texture2D(occlusionTex, vUV).r - 1.0);
+#endif
+  vec3 color;
+#if defined(METALLIC_ROUGHNESS)
+  float metallic = metallicFactor, roughness = roughnessFactor;
+#ifdef METALLIC_ROUGHNESS_TEX
+  vec4 mr = texture2D(metallicRoughnessTex, vUV);
+  metallic *= mr.b; roughness *= mr.g;
+#endif
+  metallic = clamp(metallic, 0.0, 1.0);
+  float r = max(0.03, clamp(roughness, 0.0, 1.0));
+  float alpha2 = r * r * r * r;
+  vec3 diffuse = albedo.rgb * (1.0 - metallic);
+  vec3 f0 = mix(vec3(0.04), albedo.rgb, metallic);
+  vec3 view = safeNormalize(cameraPosition - vPosition);
+  float nDotV = max(dot(n, view), 1e-4);
+  color = ambient * occlusion * (diffuse + f0);
+  for (int i = 0; i < lightCount; ++i) {
+    vec3 l, e;
+    incident(i, vPosition, l, e);
+    float nDotL = dot(n, l);
+    if (!(nDotL > 0.0)) continue;
+    vec3 h = safeNormalize(l + view);
+    float nDotH = max(dot(n, h), 0.0), vDotH = max(dot(view, h), 0.0);
+    float schlick = pow(1.0 - vDotH, 5.0);
+    vec3 fresnel = f0 + (vec3(1.0) - f0) * schlick;
+    vec3 nCrossH = cross(n, h);
+    float dDenominator = alpha2 * nDotH * nDotH + dot(nCrossH, nCrossH);
+    float distribution = alpha2 / (3.14159265 * dDenominator * dDenominator);
+    float visibility = 0.5 / (nDotL * sqrt(nDotV * nDotV * (1.0 - alpha2) + alpha2) +
+                              nDotV * sqrt(nDotL * nDotL * (1.0 - alpha2) + alpha2));
+    vec3 brdf = (vec3(1.0) - fresnel) * diffuse + 3.14159265 * distribution * visibility * fresnel;
+    color += e * nDotL * brdf;
+  }
+#elif defined(ONE_DIRECTIONAL_LIGHT)
+  color = albedo.rgb * (ambient * occlusion + lightIntensity[0] * max(0.0, dot(n, -lightDirection[0])));
+#else
+  vec3 irradiance = ambient * occlusion;
+  for (int i = 0; i < lightCount; ++i) {
+    vec3 l, e;
+    incident(i, vPosition, l, e);
+    irradiance += e * max(0.0, dot(n, l));
+  }
+  color = albedo.rgb * irradiance;
+#endif
+#ifdef EMISSIVE
+  vec3 emissive = emissiveFactor;
+#ifdef EMISSIVE_TEX
+  emissive *= texture2D(emissiveTex, vUV).rgb;
+#endif
+  color += emissive;
+#endif
+  gl_FragColor = vec4(color, albedo.a);
+#endif
 })";
 
 GLuint compile(GLenum type, const char* source) {
@@ -78,9 +217,67 @@ GLuint compile(GLenum type, const char* source) {
 }
 
 struct MeshBuffers {
-    GLuint positions, normals, indices;
-    GLsizei indexCount;
+    GLuint positions = 0, normals = 0, colors = 0, uvs = 0, tangents = 0, indices = 0;
+    GLsizei indexCount = 0;
+    size_t program = 0;  // into Impl::programs
 };
+
+/// One shader variant and its uniform locations.
+struct Program {
+    std::string defines;
+    GLuint id = 0;
+    GLint clipFromWorld, baseColor, metallic, roughness, normalScale, occlusionStrength, alphaCutoff, emissive,
+        cameraPosition, ambient, lightCount, lightType, lightPosition, lightDirection, lightIntensity, lightRange,
+        lightCosInner, lightCosOuter;
+};
+
+/// The features of a mesh's draw, as #defines for the shaders.
+std::string definesFor(const scene::Mesh& m, const raster::Lighting& lighting) {
+    const bool textured = m.texCoords.size() == m.positions.size() && !m.texCoords.empty();
+    std::string d;
+    auto define = [&](bool on, const char* name) {
+        if (on) d += std::string("#define ") + name + "\n";
+    };
+    bool onlyOneDirectional = lighting.lightCount == 1 && lighting.lights[0].type == raster::LightType::Directional;
+    const bool mr = m.metallicRoughness && !m.unlit;
+    bool pointOrSpot = false;
+    for (int i = 0; i < lighting.lightCount; ++i) pointOrSpot = pointOrSpot || lighting.lights[i].type != raster::LightType::Directional;
+    define(m.unlit, "UNLIT");
+    define(mr, "METALLIC_ROUGHNESS");
+    define(mr || pointOrSpot, "WORLD_POSITION");
+    define(!mr && onlyOneDirectional, "ONE_DIRECTIONAL_LIGHT");
+    define(m.colors.size() == m.positions.size() && !m.colors.empty(), "VERTEX_COLOR");
+    define(textured, "TEXTURED");
+    define(textured && bool(m.textures.baseColor), "BASE_TEX");
+    define(textured && mr && bool(m.textures.metallicRoughness), "METALLIC_ROUGHNESS_TEX");
+    define(textured && bool(m.textures.normal) && m.tangents.size() == m.positions.size(), "NORMAL_TEX");
+    define(textured && bool(m.textures.occlusion), "OCCLUSION_TEX");
+    define(m.emissive != glm::vec3(0.0f), "EMISSIVE");
+    define(textured && bool(m.textures.emissive), "EMISSIVE_TEX");
+    define(m.alphaMode == raster::AlphaMode::Mask, "MASK");
+    return d;
+}
+
+GLint wrapOf(raster::WrapMode w) {
+    switch (w) {
+        case raster::WrapMode::Repeat: return GL_REPEAT;
+        case raster::WrapMode::ClampToEdge: return GL_CLAMP_TO_EDGE;
+        case raster::WrapMode::MirroredRepeat: return GL_MIRRORED_REPEAT;
+    }
+    return GL_REPEAT;
+}
+
+GLint minFilterOf(raster::MinFilter f) {
+    switch (f) {
+        case raster::MinFilter::Nearest: return GL_NEAREST;
+        case raster::MinFilter::Linear: return GL_LINEAR;
+        case raster::MinFilter::NearestMipmapNearest: return GL_NEAREST_MIPMAP_NEAREST;
+        case raster::MinFilter::LinearMipmapNearest: return GL_LINEAR_MIPMAP_NEAREST;
+        case raster::MinFilter::NearestMipmapLinear: return GL_NEAREST_MIPMAP_LINEAR;
+        case raster::MinFilter::LinearMipmapLinear: return GL_LINEAR_MIPMAP_LINEAR;
+    }
+    return GL_LINEAR_MIPMAP_LINEAR;
+}
 
 }  // namespace
 
@@ -88,9 +285,69 @@ struct LlvmpipePeer::Impl {
     int width, height, msaa;
     OSMesaContext context = nullptr;
     std::vector<unsigned char> buffer;
-    GLuint program = 0, fbo = 0;
+    GLuint fbo = 0;
+    std::vector<Program> programs;
     std::vector<MeshBuffers> meshes;
+    std::map<const raster::Texture*, GLuint> textures;
+
+    size_t programFor(const std::string& defines);
+    GLuint textureFor(const raster::Texture& t);
 };
+
+size_t LlvmpipePeer::Impl::programFor(const std::string& defines) {
+    for (size_t i = 0; i < programs.size(); ++i)
+        if (programs[i].defines == defines) return i;
+    Program p;
+    p.defines = defines;
+    const std::string vertex = "#version 120\n" + defines + kVertexShader;
+    const std::string fragment = "#version 120\n" + defines + kFragmentShader;
+    p.id = p_glCreateProgram();
+    p_glAttachShader(p.id, compile(GL_VERTEX_SHADER, vertex.c_str()));
+    p_glAttachShader(p.id, compile(GL_FRAGMENT_SHADER, fragment.c_str()));
+    const char* attributes[] = {"position", "normal", "color", "uv", "tangent"};
+    for (GLuint i = 0; i < 5; ++i) p_glBindAttribLocation(p.id, i, attributes[i]);
+    p_glLinkProgram(p.id);
+    p_glUseProgram(p.id);
+    auto at = [&](const char* name) { return p_glGetUniformLocation(p.id, name); };
+    p.clipFromWorld = at("clipFromWorld"), p.baseColor = at("baseColor"), p.metallic = at("metallicFactor");
+    p.roughness = at("roughnessFactor"), p.normalScale = at("normalScale"), p.occlusionStrength = at("occlusionStrength");
+    p.alphaCutoff = at("alphaCutoff"), p.emissive = at("emissiveFactor"), p.cameraPosition = at("cameraPosition");
+    p.ambient = at("ambient"), p.lightCount = at("lightCount"), p.lightType = at("lightType");
+    p.lightPosition = at("lightPosition"), p.lightDirection = at("lightDirection"), p.lightIntensity = at("lightIntensity");
+    p.lightRange = at("lightRange"), p.lightCosInner = at("lightCosInner"), p.lightCosOuter = at("lightCosOuter");
+    const char* samplers[] = {"baseColorTex", "metallicRoughnessTex", "normalTex", "occlusionTex", "emissiveTex"};
+    for (int i = 0; i < 5; ++i) p_glUniform1i(at(samplers[i]), i);
+    programs.push_back(p);
+    return programs.size() - 1;
+}
+
+// Cuberille's own mip chain, level by level, in its texel format: 8-bit texels as sRGB or UNORM
+// bytes (the sampler decodes them, as Cuberille's table does), float texels as RGBA32F.
+GLuint LlvmpipePeer::Impl::textureFor(const raster::Texture& t) {
+    if (auto found = textures.find(&t); found != textures.end()) return found->second;
+    GLuint id;
+    glGenTextures(1, &id);
+    glBindTexture(GL_TEXTURE_2D, id);
+    for (int level = 0; level < t.levelCount(); ++level) {
+        const int w = t.width(level), h = t.height(level);
+        if (const uint32_t* packed = t.packedTexels(level)) {
+            const GLint format = t.format() == raster::TexelFormat::Srgb8 ? GL_SRGB8_ALPHA8 : GL_RGBA8;
+            glTexImage2D(GL_TEXTURE_2D, level, format, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, packed);
+            continue;
+        }
+        std::vector<glm::vec4> texels(size_t(w) * h);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) texels[size_t(y) * w + x] = t.texel(level, x, y);
+        glTexImage2D(GL_TEXTURE_2D, level, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, texels.data());
+    }
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, t.levelCount() - 1);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, minFilterOf(t.filter().minify));
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, t.filter().magnifyNearest ? GL_NEAREST : GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapOf(t.wrapU()));
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrapOf(t.wrapV()));
+    textures[&t] = id;
+    return id;
+}
 
 bool LlvmpipePeer::available() { return true; }
 
@@ -110,14 +367,6 @@ LlvmpipePeer::LlvmpipePeer(int width, int height, int msaa) : impl_(std::make_un
     p_##name = reinterpret_cast<type>(OSMesaGetProcAddress(#name));                 \
     if (!p_##name) throw std::runtime_error("OSMesa: missing " #name);
     CUB_GL_FUNCTIONS(CUB_LOAD)
-
-    m.program = p_glCreateProgram();
-    p_glAttachShader(m.program, compile(GL_VERTEX_SHADER, kVertexShader));
-    p_glAttachShader(m.program, compile(GL_FRAGMENT_SHADER, kFragmentShader));
-    p_glBindAttribLocation(m.program, 0, "position");
-    p_glBindAttribLocation(m.program, 1, "normal");
-    p_glLinkProgram(m.program);
-    p_glUseProgram(m.program);
 
     if (msaa > 1) {
         GLuint color, depth;
@@ -147,18 +396,32 @@ LlvmpipePeer::~LlvmpipePeer() {
 }
 
 void LlvmpipePeer::upload(const scene::Scene& scene) {
+    auto buffer = [](GLenum target, const void* data, size_t bytes) {
+        GLuint b = 0;
+        if (bytes == 0) return b;
+        p_glGenBuffers(1, &b);
+        p_glBindBuffer(target, b);
+        p_glBufferData(target, GLsizeiptr(bytes), data, GL_STATIC_DRAW);
+        return b;
+    };
     for (const scene::Mesh& mesh : scene.meshes) {
         MeshBuffers b;
-        p_glGenBuffers(1, &b.positions);
-        p_glBindBuffer(GL_ARRAY_BUFFER, b.positions);
-        p_glBufferData(GL_ARRAY_BUFFER, mesh.positions.size() * sizeof(glm::vec3), mesh.positions.data(), GL_STATIC_DRAW);
-        p_glGenBuffers(1, &b.normals);
-        p_glBindBuffer(GL_ARRAY_BUFFER, b.normals);
-        p_glBufferData(GL_ARRAY_BUFFER, mesh.normals.size() * sizeof(glm::vec3), mesh.normals.data(), GL_STATIC_DRAW);
-        p_glGenBuffers(1, &b.indices);
-        p_glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, b.indices);
-        p_glBufferData(GL_ELEMENT_ARRAY_BUFFER, mesh.indices.size() * sizeof(uint32_t), mesh.indices.data(), GL_STATIC_DRAW);
+        const std::string defines = definesFor(mesh, scene.lighting);
+        b.program = impl_->programFor(defines);
+        b.positions = buffer(GL_ARRAY_BUFFER, mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
+        b.normals = buffer(GL_ARRAY_BUFFER, mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
+        if (defines.find("VERTEX_COLOR") != std::string::npos)
+            b.colors = buffer(GL_ARRAY_BUFFER, mesh.colors.data(), mesh.colors.size() * sizeof(glm::vec3));
+        if (defines.find("TEXTURED") != std::string::npos)
+            b.uvs = buffer(GL_ARRAY_BUFFER, mesh.texCoords.data(), mesh.texCoords.size() * sizeof(glm::vec2));
+        if (defines.find("NORMAL_TEX") != std::string::npos)
+            b.tangents = buffer(GL_ARRAY_BUFFER, mesh.tangents.data(), mesh.tangents.size() * sizeof(glm::vec4));
+        b.indices = buffer(GL_ELEMENT_ARRAY_BUFFER, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
         b.indexCount = GLsizei(mesh.indices.size());
+        const scene::MeshTexture* slots[] = {&mesh.textures.baseColor, &mesh.textures.metallicRoughness,
+                                             &mesh.textures.normal, &mesh.textures.occlusion, &mesh.textures.emissive};
+        for (const scene::MeshTexture* t : slots)
+            if (t->texture) impl_->textureFor(*t->texture);
         impl_->meshes.push_back(b);
     }
     glFinish();
@@ -175,24 +438,84 @@ double LlvmpipePeer::renderFrame(const scene::Scene& scene) {
     if (m.fbo) p_glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     glClearColor(scene.background.r, scene.background.g, scene.background.b, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    p_glUniformMatrix4fv(p_glGetUniformLocation(m.program, "clipFromWorld"), 1, GL_FALSE, glm::value_ptr(clipFromWorld));
-    const glm::vec3 towardsLight = -scene.lighting.lights[0].direction;  // the bench scenes' one directional light
-    p_glUniform3fv(p_glGetUniformLocation(m.program, "lightDir"), 1, glm::value_ptr(towardsLight));
-    p_glUniform3fv(p_glGetUniformLocation(m.program, "radiance"), 1, glm::value_ptr(scene.lighting.lights[0].intensity));
-    p_glUniform3fv(p_glGetUniformLocation(m.program, "ambient"), 1, glm::value_ptr(scene.lighting.ambient));
-    const GLint albedo = p_glGetUniformLocation(m.program, "albedo");
-    p_glEnableVertexAttribArray(0);
-    p_glEnableVertexAttribArray(1);
-    for (size_t i = 0; i < m.meshes.size(); ++i) {
+    const raster::Lighting& lighting = scene.lighting;
+    GLint types[raster::kMaxLights];
+    glm::vec3 positions[raster::kMaxLights], directions[raster::kMaxLights], intensities[raster::kMaxLights];
+    float ranges[raster::kMaxLights], inner[raster::kMaxLights], outer[raster::kMaxLights];
+    for (int i = 0; i < lighting.lightCount; ++i) {
+        const raster::Light& l = lighting.lights[i];
+        types[i] = GLint(l.type), positions[i] = l.position, directions[i] = l.direction, intensities[i] = l.intensity;
+        ranges[i] = l.range, inner[i] = l.cosInnerCone, outer[i] = l.cosOuterCone;
+    }
+    // Opaque and masked meshes first, then blended ones without depth writes, as Scene::draw.
+    std::vector<size_t> order, blended;
+    for (size_t i = 0; i < m.meshes.size(); ++i)
+        (scene.meshes[i].alphaMode == raster::AlphaMode::Blend ? blended : order).push_back(i);
+    order.insert(order.end(), blended.begin(), blended.end());
+    size_t bound = SIZE_MAX;
+    for (size_t i : order) {
         const MeshBuffers& b = m.meshes[i];
-        p_glUniform3fv(albedo, 1, glm::value_ptr(scene.meshes[i].color));
-        p_glBindBuffer(GL_ARRAY_BUFFER, b.positions);
-        p_glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
-        p_glBindBuffer(GL_ARRAY_BUFFER, b.normals);
-        p_glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+        const scene::Mesh& mesh = scene.meshes[i];
+        const Program& p = m.programs[b.program];
+        if (b.program != bound) {
+            p_glUseProgram(p.id);
+            p_glUniformMatrix4fv(p.clipFromWorld, 1, GL_FALSE, glm::value_ptr(clipFromWorld));
+            p_glUniform3fv(p.cameraPosition, 1, glm::value_ptr(scene.camera.position));
+            p_glUniform3fv(p.ambient, 1, glm::value_ptr(lighting.ambient));
+            p_glUniform1i(p.lightCount, lighting.lightCount);
+            if (lighting.lightCount > 0) {
+                p_glUniform1iv(p.lightType, lighting.lightCount, types);
+                p_glUniform3fv(p.lightPosition, lighting.lightCount, glm::value_ptr(positions[0]));
+                p_glUniform3fv(p.lightDirection, lighting.lightCount, glm::value_ptr(directions[0]));
+                p_glUniform3fv(p.lightIntensity, lighting.lightCount, glm::value_ptr(intensities[0]));
+                p_glUniform1fv(p.lightRange, lighting.lightCount, ranges);
+                p_glUniform1fv(p.lightCosInner, lighting.lightCount, inner);
+                p_glUniform1fv(p.lightCosOuter, lighting.lightCount, outer);
+            }
+            bound = b.program;
+        }
+        const glm::vec4 baseColor(mesh.color, mesh.alpha);
+        p_glUniform4fv(p.baseColor, 1, glm::value_ptr(baseColor));
+        p_glUniform1f(p.metallic, mesh.metallic);
+        p_glUniform1f(p.roughness, mesh.roughness);
+        p_glUniform1f(p.normalScale, mesh.normalScale);
+        p_glUniform1f(p.occlusionStrength, mesh.occlusionStrength);
+        p_glUniform1f(p.alphaCutoff, mesh.alphaCutoff);
+        p_glUniform3fv(p.emissive, 1, glm::value_ptr(mesh.emissive));
+        const scene::MeshTexture* slots[] = {&mesh.textures.baseColor, &mesh.textures.metallicRoughness,
+                                             &mesh.textures.normal, &mesh.textures.occlusion, &mesh.textures.emissive};
+        for (int unit = 0; unit < 5; ++unit) {
+            if (!slots[unit]->texture) continue;
+            p_glActiveTexture(GL_TEXTURE0 + unit);
+            glBindTexture(GL_TEXTURE_2D, m.textures.at(slots[unit]->texture.get()));
+        }
+        if (mesh.doubleSided || scene.cull == raster::CullMode::None)
+            glDisable(GL_CULL_FACE);
+        else
+            glEnable(GL_CULL_FACE);
+        const bool blend = mesh.alphaMode == raster::AlphaMode::Blend;
+        if (blend) {
+            glEnable(GL_BLEND);
+            glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+        } else {
+            glDisable(GL_BLEND);
+        }
+        glDepthMask(blend ? GL_FALSE : GL_TRUE);
+        auto attribute = [](GLuint index, GLuint buffer, GLint components) {
+            if (!buffer) return p_glDisableVertexAttribArray(index);
+            p_glEnableVertexAttribArray(index);
+            p_glBindBuffer(GL_ARRAY_BUFFER, buffer);
+            p_glVertexAttribPointer(index, components, GL_FLOAT, GL_FALSE, 0, nullptr);
+        };
+        attribute(0, b.positions, 3);
+        attribute(1, b.normals, 3);
+        attribute(2, b.colors, 3);
+        attribute(3, b.uvs, 2);
+        attribute(4, b.tangents, 4);
         p_glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, b.indices);
         glDrawElements(GL_TRIANGLES, b.indexCount, GL_UNSIGNED_INT, nullptr);
     }
+    glDepthMask(GL_TRUE);
     if (m.fbo) {  // resolve into the OSMesa buffer
         p_glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo);
         p_glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);

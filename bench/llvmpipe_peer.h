@@ -1,6 +1,8 @@
 #pragma once
-// Mesa's llvmpipe through OSMesa, drawing the same triangles with the same per-pixel Lambert
-// shading (GLSL), for side-by-side timing. Thread count: LP_NUM_THREADS, read once per process.
+// Mesa's llvmpipe through OSMesa, drawing the same triangles with the same per-pixel shading as
+// Cuberille (raster/shade.h in GLSL: Lambert or the metallic-roughness BRDF over the scene's
+// lights, the same textures), for side-by-side timing. Thread count: LP_NUM_THREADS, read once
+// per process.
 
 #include <memory>
 #include <vector>

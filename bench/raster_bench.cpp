@@ -14,6 +14,7 @@
 #include <functional>
 #include <memory>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <malloc.h>
@@ -55,6 +56,25 @@ OurFrame renderOurs(raster::Pipeline& p, const scene::Scene& s, int w, int h, in
     OurFrame f{std::chrono::duration<double, std::milli>(t2 - t0).count(), p.stats().times};
     f.stages.resolveMs = std::chrono::duration<double, std::milli>(t2 - t1).count();
     return f;
+}
+
+// How alike the two renderers' images are, as PSNR in dB over the linear RGB values both write
+// (the peer's framebuffer holds them as 8-bit UNORM, bottom row first): the evidence that the
+// peer did the same work. Equal shading leaves rasterization rules and rounding: around 40 dB
+// and up on the bench scenes; a peer that shaded differently shows as 20 dB or less.
+double peerAgreementDb(const raster::Image& ours, const std::vector<unsigned char>& theirs) {
+    double squared = 0.0;
+    for (int y = 0; y < ours.height; ++y)
+        for (int x = 0; x < ours.width; ++x) {
+            const float* p = ours.pixel(x, y);
+            const unsigned char* q = theirs.data() + (size_t(ours.height - 1 - y) * ours.width + x) * 4;
+            for (int c = 0; c < 3; ++c) {
+                const double a = std::clamp(double(p[c]), 0.0, 1.0), b = q[c] / 255.0;
+                squared += (a - b) * (a - b);
+            }
+        }
+    const double mse = squared / (3.0 * ours.width * ours.height);
+    return mse > 0.0 ? 10.0 * std::log10(1.0 / mse) : 99.0;
 }
 
 // --- What each effect costs: the field scene's geometry drawn with one effect added at a time.
@@ -196,8 +216,8 @@ int main(int argc, char** argv) {
     for (const std::string& name : raster::availableInstructionSets()) sets += (sets.empty() ? "" : ", ") + name;
     std::printf("# %dx%d, %d thread%s, median of %d warm frames; Cuberille on %s (this CPU runs %s)\n", width, height,
                 effectiveThreads, effectiveThreads > 1 ? "s" : "", frames, raster::activeInstructionSet().c_str(), sets.c_str());
-    std::printf("%-9s %4s %10s | %8s %8s %8s %8s %10s | %10s | %7s\n", "scene", "msaa", "triangles",
-                "vertex", "front", "back", "resolve", "cuberille", "llvmpipe", "ratio");
+    std::printf("%-9s %4s %10s | %8s %8s %8s %8s %10s | %10s | %7s | %5s\n", "scene", "msaa", "triangles",
+                "vertex", "front", "back", "resolve", "cuberille", "llvmpipe", "ratio", "PSNR");
     for (const std::string& entry : bench::splitList(scenes)) {
         // Model files: load time first (parse, decode, pose), then the same frame comparison.
         const auto loadStart = std::chrono::steady_clock::now();
@@ -225,6 +245,7 @@ int main(int argc, char** argv) {
             });
 
             std::vector<double> theirs;
+            double agreementDb = 0.0;
             if (noPeer) {
                 theirs.push_back(0.0);
             } else {
@@ -232,6 +253,7 @@ int main(int argc, char** argv) {
                 peer.upload(s);
                 for (int i = 0; i < warmup; ++i) peer.renderFrame(s);  // includes shader JIT
                 for (int i = 0; i < frames; ++i) theirs.push_back(peer.renderFrame(s));
+                agreementDb = peerAgreementDb(image, peer.pixels());
             }
             const double theirMedian = bench::median(theirs);
             if (verbose) {
@@ -242,10 +264,10 @@ int main(int argc, char** argv) {
                 std::printf("\n");
             }
 
-            std::printf("%-9s %4d %10zu | %8.1f %8.1f %8.1f %8.1f %10.1f | %10.1f | %6.2fx\n",
+            std::printf("%-9s %4d %10zu | %8.1f %8.1f %8.1f %8.1f %10.1f | %10.1f | %6.2fx | %5.1f\n",
                         name.c_str(), msaa, s.triangleCount(), typical.stages.vertexMs,
                         typical.stages.frontEndMs, typical.stages.backEndMs,
-                        typical.stages.resolveMs, ourMedian, theirMedian, theirMedian / ourMedian);
+                        typical.stages.resolveMs, ourMedian, theirMedian, theirMedian / ourMedian, agreementDb);
             std::fflush(stdout);
         }
     }

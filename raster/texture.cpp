@@ -1,35 +1,105 @@
 #include "raster/texture.h"
 
+#include "raster/srgb.h"
+
 #include <algorithm>
+#include <array>
+#include <bit>
+#include <cstring>
 #include <cmath>
 #include <stdexcept>
 
 namespace cuberille::raster {
+
+namespace {
+
+/// Byte to linear value: b / 255, as a float image reader divides (UNORM).
+const float* unorm8Table() {
+    static const auto table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) t[i] = float(i) / 255.0f;
+        return t;
+    }();
+    return table.data();
+}
+
+/// Byte to linear value through the sRGB transfer function (raster/srgb.h).
+const float* srgb8Table() {
+    static const auto table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) t[i] = decodeSrgb8(uint8_t(i));
+        return t;
+    }();
+    return table.data();
+}
+
+uint8_t encodeUnorm8(float linear) {
+    if (!(linear > 0.0f)) return 0;  // NaN too
+    if (linear >= 1.0f) return 255;
+    return uint8_t(linear * 255.0f + 0.5f);  // round to nearest
+}
+
+uint32_t pack(const glm::vec4& linear, TexelFormat format) {
+    auto rgb = [&](float v) { return format == TexelFormat::Srgb8 ? encodeSrgb8(v) : encodeUnorm8(v); };
+    return uint32_t(rgb(linear.r)) | uint32_t(rgb(linear.g)) << 8 | uint32_t(rgb(linear.b)) << 16 |
+           uint32_t(encodeUnorm8(linear.a)) << 24;
+}
+
+}  // namespace
 
 Texture::Texture(int width, int height, std::vector<glm::vec4> rgba, WrapMode wrapU, WrapMode wrapV,
                  TextureFilter filter)
     : wrapU_(wrapU), wrapV_(wrapV), filter_(filter) {
     if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height))
         throw std::invalid_argument("texture: size does not match its texels");
-    levels_.push_back({width, height, std::move(rgba)});
+    levels_.push_back({width, height, std::move(rgba), {}});
+    buildMipChain();
+}
+
+Texture::Texture(int width, int height, const std::vector<uint8_t>& rgba8, TexelFormat format, WrapMode wrapU,
+                 WrapMode wrapV, TextureFilter filter)
+    : wrapU_(wrapU), wrapV_(wrapV), filter_(filter), format_(format) {
+    if (format == TexelFormat::LinearFloat) throw std::invalid_argument("texture: bytes need an 8-bit format");
+    if (width <= 0 || height <= 0 || rgba8.size() != size_t(width) * size_t(height) * 4)
+        throw std::invalid_argument("texture: size does not match its texels");
+    decodeRgb_ = format == TexelFormat::Srgb8 ? srgb8Table() : unorm8Table();
+    decodeAlpha_ = unorm8Table();
+    Level base{width, height, {}, std::vector<uint32_t>(size_t(width) * height)};
+    std::memcpy(base.packed.data(), rgba8.data(), rgba8.size());  // R in the low byte (little-endian)
+    static_assert(std::endian::native == std::endian::little, "texels are packed little-endian");
+    levels_.push_back(std::move(base));
+    buildMipChain();
+}
+
+// 2x2 box filter in linear float, down to 1x1; an 8-bit level is stored again in its format.
+void Texture::buildMipChain() {
     while (levels_.back().width > 1 || levels_.back().height > 1) {
+        const int level = levelCount() - 1;
         const Level& src = levels_.back();
-        Level dst{std::max(1, src.width / 2), std::max(1, src.height / 2), {}};
-        dst.texels.resize(size_t(dst.width) * dst.height);
+        Level dst{std::max(1, src.width / 2), std::max(1, src.height / 2), {}, {}};
+        const size_t count = size_t(dst.width) * dst.height;
+        if (format_ == TexelFormat::LinearFloat)
+            dst.texels.resize(count);
+        else
+            dst.packed.resize(count);
         for (int y = 0; y < dst.height; ++y)
             for (int x = 0; x < dst.width; ++x) {
                 const int x0 = std::min(2 * x, src.width - 1), x1 = std::min(2 * x + 1, src.width - 1);
                 const int y0 = std::min(2 * y, src.height - 1), y1 = std::min(2 * y + 1, src.height - 1);
-                const auto& t = src.texels;
-                dst.texels[size_t(y) * dst.width + x] =
-                    0.25f * (t[size_t(y0) * src.width + x0] + t[size_t(y0) * src.width + x1] +
-                             t[size_t(y1) * src.width + x0] + t[size_t(y1) * src.width + x1]);
+                const glm::vec4 average = 0.25f * (texel(level, x0, y0) + texel(level, x1, y0) +
+                                                   texel(level, x0, y1) + texel(level, x1, y1));
+                const size_t i = size_t(y) * dst.width + x;
+                if (format_ == TexelFormat::LinearFloat)
+                    dst.texels[i] = average;
+                else
+                    dst.packed[i] = pack(average, format_);
             }
         levels_.push_back(std::move(dst));
     }
 }
 
 int Texture::wrap(int i, int size, WrapMode mode) const {
+    if (unsigned(i) < unsigned(size)) return i;  // inside the image: every mode agrees
     switch (mode) {
         case WrapMode::ClampToEdge: return std::clamp(i, 0, size - 1);
         case WrapMode::Repeat: return ((i % size) + size) % size;

@@ -1,5 +1,15 @@
 #pragma once
-// Textures: a linear-RGBA float mip chain with glTF's wrap modes and filters.
+// Textures: a linear-RGBA mip chain with glTF's wrap modes and filters.
+//
+// Texels are stored as the image gave them, as GPUs store them: 8-bit images as 8-bit texels
+// (TexelFormat::Srgb8 for colour, whose RGB is sRGB-encoded, Unorm8 for data such as normals,
+// metallic-roughness and occlusion), decoded to linear float through a 256-entry table at each
+// fetch and filtered in float; other sources (16-bit images, textures made in code) as linear
+// float texels. Against float storage, 8-bit texels are a quarter of the memory a fetch touches:
+// a 2048x2048 texture is 21 MiB with its mips instead of 85, and five of them were the whole of
+// a DamagedHelmet frame's cache misses. The mip levels of an 8-bit texture are box-filtered in
+// linear float from the decoded level above and stored again in its format, rounded to nearest
+// (sRGB-correct mip generation, as a GPU driver generates them).
 //
 // Filtering follows the texture's sampler (glTF magFilter / minFilter; trilinear by default).
 // Conventions: texture coordinates (u, v) in [0, 1] span the image, v down the rows (glTF's);
@@ -17,6 +27,10 @@
 namespace cuberille::raster {
 
 enum class WrapMode : uint8_t { Repeat, ClampToEdge, MirroredRepeat };
+
+/// How texels are stored. Srgb8: RGB sRGB-encoded bytes, alpha a linear byte (glTF's base colour
+/// and emissive images); Unorm8: four linear bytes; LinearFloat: four floats.
+enum class TexelFormat : uint8_t { LinearFloat, Srgb8, Unorm8 };
 
 /// glTF's (OpenGL's) minification filters: within a level, and between levels.
 enum class MinFilter : uint8_t {
@@ -38,17 +52,32 @@ public:
     /// `rgba` is width x height linear RGBA, row-major, top row first.
     Texture(int width, int height, std::vector<glm::vec4> rgba, WrapMode wrapU = WrapMode::Repeat,
             WrapMode wrapV = WrapMode::Repeat, TextureFilter filter = {});
+    /// `rgba8` is width x height texels of 4 bytes (R, G, B, A), row-major, top row first, in
+    /// `format` (Srgb8 or Unorm8).
+    Texture(int width, int height, const std::vector<uint8_t>& rgba8, TexelFormat format,
+            WrapMode wrapU = WrapMode::Repeat, WrapMode wrapV = WrapMode::Repeat, TextureFilter filter = {});
 
     /// The same texels under other filters (an accuracy knob: `render --texture-filter`).
     void setFilter(TextureFilter filter) { filter_ = filter; }
     TextureFilter filter() const { return filter_; }
+    WrapMode wrapU() const { return wrapU_; }
+    WrapMode wrapV() const { return wrapV_; }
 
     int width(int level = 0) const { return levels_[level].width; }
     int height(int level = 0) const { return levels_[level].height; }
     int levelCount() const { return int(levels_.size()); }
-    const glm::vec4& texel(int level, int x, int y) const {
+    TexelFormat format() const { return format_; }
+    /// Texel (x, y) of a level, decoded to linear RGBA.
+    glm::vec4 texel(int level, int x, int y) const {
         const Level& l = levels_[level];
-        return l.texels[size_t(y) * l.width + x];
+        const size_t i = size_t(y) * l.width + x;
+        if (format_ == TexelFormat::LinearFloat) return l.texels[i];
+        const uint32_t p = l.packed[i];
+        return {decodeRgb_[p & 0xFF], decodeRgb_[(p >> 8) & 0xFF], decodeRgb_[(p >> 16) & 0xFF], decodeAlpha_[p >> 24]};
+    }
+    /// A level's texels as stored by an 8-bit format, R in the low byte; null for LinearFloat.
+    const uint32_t* packedTexels(int level) const {
+        return format_ == TexelFormat::LinearFloat ? nullptr : levels_[level].packed.data();
     }
 
     /// With the texture's filters: lod <= 0 magnifies (level 0), lod > 0 minifies. This is
@@ -65,13 +94,18 @@ public:
 private:
     struct Level {
         int width, height;
-        std::vector<glm::vec4> texels;
+        std::vector<glm::vec4> texels;  // LinearFloat
+        std::vector<uint32_t> packed;   // 8-bit formats
     };
+    void buildMipChain();
     int wrap(int i, int size, WrapMode mode) const;
 
     std::vector<Level> levels_;
     WrapMode wrapU_, wrapV_;
     TextureFilter filter_;
+    TexelFormat format_ = TexelFormat::LinearFloat;
+    const float* decodeRgb_ = nullptr;    // 256 linear values for an 8-bit format's colour bytes
+    const float* decodeAlpha_ = nullptr;  // and its alpha bytes
 };
 
 }  // namespace cuberille::raster

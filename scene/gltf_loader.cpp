@@ -749,24 +749,6 @@ private:
         if (!decoded) {
             warnOnce("texture " + std::to_string(index) + " has no decodable image; its colour factor is used");
         } else {
-            std::vector<glm::vec4> texels(size_t(image->width) * image->height);
-            const int c = image->component;
-            for (size_t i = 0; i < texels.size(); ++i) {
-                float v[4] = {0, 0, 0, 1};
-                for (int k = 0; k < c; ++k) {
-                    if (image->bits == 8) {
-                        v[k] = image->image[i * c + k] / 255.0f;
-                    } else {
-                        uint16_t x;
-                        std::memcpy(&x, &image->image[(i * c + k) * 2], 2);
-                        v[k] = x / 65535.0f;
-                    }
-                }
-                const float alpha = c == 2 ? v[1] : v[3];
-                if (c <= 2) v[1] = v[2] = v[0];  // grey (+ alpha)
-                texels[i] = srgb ? glm::vec4(srgbToLinear(v[0]), srgbToLinear(v[1]), srgbToLinear(v[2]), alpha)
-                                 : glm::vec4(v[0], v[1], v[2], alpha);
-            }
             raster::WrapMode wrapU = raster::WrapMode::Repeat, wrapV = raster::WrapMode::Repeat;
             raster::TextureFilter filter;
             if (tex.sampler >= 0 && tex.sampler < int(model_.samplers.size())) {
@@ -775,12 +757,51 @@ private:
                 wrapV = wrapMode(sampler.wrapT);
                 filter = textureFilter(sampler);
             }
-            result = std::make_shared<raster::Texture>(image->width, image->height, std::move(texels), wrapU, wrapV,
-                                                       filter);
+            result = image->bits == 8 ? texture8(*image, srgb, wrapU, wrapV, filter)
+                                      : texture16(*image, srgb, wrapU, wrapV, filter);
         }
         textures_[key] = result;
         texturesUsed_.insert(key);
         return result;
+    }
+
+    // An 8-bit image keeps its bytes (raster/texture.h): grey and grey-alpha widened to RGBA.
+    static std::shared_ptr<const raster::Texture> texture8(const tinygltf::Image& image, bool srgb, raster::WrapMode wrapU,
+                                                           raster::WrapMode wrapV, raster::TextureFilter filter) {
+        const int c = image.component;
+        const size_t count = size_t(image.width) * image.height;
+        std::vector<uint8_t> rgba(count * 4);
+        for (size_t i = 0; i < count; ++i) {
+            const unsigned char* in = &image.image[i * c];
+            uint8_t* out = &rgba[i * 4];
+            out[0] = in[0];
+            out[1] = c >= 3 ? in[1] : in[0];
+            out[2] = c >= 3 ? in[2] : in[0];
+            out[3] = c == 4 ? in[3] : (c == 2 ? in[1] : 255);
+        }
+        return std::make_shared<raster::Texture>(image.width, image.height, rgba,
+                                                 srgb ? raster::TexelFormat::Srgb8 : raster::TexelFormat::Unorm8,
+                                                 wrapU, wrapV, filter);
+    }
+
+    // A 16-bit image as linear float texels.
+    static std::shared_ptr<const raster::Texture> texture16(const tinygltf::Image& image, bool srgb, raster::WrapMode wrapU,
+                                                            raster::WrapMode wrapV, raster::TextureFilter filter) {
+        std::vector<glm::vec4> texels(size_t(image.width) * image.height);
+        const int c = image.component;
+        for (size_t i = 0; i < texels.size(); ++i) {
+            float v[4] = {0, 0, 0, 1};
+            for (int k = 0; k < c; ++k) {
+                uint16_t x;
+                std::memcpy(&x, &image.image[(i * c + k) * 2], 2);
+                v[k] = x / 65535.0f;
+            }
+            const float alpha = c == 2 ? v[1] : v[3];
+            if (c <= 2) v[1] = v[2] = v[0];  // grey (+ alpha)
+            texels[i] = srgb ? glm::vec4(srgbToLinear(v[0]), srgbToLinear(v[1]), srgbToLinear(v[2]), alpha)
+                             : glm::vec4(v[0], v[1], v[2], alpha);
+        }
+        return std::make_shared<raster::Texture>(image.width, image.height, std::move(texels), wrapU, wrapV, filter);
     }
 
     // The image a texture reads: EXT_texture_webp's source where the texture names one (a reader

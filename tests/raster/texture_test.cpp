@@ -4,8 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
+#include "raster/srgb.h"
 #include "raster/texture.h"
 #include "tests/raster/test_support.h"
 
@@ -59,6 +62,52 @@ TEST(Texture, MipChainBoxFiltersDownToOneTexel) {
     EXPECT_EQ(t.sampleTrilinear(uv, -3.0f), t.sampleBilinear(0, uv));
     EXPECT_EQ(t.levelOfDetail(glm::vec2(1.0f / 8, 0), glm::vec2(0)), 0.0f);
     EXPECT_EQ(t.levelOfDetail(glm::vec2(0), glm::vec2(0, 4.0f / 4)), 2.0f);
+}
+
+TEST(Texture, EightBitTexelsDecodeThroughTheTableAndMipInLinear) {
+    // Random bytes on odd sides (the last row and column fold into the level below).
+    constexpr int kWidth = 13, kHeight = 7;
+    std::mt19937 rng(8);
+    std::vector<uint8_t> bytes(kWidth * kHeight * 4);
+    for (uint8_t& b : bytes) b = uint8_t(rng() & 0xFF);
+    for (raster::TexelFormat format : {raster::TexelFormat::Srgb8, raster::TexelFormat::Unorm8}) {
+        const bool srgb = format == raster::TexelFormat::Srgb8;
+        auto decode = [&](uint8_t b, int channel) {
+            return srgb && channel < 3 ? raster::decodeSrgb8(b) : float(b) / 255.0f;
+        };
+        auto encode = [&](float v, int channel) {
+            if (srgb && channel < 3) return raster::encodeSrgb8(v);
+            return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+        };
+        const Texture t(kWidth, kHeight, bytes, format);
+        ASSERT_NE(t.packedTexels(0), nullptr);
+        // Level 0: each texel is its bytes through the decode, exactly.
+        std::vector<glm::vec4> decoded;
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x) {
+                glm::vec4 expected;
+                for (int c = 0; c < 4; ++c) expected[c] = decode(bytes[(y * kWidth + x) * 4 + c], c);
+                ASSERT_EQ(t.texel(0, x, y), expected) << x << "," << y;
+                decoded.push_back(expected);
+            }
+        // Level 1: the 2x2 average in linear, stored again as bytes of the format.
+        ASSERT_EQ(t.width(1), kWidth / 2);
+        for (int y = 0; y < t.height(1); ++y)
+            for (int x = 0; x < t.width(1); ++x) {
+                const glm::vec4 average = 0.25f * (decoded[2 * y * kWidth + 2 * x] + decoded[2 * y * kWidth + 2 * x + 1] +
+                                                   decoded[(2 * y + 1) * kWidth + 2 * x] +
+                                                   decoded[(2 * y + 1) * kWidth + 2 * x + 1]);
+                for (int c = 0; c < 4; ++c)
+                    ASSERT_EQ(t.texel(1, x, y)[c], decode(encode(average[c], c), c)) << x << "," << y << " channel " << c;
+            }
+        ASSERT_EQ(t.width(t.levelCount() - 1), 1);
+        // Sampling level 0 is sampling the same values held as floats.
+        const Texture asFloat(kWidth, kHeight, decoded);
+        for (int i = 0; i < 200; ++i) {
+            const glm::vec2 uv(float(rng() % 1000) / 300.0f - 1.0f, float(rng() % 1000) / 300.0f - 1.0f);
+            ASSERT_EQ(t.sampleBilinear(0, uv), asFloat.sampleBilinear(0, uv)) << uv.x << "," << uv.y;
+        }
+    }
 }
 
 TEST(TexturedDraw, OneTexelPerPixelReproducesTheTexture) {
