@@ -191,18 +191,25 @@ private:
     }
 
     // One filtered fetch per pixel through the binding's UV transform (applied to the
-    // derivatives too, so the level of detail follows the transformed coordinates).
-    static glm::vec4 fetch(const TextureBinding& b, const PixelAttributes& a, int i) {
+    // derivatives too, so the level of detail follows the transformed coordinates), for the
+    // whole queue at once (Texture::sampleBatch overlaps the texel reads of its pixels).
+    static void fetchAll(const TextureBinding& b, const PixelAttributes& a, int count, glm::vec4* out) {
         const glm::mat2& m = b.transform.linear;
-        const glm::vec2 uv = b.transform.apply({a.uv[0][i], a.uv[1][i]});
-        const glm::vec2 dx = m * glm::vec2(a.dUVdx[0][i], a.dUVdx[1][i]);
-        const glm::vec2 dy = m * glm::vec2(a.dUVdy[0][i], a.dUVdy[1][i]);
-        return b.texture->sample(uv, b.texture->levelOfDetail(dx, dy));
+        float u[N], v[N], lod[N];
+        for (int i = 0; i < count; ++i) {
+            const glm::vec2 uv = b.transform.apply({a.uv[0][i], a.uv[1][i]});
+            const glm::vec2 dx = m * glm::vec2(a.dUVdx[0][i], a.dUVdx[1][i]);
+            const glm::vec2 dy = m * glm::vec2(a.dUVdy[0][i], a.dUVdy[1][i]);
+            u[i] = uv.x, v[i] = uv.y, lod[i] = b.texture->levelOfDetail(dx, dy);
+        }
+        b.texture->sampleBatch(count, u, v, lod, out);
     }
 
     void applyBaseColorTexture(int count, PixelAttributes& a, StageCounters& counters) const {
+        glm::vec4 texels[N];
+        fetchAll(s_.textures.baseColor, a, count, texels);
         for (int i = 0; i < count; ++i) {
-            const glm::vec4 texel = fetch(s_.textures.baseColor, a, i);
+            const glm::vec4& texel = texels[i];
             a.albedo[0][i] *= texel.r, a.albedo[1][i] *= texel.g, a.albedo[2][i] *= texel.b;
             a.alpha[0][i] *= texel.a;
         }
@@ -218,12 +225,14 @@ private:
             float tangent[4][N];
             interpolate<4>(v, layout_.tangent, count, a.w, tangent);
             const float scale = s_.normalScale;
+            glm::vec4 texels[N];
+            fetchAll(s_.textures.normal, a, count, texels);
             for (int i = 0; i < count; ++i) {
                 const glm::vec3 nrm = safeNormalize({a.normal[0][i], a.normal[1][i], a.normal[2][i]});
                 glm::vec3 tan(tangent[0][i], tangent[1][i], tangent[2][i]);
                 tan = safeNormalize(tan - nrm * glm::dot(nrm, tan));  // Gram-Schmidt
                 const glm::vec3 bitangent = glm::cross(nrm, tan) * (tangent[3][i] < 0.0f ? -1.0f : 1.0f);
-                const glm::vec4 texel = fetch(s_.textures.normal, a, i);
+                const glm::vec4& texel = texels[i];
                 const glm::vec3 m(scale * (2.0f * texel.r - 1.0f), scale * (2.0f * texel.g - 1.0f), 2.0f * texel.b - 1.0f);
                 const glm::vec3 n = tan * m.x + bitangent * m.y + nrm * m.z;
                 a.normal[0][i] = n.x, a.normal[1][i] = n.y, a.normal[2][i] = n.z;
@@ -241,7 +250,9 @@ private:
 
     void occlusionFromTexture(int count, const PixelAttributes& a, float* occlusion, StageCounters& counters) const {
         const float strength = s_.occlusionStrength;
-        for (int i = 0; i < count; ++i) occlusion[i] = 1.0f + strength * (fetch(s_.textures.occlusion, a, i).r - 1.0f);
+        glm::vec4 texels[N];
+        fetchAll(s_.textures.occlusion, a, count, texels);
+        for (int i = 0; i < count; ++i) occlusion[i] = 1.0f + strength * (texels[i].r - 1.0f);
         counters.textureSamples += uint64_t(count);
     }
 
@@ -336,12 +347,11 @@ private:
         const int count = q.count;
         const Lighting& lighting = s_.lighting;
         const bool textured = layout_.texCoord >= 0 && s_.textures.metallicRoughness;
+        glm::vec4 texels[N];
+        if (textured) fetchAll(s_.textures.metallicRoughness, a, count, texels);
         for (int i = 0; i < count; ++i) {
             float metallic = s_.metallic, roughness = s_.roughness;
-            if (textured) {
-                const glm::vec4 texel = fetch(s_.textures.metallicRoughness, a, i);
-                metallic *= texel.b, roughness *= texel.g;
-            }
+            if (textured) metallic *= texels[i].b, roughness *= texels[i].g;
             metallic = std::clamp(metallic, 0.0f, 1.0f);
             // A floor on roughness: a perfect mirror's highlight is a delta no sample can hit.
             const float r = std::max(0.03f, std::clamp(roughness, 0.0f, 1.0f));
@@ -384,10 +394,10 @@ private:
     void addEmissive(int count, PixelAttributes& a, StageCounters& counters) const {
         const glm::vec3 e = s_.emissive;
         if (layout_.texCoord >= 0 && s_.textures.emissive) {
-            for (int i = 0; i < count; ++i) {
-                const glm::vec4 texel = fetch(s_.textures.emissive, a, i);
-                for (int k = 0; k < 3; ++k) a.radiance[k][i] += e[k] * texel[k];
-            }
+            glm::vec4 texels[N];
+            fetchAll(s_.textures.emissive, a, count, texels);
+            for (int i = 0; i < count; ++i)
+                for (int k = 0; k < 3; ++k) a.radiance[k][i] += e[k] * texels[i][k];
             counters.textureSamples += uint64_t(count);
             return;
         }

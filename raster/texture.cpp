@@ -98,7 +98,7 @@ void Texture::buildMipChain() {
     }
 }
 
-int Texture::wrap(int i, int size, WrapMode mode) const {
+[[gnu::always_inline]] inline int Texture::wrap(int i, int size, WrapMode mode) const {
     if (unsigned(i) < unsigned(size)) return i;  // inside the image: every mode agrees
     switch (mode) {
         case WrapMode::ClampToEdge: return std::clamp(i, 0, size - 1);
@@ -145,7 +145,9 @@ glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const {
     return texel(level, wrap(int(std::floor(x)), l.width, wrapU_), wrap(int(std::floor(y)), l.height, wrapV_));
 }
 
-glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const {
+glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(level, footprint(level, uv)); }
+
+[[gnu::always_inline]] inline Texture::BilinearFootprint Texture::footprint(int level, glm::vec2 uv) const {
     const Level& l = levels_[level];
     // Texel space with texel centres on integers; non-finite coordinates sample texel 0.
     float x = uv.x * float(l.width) - 0.5f, y = uv.y * float(l.height) - 0.5f;
@@ -153,13 +155,52 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const {
     x = std::clamp(x, -1e6f, 1e6f);  // far beyond any wrap period; keeps the int conversion defined
     y = std::clamp(y, -1e6f, 1e6f);
     const float fx = std::floor(x), fy = std::floor(y);
-    const float ax = x - fx, ay = y - fy;
     const int x0 = int(fx), y0 = int(fy);
-    const int xa = wrap(x0, l.width, wrapU_), xb = wrap(x0 + 1, l.width, wrapU_);
-    const int ya = wrap(y0, l.height, wrapV_), yb = wrap(y0 + 1, l.height, wrapV_);
-    const glm::vec4 top = glm::mix(texel(level, xa, ya), texel(level, xb, ya), ax);
-    const glm::vec4 bottom = glm::mix(texel(level, xa, yb), texel(level, xb, yb), ax);
-    return glm::mix(top, bottom, ay);
+    const uint32_t xa = uint32_t(wrap(x0, l.width, wrapU_)), xb = uint32_t(wrap(x0 + 1, l.width, wrapU_));
+    const uint32_t ya = uint32_t(wrap(y0, l.height, wrapV_)) * uint32_t(l.width);
+    const uint32_t yb = uint32_t(wrap(y0 + 1, l.height, wrapV_)) * uint32_t(l.width);
+    return {{ya + xa, ya + xb, yb + xa, yb + xb}, x - fx, y - fy};
+}
+
+[[gnu::always_inline]] inline glm::vec4 Texture::blend(int level, const BilinearFootprint& f) const {
+    const glm::vec4 top = glm::mix(texelAt(level, f.index[0]), texelAt(level, f.index[1]), f.ax);
+    const glm::vec4 bottom = glm::mix(texelAt(level, f.index[2]), texelAt(level, f.index[3]), f.ax);
+    return glm::mix(top, bottom, f.ay);
+}
+
+void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, glm::vec4* out) const {
+    if (filter_.magnifyNearest || filter_.minify != MinFilter::LinearMipmapLinear) {
+        for (int i = 0; i < count; ++i) out[i] = sample({u[i], v[i]}, lod[i]);
+        return;
+    }
+    // Trilinear, as sampleTrilinear() (which sample() calls for these filters, and which is
+    // level 0's bilinear for lod <= 0 and NaN): the footprints of a run of points first, then
+    // their texels.
+    constexpr int kRun = 64;
+    const int last = levelCount() - 1;
+    BilinearFootprint near[kRun], far[kRun];
+    int level[kRun];
+    float between[kRun];  // weight of the coarser level; 0: one level only
+    for (int first = 0; first < count; first += kRun) {
+        const int n = std::min(kRun, count - first);
+        for (int i = 0; i < n; ++i) {
+            const glm::vec2 uv(u[first + i], v[first + i]);
+            float l = lod[first + i];
+            if (!(l > 0.0f)) {
+                level[i] = 0, between[i] = 0.0f;
+            } else {
+                l = std::min(l, float(last));
+                level[i] = int(l);
+                between[i] = l - float(level[i]);
+            }
+            near[i] = footprint(level[i], uv);
+            if (between[i] > 0.0f) far[i] = footprint(std::min(level[i] + 1, last), uv);
+        }
+        for (int i = 0; i < n; ++i) {
+            const glm::vec4 a = blend(level[i], near[i]);
+            out[first + i] = between[i] > 0.0f ? glm::mix(a, blend(std::min(level[i] + 1, last), far[i]), between[i]) : a;
+        }
+    }
 }
 
 glm::vec4 Texture::sampleTrilinear(glm::vec2 uv, float lod) const {

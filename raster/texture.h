@@ -69,11 +69,7 @@ public:
     TexelFormat format() const { return format_; }
     /// Texel (x, y) of a level, decoded to linear RGBA.
     glm::vec4 texel(int level, int x, int y) const {
-        const Level& l = levels_[level];
-        const size_t i = size_t(y) * l.width + x;
-        if (format_ == TexelFormat::LinearFloat) return l.texels[i];
-        const uint32_t p = l.packed[i];
-        return {decodeRgb_[p & 0xFF], decodeRgb_[(p >> 8) & 0xFF], decodeRgb_[(p >> 16) & 0xFF], decodeAlpha_[p >> 24]};
+        return texelAt(level, size_t(y) * levels_[level].width + x);
     }
     /// A level's texels as stored by an 8-bit format, R in the low byte; null for LinearFloat.
     const uint32_t* packedTexels(int level) const {
@@ -84,6 +80,11 @@ public:
     /// what the shade stage calls.
     glm::vec4 sample(glm::vec2 uv, float lod) const;
 
+    /// sample() at `count` points: out[i] = sample({u[i], v[i]}, lod[i]), bit for bit. The shade
+    /// stage fetches a queue of pixels at a time this way: every point's texel addresses are
+    /// found first and the texels read after, so the cache misses of many points overlap
+    /// instead of each waiting behind the last (how a GPU's texture unit hides them).
+    void sampleBatch(int count, const float* u, const float* v, const float* lod, glm::vec4* out) const;
     glm::vec4 sampleNearest(int level, glm::vec2 uv) const;
     glm::vec4 sampleBilinear(int level, glm::vec2 uv) const;
     /// lod <= 0 samples level 0; fractional lods blend the two nearest levels.
@@ -98,6 +99,19 @@ private:
         std::vector<uint32_t> packed;   // 8-bit formats
     };
     void buildMipChain();
+    /// The four texels and weights sampleBilinear(level, uv) blends.
+    struct BilinearFootprint {
+        uint32_t index[4];  // (xa, ya), (xb, ya), (xa, yb), (xb, yb) in the level's texels
+        float ax, ay;
+    };
+    BilinearFootprint footprint(int level, glm::vec2 uv) const;
+    glm::vec4 blend(int level, const BilinearFootprint& f) const;
+    glm::vec4 texelAt(int level, size_t i) const {
+        const Level& l = levels_[level];
+        if (format_ == TexelFormat::LinearFloat) return l.texels[i];
+        const uint32_t p = l.packed[i];
+        return {decodeRgb_[p & 0xFF], decodeRgb_[(p >> 8) & 0xFF], decodeRgb_[(p >> 16) & 0xFF], decodeAlpha_[p >> 24]};
+    }
     int wrap(int i, int size, WrapMode mode) const;
 
     std::vector<Level> levels_;
