@@ -121,8 +121,10 @@ glm::vec4 Texture::sample(glm::vec2 uv, float lod) const {
         case MinFilter::Linear: return sampleBilinear(0, uv);
         case MinFilter::NearestMipmapNearest:
         case MinFilter::LinearMipmapNearest: {
-            // OpenGL's nearest level: ceil(lod + 0.5) - 1, i.e. lod rounded with ties down.
-            const int level = std::min(last, int(std::ceil(lod + 0.5f)) - 1);
+            // OpenGL's nearest level: ceil(lod + 0.5) - 1, i.e. lod rounded with ties down; lod
+            // is clamped to the last level first, so an infinite one (a degenerate derivative)
+            // converts to a level and not to an undefined int.
+            const int level = std::min(last, int(std::ceil(std::min(lod, float(last)) + 0.5f)) - 1);
             return filter_.minify == MinFilter::NearestMipmapNearest ? sampleNearest(level, uv)
                                                                      : sampleBilinear(level, uv);
         }
@@ -136,13 +138,16 @@ glm::vec4 Texture::sample(glm::vec2 uv, float lod) const {
     return sampleTrilinear(uv, lod);
 }
 
-glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const {
+glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const { return texelAt(level, nearestIndex(level, uv)); }
+
+[[gnu::always_inline]] inline uint32_t Texture::nearestIndex(int level, glm::vec2 uv) const {
     const Level& l = levels_[level];
     float x = uv.x * float(l.width), y = uv.y * float(l.height);
     if (!std::isfinite(x) || !std::isfinite(y)) x = y = 0.0f;
     x = std::clamp(x, -1e6f, 1e6f);
     y = std::clamp(y, -1e6f, 1e6f);
-    return texel(level, wrap(int(std::floor(x)), l.width, wrapU_), wrap(int(std::floor(y)), l.height, wrapV_));
+    return uint32_t(wrap(int(std::floor(y)), l.height, wrapV_)) * uint32_t(l.width) +
+           uint32_t(wrap(int(std::floor(x)), l.width, wrapU_));
 }
 
 glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(level, footprint(level, uv)); }
@@ -169,36 +174,64 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(
 }
 
 void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, glm::vec4* out) const {
-    if (filter_.magnifyNearest || filter_.minify != MinFilter::LinearMipmapLinear) {
-        for (int i = 0; i < count; ++i) out[i] = sample({u[i], v[i]}, lod[i]);
-        return;
-    }
-    // Trilinear, as sampleTrilinear() (which sample() calls for these filters, and which is
-    // level 0's bilinear for lod <= 0 and NaN): the footprints of a run of points first, then
-    // their texels.
+    // Per point, sample()'s choice written as up to two taps (a texel, or a bilinear footprint,
+    // on a level) and how they combine; the taps of a run of points are found first, then read.
     constexpr int kRun = 64;
+    enum Combine : uint8_t { kFirstOnly, kMix, kMixIfBetween };
+    struct Tap {
+        BilinearFootprint f;  // a nearest tap uses index[0]
+        int level;
+        bool nearest;
+    };
     const int last = levelCount() - 1;
-    BilinearFootprint near[kRun], far[kRun];
-    int level[kRun];
-    float between[kRun];  // weight of the coarser level; 0: one level only
-    for (int first = 0; first < count; first += kRun) {
-        const int n = std::min(kRun, count - first);
+    Tap first[kRun], second[kRun];
+    Combine combine[kRun];
+    float weight[kRun];
+    auto tap = [&](Tap& t, int level, bool nearest, glm::vec2 uv) [[gnu::always_inline]] {
+        t.level = level, t.nearest = nearest;
+        if (nearest)
+            t.f.index[0] = nearestIndex(level, uv);
+        else
+            t.f = footprint(level, uv);
+    };
+    auto read = [&](const Tap& t) [[gnu::always_inline]] { return t.nearest ? texelAt(t.level, t.f.index[0]) : blend(t.level, t.f); };
+    for (int start = 0; start < count; start += kRun) {
+        const int n = std::min(kRun, count - start);
         for (int i = 0; i < n; ++i) {
-            const glm::vec2 uv(u[first + i], v[first + i]);
-            float l = lod[first + i];
-            if (!(l > 0.0f)) {
-                level[i] = 0, between[i] = 0.0f;
-            } else {
-                l = std::min(l, float(last));
-                level[i] = int(l);
-                between[i] = l - float(level[i]);
+            const glm::vec2 uv(u[start + i], v[start + i]);
+            float l = lod[start + i];
+            combine[i] = kFirstOnly;
+            if (!(l > 0.0f)) {  // magnification (also NaN)
+                tap(first[i], 0, filter_.magnifyNearest, uv);
+                continue;
             }
-            near[i] = footprint(level[i], uv);
-            if (between[i] > 0.0f) far[i] = footprint(std::min(level[i] + 1, last), uv);
+            switch (filter_.minify) {
+                case MinFilter::Nearest:
+                case MinFilter::Linear: tap(first[i], 0, filter_.minify == MinFilter::Nearest, uv); break;
+                case MinFilter::NearestMipmapNearest:
+                case MinFilter::LinearMipmapNearest:
+                    tap(first[i], std::min(last, int(std::ceil(std::min(l, float(last)) + 0.5f)) - 1),
+                        filter_.minify == MinFilter::NearestMipmapNearest, uv);
+                    break;
+                case MinFilter::NearestMipmapLinear:
+                case MinFilter::LinearMipmapLinear: {
+                    const bool nearest = filter_.minify == MinFilter::NearestMipmapLinear;
+                    l = std::min(l, float(last));
+                    const int l0 = int(l);
+                    weight[i] = l - float(l0);
+                    tap(first[i], l0, nearest, uv);
+                    // sample() mixes the nearest taps always, sampleTrilinear() the bilinear
+                    // ones only between levels.
+                    combine[i] = nearest ? kMix : kMixIfBetween;
+                    if (nearest || weight[i] > 0.0f) tap(second[i], std::min(l0 + 1, last), nearest, uv);
+                    break;
+                }
+            }
         }
         for (int i = 0; i < n; ++i) {
-            const glm::vec4 a = blend(level[i], near[i]);
-            out[first + i] = between[i] > 0.0f ? glm::mix(a, blend(std::min(level[i] + 1, last), far[i]), between[i]) : a;
+            const glm::vec4 a = read(first[i]);
+            const bool mix = combine[i] == kMix || (combine[i] == kMixIfBetween && weight[i] > 0.0f);
+            out[start + i] = mix ? glm::mix(a, read(second[i]), weight[i]) : a;
         }
     }
 }

@@ -105,6 +105,7 @@ private:
         float ax, ay;
     };
     BilinearFootprint footprint(int level, glm::vec2 uv) const;
+    uint32_t nearestIndex(int level, glm::vec2 uv) const;
     glm::vec4 blend(int level, const BilinearFootprint& f) const;
     glm::vec4 texelAt(int level, size_t i) const {
         const Level& l = levels_[level];

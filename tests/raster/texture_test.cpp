@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cmath>
 #include <random>
 
 #include "raster/pipeline.h"
@@ -108,6 +110,38 @@ TEST(Texture, EightBitTexelsDecodeThroughTheTableAndMipInLinear) {
             ASSERT_EQ(t.sampleBilinear(0, uv), asFloat.sampleBilinear(0, uv)) << uv.x << "," << uv.y;
         }
     }
+}
+
+TEST(Texture, BatchSamplingIsSampleBitForBitUnderEveryFilter) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> coordinate(-2.5f, 3.5f), level(-2.0f, 9.0f);
+    std::vector<uint8_t> bytes(37 * 20 * 4);
+    for (uint8_t& b : bytes) b = uint8_t(rng() & 0xFF);
+    const raster::MinFilter filters[] = {raster::MinFilter::Nearest, raster::MinFilter::Linear,
+                                         raster::MinFilter::NearestMipmapNearest, raster::MinFilter::LinearMipmapNearest,
+                                         raster::MinFilter::NearestMipmapLinear, raster::MinFilter::LinearMipmapLinear};
+    constexpr int kPoints = 150;  // more than one run of the batch
+    float u[kPoints], v[kPoints], lod[kPoints];
+    for (int i = 0; i < kPoints; ++i) u[i] = coordinate(rng), v[i] = coordinate(rng), lod[i] = level(rng);
+    // Edge cases: exact levels, no minification, non-finite coordinates and levels.
+    lod[0] = 0.0f, lod[1] = 1.0f, lod[2] = 3.0f, lod[3] = NAN, lod[4] = INFINITY, lod[5] = -INFINITY;
+    u[6] = NAN, v[7] = INFINITY, u[8] = -1e30f;
+    for (const bool eightBit : {false, true})
+        for (WrapMode wrap : {WrapMode::Repeat, WrapMode::ClampToEdge, WrapMode::MirroredRepeat})
+            for (const bool magnifyNearest : {false, true})
+                for (raster::MinFilter minify : filters) {
+                    Texture t = eightBit ? Texture(37, 20, bytes, raster::TexelFormat::Srgb8, wrap, WrapMode::Repeat)
+                                         : ramp(37, 20, wrap, WrapMode::MirroredRepeat);
+                    t.setFilter({magnifyNearest, minify});
+                    glm::vec4 batch[kPoints];
+                    t.sampleBatch(kPoints, u, v, lod, batch);
+                    for (int i = 0; i < kPoints; ++i) {
+                        const glm::vec4 one = t.sample({u[i], v[i]}, lod[i]);
+                        for (int c = 0; c < 4; ++c)
+                            ASSERT_EQ(std::bit_cast<uint32_t>(batch[i][c]), std::bit_cast<uint32_t>(one[c]))
+                                << "point " << i << ", filter " << int(minify) << (magnifyNearest ? " nearest" : "");
+                    }
+                }
 }
 
 TEST(TexturedDraw, OneTexelPerPixelReproducesTheTexture) {
