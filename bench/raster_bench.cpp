@@ -1,6 +1,7 @@
 // Frame time of the software pipeline against Mesa's llvmpipe (OSMesa) on the same scenes, in
-// the same run, at equal settings: same triangles, same per-pixel Lambert shading, same
-// resolution and sample count, back-face culling and a depth test. Prints the ratio
+// the same run, at equal settings: same triangles, the same per-pixel shading (the peer's GLSL is
+// raster/shade.h: bench/llvmpipe_peer.cpp), same resolution and sample count, the scene's culling
+// (back faces, none for scans and double-sided materials) and a depth test. Prints the ratio
 // llvmpipe / cuberille (above 1: cuberille is faster). Absolute times on shared machines are
 // noise; the ratio is the figure (docs/performance.md).
 //
