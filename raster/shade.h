@@ -125,6 +125,14 @@ private:
         float normal[3][N];      // world space, unit length
         float position[3][N];    // world space
         float radiance[3][N];    // the result
+        // The last texture coordinates fetched (fetchAll): glTF's slots mostly share one
+        // size and one transform, and then share the transformed UVs and the level of detail.
+        struct FetchCoordinates {
+            bool valid = false;
+            int width = 0, height = 0;
+            UvTransform transform;
+            float u[N], v[N], lod[N];
+        } fetched;
     };
 
     // Perspective-correct weights of queued pixel i: screen weights clamped onto the triangle
@@ -193,16 +201,21 @@ private:
     // One filtered fetch per pixel through the binding's UV transform (applied to the
     // derivatives too, so the level of detail follows the transformed coordinates), for the
     // whole queue at once (Texture::sampleBatch overlaps the texel reads of its pixels).
-    static void fetchAll(const TextureBinding& b, const PixelAttributes& a, int count, glm::vec4* out) {
-        const glm::mat2& m = b.transform.linear;
-        float u[N], v[N], lod[N];
-        for (int i = 0; i < count; ++i) {
-            const glm::vec2 uv = b.transform.apply({a.uv[0][i], a.uv[1][i]});
-            const glm::vec2 dx = m * glm::vec2(a.dUVdx[0][i], a.dUVdx[1][i]);
-            const glm::vec2 dy = m * glm::vec2(a.dUVdy[0][i], a.dUVdy[1][i]);
-            u[i] = uv.x, v[i] = uv.y, lod[i] = b.texture->levelOfDetail(dx, dy);
+    static void fetchAll(const TextureBinding& b, PixelAttributes& a, int count, glm::vec4* out) {
+        typename PixelAttributes::FetchCoordinates& c = a.fetched;
+        const Texture& t = *b.texture;
+        if (!c.valid || c.width != t.width() || c.height != t.height() || c.transform.linear != b.transform.linear ||
+            c.transform.offset != b.transform.offset) {
+            const glm::mat2& m = b.transform.linear;
+            for (int i = 0; i < count; ++i) {
+                const glm::vec2 uv = b.transform.apply({a.uv[0][i], a.uv[1][i]});
+                const glm::vec2 dx = m * glm::vec2(a.dUVdx[0][i], a.dUVdx[1][i]);
+                const glm::vec2 dy = m * glm::vec2(a.dUVdy[0][i], a.dUVdy[1][i]);
+                c.u[i] = uv.x, c.v[i] = uv.y, c.lod[i] = t.levelOfDetail(dx, dy);
+            }
+            c.valid = true, c.width = t.width(), c.height = t.height(), c.transform = b.transform;
         }
-        b.texture->sampleBatch(count, u, v, lod, out);
+        t.sampleBatch(count, c.u, c.v, c.lod, out);
     }
 
     void applyBaseColorTexture(int count, PixelAttributes& a, StageCounters& counters) const {
@@ -248,7 +261,7 @@ private:
         }
     }
 
-    void occlusionFromTexture(int count, const PixelAttributes& a, float* occlusion, StageCounters& counters) const {
+    void occlusionFromTexture(int count, PixelAttributes& a, float* occlusion, StageCounters& counters) const {
         const float strength = s_.occlusionStrength;
         glm::vec4 texels[N];
         fetchAll(s_.textures.occlusion, a, count, texels);
