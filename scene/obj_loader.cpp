@@ -3,7 +3,6 @@
 #include <charconv>
 #include <cmath>
 #include <map>
-#include <unordered_map>
 
 #include "scene/input_error.h"
 #include "scene/text_parsing.h"
@@ -72,10 +71,34 @@ std::map<std::string, glm::vec3> parseMtl(const std::filesystem::path& path, con
     return colors;
 }
 
+/// One material's mesh, its vertices made as faces first use each (position, normal) pair.
 struct MeshBuilder {
     Mesh mesh;
-    std::unordered_map<uint64_t, uint32_t> vertexOf;  // (position, normal + 1) → mesh vertex
     bool needsComputedNormals = false;
+
+    /// The mesh vertex of OBJ position p with normal n (UINT32_MAX: none), made on first use.
+    /// A chain per position instead of a hash map of pairs: a position almost always has one
+    /// normal, so the lookup is one array read (a hash map was a quarter of the bunny's parse).
+    uint32_t vertexFor(uint32_t p, uint32_t n, const std::vector<glm::vec3>& positions,
+                       const std::vector<glm::vec3>& positionColors, const std::vector<glm::vec3>& normals) {
+        if (p >= firstVertexOf_.size()) firstVertexOf_.resize(positions.size(), kNone);
+        for (uint32_t v = firstVertexOf_[p]; v != kNone; v = nextWithPosition_[v])
+            if (normalOf_[v] == n) return v;
+        const uint32_t v = uint32_t(mesh.positions.size());
+        mesh.positions.push_back(positions[p]);
+        mesh.normals.push_back(n == kNone ? glm::vec3(0.0f) : normals[n]);
+        mesh.colors.push_back(positionColors[p]);
+        normalOf_.push_back(n);
+        nextWithPosition_.push_back(firstVertexOf_[p]);
+        firstVertexOf_[p] = v;
+        return v;
+    }
+
+private:
+    static constexpr uint32_t kNone = UINT32_MAX;
+    std::vector<uint32_t> firstVertexOf_;     // per OBJ position: its latest mesh vertex, or kNone
+    std::vector<uint32_t> nextWithPosition_;  // per mesh vertex: the previous one of its position
+    std::vector<uint32_t> normalOf_;          // per mesh vertex: its OBJ normal, or kNone
 };
 
 }  // namespace
@@ -91,6 +114,7 @@ std::vector<Mesh> parseObj(const std::string& text, const std::string& file,
 
     size_t lineNumber = 0, pos = 0;
     std::vector<uint32_t> polygon;
+    std::vector<std::string_view> w;
     while (pos <= text.size()) {
         size_t end = text.find('\n', pos);
         if (end == std::string::npos) end = text.size();
@@ -98,7 +122,7 @@ std::vector<Mesh> parseObj(const std::string& text, const std::string& file,
         std::string_view line = std::string_view(text).substr(pos, end - pos);
         pos = end + 1;
         if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-        const auto w = splitWords(line);
+        splitWords(line, w);
         if (w.empty()) {
             if (end == text.size()) break;
             continue;
@@ -131,14 +155,7 @@ std::vector<Mesh> parseObj(const std::string& text, const std::string& file,
                         n = resolveIndex(spec.substr(slash2 + 1), normals.size(), "normal", file, lineNumber);
                 }
                 if (n == UINT32_MAX) b.needsComputedNormals = true;
-                const uint64_t key = (uint64_t(p) << 32) | uint64_t(n + 1u);
-                auto [it, inserted] = b.vertexOf.try_emplace(key, uint32_t(b.mesh.positions.size()));
-                if (inserted) {
-                    b.mesh.positions.push_back(positions[p]);
-                    b.mesh.normals.push_back(n == UINT32_MAX ? glm::vec3(0.0f) : normals[n]);
-                    b.mesh.colors.push_back(positionColors[p]);
-                }
-                polygon.push_back(it->second);
+                polygon.push_back(b.vertexFor(p, n, positions, positionColors, normals));
             }
             for (size_t k = 2; k < polygon.size(); ++k)
                 b.mesh.indices.insert(b.mesh.indices.end(), {polygon[0], polygon[k - 1], polygon[k]});

@@ -133,7 +133,7 @@ TEST(GltfLoader, AnAnimationIsChosenByNameOrIndex) {
     EXPECT_NE(turn, lift);  // lift neither turns nor scales node 1
     EXPECT_EQ(positions("0"), turn);
     EXPECT_EQ(positions("1"), lift);
-    for (const std::string& missing : {"spin", "2", "-1"}) {
+    for (const std::string missing : {"spin", "2", "-1"}) {
         try {
             positions(missing);
             ADD_FAILURE() << "accepted animation " << missing;
