@@ -80,7 +80,9 @@ void boundsAndVerdicts(const TriangleLanes& in, int count, const SetupContext& c
         const int32_t lastY = std::min((maxY - highY) >> kSubpixelBits, context.scissorHeight - 1);
         out.pixelMinX[i] = firstX, out.pixelMinY[i] = firstY, out.pixelMaxX[i] = lastX, out.pixelMaxY[i] = lastY;
         const int32_t empty = int32_t(firstX > lastX) | int32_t(firstY > lastY);
-        const int32_t width = lastX - firstX + 1, height = lastY - firstY + 1;
+        // Sides clamped to [0, 3] before the product: bounds far off screen on both axes would
+        // overflow int32 (2^17 x 2^17), and only "at most 2 pixels" is asked.
+        const int32_t width = std::clamp(lastX - firstX + 1, 0, 3), height = std::clamp(lastY - firstY + 1, 0, 3);
         const int32_t few = (1 - empty) & int32_t(width * height <= kSetupCoverageTestPixels);
 
         const int32_t culled = (cullBack & (1 - front)) | (cullFront & front);
