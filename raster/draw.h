@@ -89,7 +89,7 @@ struct TextureBinding {
 
 /// glTF's material texture slots. All read the draw's one set of texture coordinates.
 struct MaterialTextures {
-    TextureBinding baseColor;          // linear RGBA (decoded from sRGB at load), x albedo
+    TextureBinding baseColor;          // colour, fetched as linear RGBA (an image's sRGB decoded by the texture), x albedo
     TextureBinding metallicRoughness;  // B: metallic, G: roughness, x the factors
     TextureBinding normal;             // tangent space, needs tangents
     TextureBinding occlusion;          // R: ambient occlusion
