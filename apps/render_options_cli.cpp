@@ -55,6 +55,9 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
     render->add_option("--zoom", o.zoom,
                        "Magnify the view F times, whichever camera frames it (the field of view narrows; the eye stays)")
         ->capture_default_str();
+    render->add_flag("--ground", o.ground,
+                     "Model files: stand the model on a grey floor (3 times its half-width around it) that catches its "
+                     "shadows; the framing stays the model's");
     render->add_flag("--orthographic", o.orthographic,
                      "A parallel projection: the target's plane at the size the perspective camera shows it "
                      "(--zoom narrows it)");

@@ -52,6 +52,9 @@ struct FrameSettings {
     /// camera shows it (scene::orthographicView); --zoom then narrows the half height.
     bool orthographic = false;
     bool frustumCull = false; // 3D scenes: cull triangles against the frustum through a BVH
+    /// --ground: model files stand on a floor (render/loaded_scene.cpp, groundUnder) that
+    /// receives their shadows; the framing and the lights are the model's alone.
+    bool ground = false;
     rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit;  // how BVHs follow a new pose
     int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)
     TextureFilterOverride textureFilter = TextureFilterOverride::File;

@@ -1,5 +1,6 @@
 #include "render/loaded_scene.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "raster/clock.h"
@@ -72,6 +73,42 @@ void loadInto(LoadedScene::State& s) {
                             "file, or a built-in scene (" + builtIn + ")");
 }
 
+/// The floor --ground puts under a model, as model viewers stage a product shot: a square at the
+/// bottom of the model's bounds (up is +y once a file is read), centred under it, reaching
+/// kGroundReach times the model's larger horizontal half-extent (and at least its height) in
+/// each direction, so a shadow cast by a light up to about 60 degrees from the zenith falls on
+/// it; light grey, matte, one-sided (seen from above).
+scene::Mesh groundUnder(const scene::Bounds& b) {
+    constexpr float kGroundReach = 3.0f;
+    constexpr float kGroundAlbedo = 0.6f;  // linear: a mid-light grey, below the usual white model
+    const glm::vec3 size = b.max - b.min;
+    const float half = kGroundReach * std::max({0.5f * size.x, 0.5f * size.z, size.y});
+    const float cx = 0.5f * (b.min.x + b.max.x), cz = 0.5f * (b.min.z + b.max.z), y = b.min.y;
+    scene::Mesh m;
+    // Counter-clockwise seen from above: (b - a) x (c - a) is +y for both triangles.
+    m.positions = {{cx - half, y, cz - half}, {cx - half, y, cz + half}, {cx + half, y, cz + half}, {cx + half, y, cz - half}};
+    m.normals.assign(4, glm::vec3(0.0f, 1.0f, 0.0f));
+    m.indices = {0, 1, 2, 0, 2, 3};
+    m.color = glm::vec3(kGroundAlbedo);
+    return m;
+}
+
+/// With a floor, a model without lights of its own takes its key light from above and beside the
+/// camera instead of from above it (scene/model_scene.cpp): a light behind the viewer throws the
+/// shadow behind the model, where the floor would catch nothing the frame shows. kKeyLightTurn
+/// to the camera's left, kKeyLightElevation up from the horizon, as a product shot's key light
+/// stands. Returns the direction towards the light.
+glm::vec3 keyLightBeside(const scene::Camera& camera) {
+    constexpr float kKeyLightTurn = glm::radians(50.0f);
+    constexpr float kKeyLightElevation = glm::radians(55.0f);
+    glm::vec3 toCamera = camera.position - camera.target;
+    toCamera.y = 0.0f;
+    toCamera = glm::dot(toCamera, toCamera) > 0.0f ? glm::normalize(toCamera) : glm::vec3(0.0f, 0.0f, 1.0f);
+    const float c = std::cos(kKeyLightTurn), s = std::sin(kKeyLightTurn);
+    const glm::vec3 turned(c * toCamera.x - s * toCamera.z, 0.0f, s * toCamera.x + c * toCamera.z);
+    return glm::normalize(turned * std::cos(kKeyLightElevation) + glm::vec3(0.0f, std::sin(kKeyLightElevation), 0.0f));
+}
+
 // Built-in scenes and PLY and OBJ files are read whole here; a glTF is parsed here and posed by
 // the first frame (which says at what time).
 void load3d(LoadedScene::State& s) {
@@ -110,6 +147,7 @@ double LoadedScene::State::poseFor(const FrameSettings& f) {
     fileCameras = std::move(c.cameras);
     fileLights = std::move(c.lights);
     bounds = scene::boundsOf(posed.meshes);
+    groundHeld = false;  // the new pose's meshes are the model's alone
     shadowsPoseStale = cullingPoseStale = hasPose;  // the hierarchies follow the new pose
     hasPose = true;
     poseTimeSeconds = f.timeSeconds;
@@ -128,6 +166,22 @@ void LoadedScene::State::frameFor(const FrameSettings& f) {
     view.cameraIndex = f.cameraIndex;
     view.placement = f.placement;
     scene::frameModelScene(posed, bounds, fileCameras, fileLights, view, name);
+}
+
+void LoadedScene::State::groundFor(const FrameSettings& f) {
+    if (f.ground != groundAsked) {  // the scene's triangles change: hierarchies built anew
+        shadows.reset();
+        culling.reset();
+        groundAsked = f.ground;
+    }
+    if (f.ground && !groundHeld && !bounds.empty()) {
+        posed.meshes.push_back(groundUnder(bounds));
+        groundHeld = true;
+    } else if (!f.ground && groundHeld) {
+        posed.meshes.pop_back();
+        groundHeld = false;
+    }
+    if (f.ground && fileLights.empty()) posed.lighting.lights[0].direction = -keyLightBeside(posed.camera);
 }
 
 SceneShadows* LoadedScene::State::shadowsFor(const FrameSettings& f) {

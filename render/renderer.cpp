@@ -91,6 +91,7 @@ void validate(const State& s, const FrameSettings& o) {
     if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
         throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
     if (o.frustumCull && !threeD) throw InputError("--frustum-cull: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
+    if (o.ground && (!threeD || s.procedural)) throw InputError("--ground: only for model files (glTF, PLY, OBJ), not " + s.name);
     if (o.placement && !threeD) throw InputError("--eye: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.placement && o.cameraIndex >= 0) throw InputError("--eye and --camera-index: one camera or the other");
     if (o.placement && !(o.placement->verticalFovDegrees >= 0.0f && o.placement->verticalFovDegrees < 180.0f))
@@ -279,6 +280,7 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
     scene::Scene& s = st.posed;
     result.load = s.loadStats;
     st.frameFor(o);
+    st.groundFor(o);
     s.camera.reversedDepth = o.depth == raster::DepthConvention::Reversed;
     if (o.orthographic) s.camera = scene::orthographicView(s.camera);
     applyZoom(s.camera, o.zoom);

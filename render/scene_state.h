@@ -39,6 +39,8 @@ struct LoadedScene::State {
     std::vector<raster::Light> fileLights;
     scene::Bounds bounds;
     scene::Camera ownCamera;       // a built-in scene's own camera (and its lighting stays put)
+    bool groundHeld = false;       // posed.meshes ends with the --ground floor for the pose held
+    bool groundAsked = false;      // what the last frame asked (the hierarchies were built for it)
 
     // Kept between frames while the settings that shaped them hold (render/loaded_scene.h).
     std::optional<SceneShadows> shadows;
@@ -54,6 +56,9 @@ struct LoadedScene::State {
     double poseFor(const FrameSettings& f);
     /// The frame's camera and lights on `posed` (render/renderer.cpp applies zoom and orbit).
     void frameFor(const FrameSettings& f);
+    /// The --ground floor added to or taken from `posed` as the frame asks, after frameFor (the
+    /// framing is the model's); the shadow and cull hierarchies are rebuilt when it comes or goes.
+    void groundFor(const FrameSettings& f);
     /// The shadow stage and frustum cull for this frame, built or brought to the pose held.
     SceneShadows* shadowsFor(const FrameSettings& f);
     SceneFrustumCull* cullingFor(const FrameSettings& f);

@@ -241,3 +241,74 @@ TEST_F(Renderer, BadInputThrowsTheCliMessages) {
 
 }  // namespace
 }  // namespace cuberille
+
+namespace cuberille {
+namespace {
+
+// A pillar 0.4 wide and 2 tall standing on y = 0, its six faces outward.
+fs::path writePillarPly(const fs::path& dir) {
+    const fs::path path = dir / "pillar.ply";
+    std::ofstream(path) << "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element face 12\nproperty list uchar int vertex_indices\nend_header\n"
+                           "-0.2 0 -0.2\n0.2 0 -0.2\n0.2 0 0.2\n-0.2 0 0.2\n-0.2 2 -0.2\n0.2 2 -0.2\n0.2 2 0.2\n-0.2 2 0.2\n"
+                           "3 0 1 2\n3 0 2 3\n3 4 6 5\n3 4 7 6\n3 0 4 5\n3 0 5 1\n3 1 5 6\n3 1 6 2\n"
+                           "3 2 6 7\n3 2 7 3\n3 3 7 4\n3 3 4 0\n";
+    return path;
+}
+
+// Pixels darker in `shadowed` than in `lit` by more than rounding, and whether any got brighter.
+std::pair<int, bool> darkenedPixels(const raster::Image& shadowed, const raster::Image& lit) {
+    int darker = 0;
+    bool brighter = false;
+    for (size_t i = 0; i < lit.rgba.size(); i += 4) {
+        const float a = shadowed.rgba[i] + shadowed.rgba[i + 1] + shadowed.rgba[i + 2];
+        const float b = lit.rgba[i] + lit.rgba[i + 1] + lit.rgba[i + 2];
+        darker += a < b - 1e-4f;
+        brighter = brighter || a > b + 1e-4f;
+    }
+    return {darker, brighter};
+}
+
+// --ground stands a model on a floor that catches its shadow: with it, ray-traced shadows darken
+// a patch of floor (and brighten nothing); without it the pillar has nothing to cast onto. The
+// floor comes and goes with the setting on one loaded scene, whose frames stay those of a fresh
+// load; a built-in scene, which has its own ground, refuses it.
+TEST(Ground, TheFloorCatchesTheModelsShadowAndComesAndGoesWithTheSetting) {
+    const fs::path dir = testing::uniqueTempPath("ground");
+    fs::create_directories(dir);
+    const fs::path ply = writePillarPly(dir);
+    render::FrameSettings frame;
+    frame.width = 160, frame.height = 90, frame.ground = true;
+    frame.shadows.mode = rt::ShadowMode::RayTraced;
+    render::FrameSettings unshadowed = frame;
+    unshadowed.shadows.mode = rt::ShadowMode::None;
+    render::FrameSettings bare = frame;
+    bare.ground = false;
+    render::FrameSettings bareUnshadowed = bare;
+    bareUnshadowed.shadows.mode = rt::ShadowMode::None;
+
+    const render::LoadedScene scene(ply.string());
+    const raster::Image withGround = render::render(scene, frame).image;
+    const raster::Image withoutGround = render::render(scene, bare).image;
+    const raster::Image groundUnshadowed = render::render(scene, unshadowed).image;
+    const raster::Image bareLit = render::render(scene, bareUnshadowed).image;
+    EXPECT_EQ(render::render(scene, frame).image.rgba, withGround.rgba) << "the floor came back as it was";
+    const render::LoadedScene fresh(ply.string());
+    EXPECT_EQ(render::render(fresh, bare).image.rgba, withoutGround.rgba) << "the floor left nothing behind";
+
+    const auto [onFloor, brighterOnFloor] = darkenedPixels(withGround, groundUnshadowed);
+    const auto [onNothing, brighterOnNothing] = darkenedPixels(withoutGround, bareLit);
+    EXPECT_GT(onFloor, 100) << "the pillar's shadow on the floor";
+    EXPECT_FALSE(brighterOnFloor);
+    EXPECT_EQ(onNothing, 0) << "without a floor the pillar casts onto nothing it shows";
+    EXPECT_FALSE(brighterOnNothing);
+    EXPECT_NE(withGround.rgba, withoutGround.rgba);
+
+    render::FrameSettings builtIn;
+    builtIn.ground = true;
+    EXPECT_THROW(render::render(render::LoadedScene("field"), builtIn), scene::InputError);
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace cuberille
