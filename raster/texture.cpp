@@ -112,30 +112,53 @@ void Texture::buildMipChain() {
     return 0;
 }
 
-glm::vec4 Texture::sample(glm::vec2 uv, float lod) const {
-    if (!(lod > 0.0f))  // magnification (also NaN)
-        return filter_.magnifyNearest ? sampleNearest(0, uv) : sampleBilinear(0, uv);
+glm::vec4 Texture::sample(glm::vec2 uv, float lod) const { return gather(plan(uv, lod)); }
+
+// The glTF (OpenGL) filters for one point: magnification below lod 0 (and for NaN), else the
+// minification filter's level or levels.
+[[gnu::always_inline]] inline Texture::SamplePlan Texture::plan(glm::vec2 uv, float lod) const {
+    SamplePlan p;
+    p.mix = false;
+    if (!(lod > 0.0f)) {  // magnification (also NaN)
+        p.first = tap(0, filter_.magnifyNearest, uv);
+        return p;
+    }
     const int last = levelCount() - 1;
     switch (filter_.minify) {
-        case MinFilter::Nearest: return sampleNearest(0, uv);
-        case MinFilter::Linear: return sampleBilinear(0, uv);
+        case MinFilter::Nearest:
+        case MinFilter::Linear: p.first = tap(0, filter_.minify == MinFilter::Nearest, uv); break;
         case MinFilter::NearestMipmapNearest:
-        case MinFilter::LinearMipmapNearest: {
+        case MinFilter::LinearMipmapNearest:
             // OpenGL's nearest level: ceil(lod + 0.5) - 1, i.e. lod rounded with ties down; lod
             // is clamped to the last level first, so an infinite one (a degenerate derivative)
             // converts to a level and not to an undefined int.
-            const int level = std::min(last, int(std::ceil(std::min(lod, float(last)) + 0.5f)) - 1);
-            return filter_.minify == MinFilter::NearestMipmapNearest ? sampleNearest(level, uv)
-                                                                     : sampleBilinear(level, uv);
-        }
-        case MinFilter::NearestMipmapLinear: {
+            p.first = tap(std::min(last, int(std::ceil(std::min(lod, float(last)) + 0.5f)) - 1),
+                          filter_.minify == MinFilter::NearestMipmapNearest, uv);
+            break;
+        case MinFilter::NearestMipmapLinear:
+        case MinFilter::LinearMipmapLinear: {
+            const bool nearest = filter_.minify == MinFilter::NearestMipmapLinear;
             lod = std::min(lod, float(last));
-            const int l0 = int(lod), l1 = std::min(l0 + 1, last);
-            return glm::mix(sampleNearest(l0, uv), sampleNearest(l1, uv), lod - float(l0));
+            const int l0 = int(lod);
+            p.weight = lod - float(l0);
+            p.first = tap(l0, nearest, uv);
+            // Nearest taps are always mixed; bilinear ones only between levels (sampleTrilinear).
+            p.mix = nearest || p.weight > 0.0f;
+            if (p.mix) p.second = tap(std::min(l0 + 1, last), nearest, uv);
+            break;
         }
-        case MinFilter::LinearMipmapLinear: break;
     }
-    return sampleTrilinear(uv, lod);
+    return p;
+}
+
+[[gnu::always_inline]] inline Texture::Tap Texture::tap(int level, bool nearest, glm::vec2 uv) const {
+    Tap t;
+    t.level = level, t.nearest = nearest;
+    if (nearest)
+        t.f.index[0] = nearestIndex(level, uv);
+    else
+        t.f = footprint(level, uv);
+    return t;
 }
 
 glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const { return texelAt(level, nearestIndex(level, uv)); }
@@ -174,65 +197,13 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(
 }
 
 void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, glm::vec4* out) const {
-    // Per point, sample()'s choice written as up to two taps (a texel, or a bilinear footprint,
-    // on a level) and how they combine; the taps of a run of points are found first, then read.
+    // The plans of a run of points first, then their texels.
     constexpr int kRun = 64;
-    enum Combine : uint8_t { kFirstOnly, kMix, kMixIfBetween };
-    struct Tap {
-        BilinearFootprint f;  // a nearest tap uses index[0]
-        int level;
-        bool nearest;
-    };
-    const int last = levelCount() - 1;
-    Tap first[kRun], second[kRun];
-    Combine combine[kRun];
-    float weight[kRun];
-    auto tap = [&](Tap& t, int level, bool nearest, glm::vec2 uv) [[gnu::always_inline]] {
-        t.level = level, t.nearest = nearest;
-        if (nearest)
-            t.f.index[0] = nearestIndex(level, uv);
-        else
-            t.f = footprint(level, uv);
-    };
-    auto read = [&](const Tap& t) [[gnu::always_inline]] { return t.nearest ? texelAt(t.level, t.f.index[0]) : blend(t.level, t.f); };
+    SamplePlan plans[kRun];
     for (int start = 0; start < count; start += kRun) {
         const int n = std::min(kRun, count - start);
-        for (int i = 0; i < n; ++i) {
-            const glm::vec2 uv(u[start + i], v[start + i]);
-            float l = lod[start + i];
-            combine[i] = kFirstOnly;
-            if (!(l > 0.0f)) {  // magnification (also NaN)
-                tap(first[i], 0, filter_.magnifyNearest, uv);
-                continue;
-            }
-            switch (filter_.minify) {
-                case MinFilter::Nearest:
-                case MinFilter::Linear: tap(first[i], 0, filter_.minify == MinFilter::Nearest, uv); break;
-                case MinFilter::NearestMipmapNearest:
-                case MinFilter::LinearMipmapNearest:
-                    tap(first[i], std::min(last, int(std::ceil(std::min(l, float(last)) + 0.5f)) - 1),
-                        filter_.minify == MinFilter::NearestMipmapNearest, uv);
-                    break;
-                case MinFilter::NearestMipmapLinear:
-                case MinFilter::LinearMipmapLinear: {
-                    const bool nearest = filter_.minify == MinFilter::NearestMipmapLinear;
-                    l = std::min(l, float(last));
-                    const int l0 = int(l);
-                    weight[i] = l - float(l0);
-                    tap(first[i], l0, nearest, uv);
-                    // sample() mixes the nearest taps always, sampleTrilinear() the bilinear
-                    // ones only between levels.
-                    combine[i] = nearest ? kMix : kMixIfBetween;
-                    if (nearest || weight[i] > 0.0f) tap(second[i], std::min(l0 + 1, last), nearest, uv);
-                    break;
-                }
-            }
-        }
-        for (int i = 0; i < n; ++i) {
-            const glm::vec4 a = read(first[i]);
-            const bool mix = combine[i] == kMix || (combine[i] == kMixIfBetween && weight[i] > 0.0f);
-            out[start + i] = mix ? glm::mix(a, read(second[i]), weight[i]) : a;
-        }
+        for (int i = 0; i < n; ++i) plans[i] = plan({u[start + i], v[start + i]}, lod[start + i]);
+        for (int i = 0; i < n; ++i) out[start + i] = gather(plans[i]);
     }
 }
 

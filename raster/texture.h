@@ -107,6 +107,26 @@ private:
     BilinearFootprint footprint(int level, glm::vec2 uv) const;
     uint32_t nearestIndex(int level, glm::vec2 uv) const;
     glm::vec4 blend(int level, const BilinearFootprint& f) const;
+    /// One texel, or one bilinear footprint, on a level.
+    struct Tap {
+        BilinearFootprint f;  // a nearest tap uses index[0]
+        int level;
+        bool nearest;
+    };
+    /// What sample() reads for one point under the texture's filters: a tap, or two taps on
+    /// adjacent levels mixed by `weight`.
+    struct SamplePlan {
+        Tap first, second;
+        bool mix;
+        float weight;
+    };
+    SamplePlan plan(glm::vec2 uv, float lod) const;
+    Tap tap(int level, bool nearest, glm::vec2 uv) const;
+    glm::vec4 read(const Tap& t) const { return t.nearest ? texelAt(t.level, t.f.index[0]) : blend(t.level, t.f); }
+    glm::vec4 gather(const SamplePlan& p) const {
+        const glm::vec4 a = read(p.first);
+        return p.mix ? glm::mix(a, read(p.second), p.weight) : a;
+    }
     glm::vec4 texelAt(int level, size_t i) const {
         const Level& l = levels_[level];
         if (format_ == TexelFormat::LinearFloat) return l.texels[i];
