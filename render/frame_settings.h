@@ -53,7 +53,8 @@ struct FrameSettings {
     bool orthographic = false;
     bool frustumCull = false; // 3D scenes: cull triangles against the frustum through a BVH
     /// --ground: model files stand on a floor (render/loaded_scene.cpp, groundUnder) that
-    /// receives their shadows; the framing and the lights are the model's alone.
+    /// receives their shadows; the framing is the model's alone, and a model without lights of
+    /// its own is lit from beside the camera (scene::ModelSceneOptions::keyLightBesideCamera).
     bool ground = false;
     rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit;  // how BVHs follow a new pose
     int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)

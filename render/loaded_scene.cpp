@@ -93,22 +93,6 @@ scene::Mesh groundUnder(const scene::Bounds& b) {
     return m;
 }
 
-/// With a floor, a model without lights of its own takes its key light from above and beside the
-/// camera instead of from above it (scene/model_scene.cpp): a light behind the viewer throws the
-/// shadow behind the model, where the floor would catch nothing the frame shows. kKeyLightTurn
-/// to the camera's left, kKeyLightElevation up from the horizon, as a product shot's key light
-/// stands. Returns the direction towards the light.
-glm::vec3 keyLightBeside(const scene::Camera& camera) {
-    constexpr float kKeyLightTurn = glm::radians(50.0f);
-    constexpr float kKeyLightElevation = glm::radians(55.0f);
-    glm::vec3 toCamera = camera.position - camera.target;
-    toCamera.y = 0.0f;
-    toCamera = glm::dot(toCamera, toCamera) > 0.0f ? glm::normalize(toCamera) : glm::vec3(0.0f, 0.0f, 1.0f);
-    const float c = std::cos(kKeyLightTurn), s = std::sin(kKeyLightTurn);
-    const glm::vec3 turned(c * toCamera.x - s * toCamera.z, 0.0f, s * toCamera.x + c * toCamera.z);
-    return glm::normalize(turned * std::cos(kKeyLightElevation) + glm::vec3(0.0f, std::sin(kKeyLightElevation), 0.0f));
-}
-
 // Built-in scenes and PLY and OBJ files are read whole here; a glTF is parsed here and posed by
 // the first frame (which says at what time).
 void load3d(LoadedScene::State& s) {
@@ -165,6 +149,7 @@ void LoadedScene::State::frameFor(const FrameSettings& f) {
     view.elevationDegrees = f.elevation;
     view.cameraIndex = f.cameraIndex;
     view.placement = f.placement;
+    view.keyLightBesideCamera = f.ground;
     scene::frameModelScene(posed, bounds, fileCameras, fileLights, view, name);
 }
 
@@ -181,7 +166,6 @@ void LoadedScene::State::groundFor(const FrameSettings& f) {
         posed.meshes.pop_back();
         groundHeld = false;
     }
-    if (f.ground && fileLights.empty()) posed.lighting.lights[0].direction = -keyLightBeside(posed.camera);
 }
 
 SceneShadows* LoadedScene::State::shadowsFor(const FrameSettings& f) {

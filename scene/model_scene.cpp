@@ -1,6 +1,7 @@
 #include "scene/model_scene.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "scene/file_names.h"
 #include "scene/gltf_loader.h"
@@ -77,6 +78,31 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
     return s;
 }
 
+namespace {
+
+/// Towards the default key light: above the camera.
+glm::vec3 keyLightAbove(const Camera& camera) {
+    const glm::vec3 toCamera = glm::normalize(camera.position - camera.target);
+    return glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f));
+}
+
+/// Towards the key light of a staged model (ModelSceneOptions::keyLightBesideCamera): a light
+/// above the camera throws the shadow behind the model, where a floor would catch nothing the
+/// frame shows; this one stands kKeyLightTurn to the camera's left and kKeyLightElevation up
+/// from the horizon, as a product shot's key light stands.
+glm::vec3 keyLightBeside(const Camera& camera) {
+    constexpr float kKeyLightTurn = glm::radians(50.0f);
+    constexpr float kKeyLightElevation = glm::radians(55.0f);
+    glm::vec3 toCamera = camera.position - camera.target;
+    toCamera.y = 0.0f;
+    toCamera = glm::dot(toCamera, toCamera) > 0.0f ? glm::normalize(toCamera) : glm::vec3(0.0f, 0.0f, 1.0f);
+    const float c = std::cos(kKeyLightTurn), s = std::sin(kKeyLightTurn);
+    const glm::vec3 turned(c * toCamera.x - s * toCamera.z, 0.0f, s * toCamera.x + c * toCamera.z);
+    return glm::normalize(turned * std::cos(kKeyLightElevation) + glm::vec3(0.0f, std::sin(kKeyLightElevation), 0.0f));
+}
+
+}  // namespace
+
 void frameModelScene(Scene& s, const Bounds& b, const std::vector<Camera>& cameras, const std::vector<raster::Light>& lights,
                      const ModelSceneOptions& view, const std::filesystem::path& path) {
     if (view.cameraIndex >= 0) {
@@ -88,11 +114,10 @@ void frameModelScene(Scene& s, const Bounds& b, const std::vector<Camera>& camer
         s.camera = frameBounds(b.min, b.max, view.azimuthDegrees, view.elevationDegrees);
     }
     if (view.placement) s.camera = placeCamera(*view.placement, s.camera, b.min, b.max);
-    const glm::vec3 toCamera = glm::normalize(s.camera.position - s.camera.target);
-    // Without lights of its own a model is lit from above the camera (a key light that follows
-    // the view, so every side of a turntable is readable).
-    s.lighting = raster::Lighting::directional(glm::normalize(toCamera + glm::vec3(0.0f, 0.8f, 0.0f)), glm::vec3(0.85f),
-                                               glm::vec3(0.12f));
+    // Without lights of its own a model is lit by a key light that follows the view, so every
+    // side of a turntable is readable: from above the camera, or from beside it when asked.
+    const glm::vec3 toLight = view.keyLightBesideCamera ? keyLightBeside(s.camera) : keyLightAbove(s.camera);
+    s.lighting = raster::Lighting::directional(toLight, glm::vec3(0.85f), glm::vec3(0.12f));
     if (!lights.empty()) {
         s.lighting.lightCount = int(std::min(lights.size(), size_t(raster::kMaxLights)));
         std::copy_n(lights.begin(), s.lighting.lightCount, s.lighting.lights);

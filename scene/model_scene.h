@@ -20,6 +20,9 @@ struct ModelSceneOptions {
     bool zUp = false;          // the file's up is +z (many scans and CAD files): turned to +y on load
     std::optional<CameraPlacement> placement;  // a camera placed by hand instead of the framing one
     std::string animation;     // glTF: the animation posed, by name or index; empty: the first
+    /// A model without lights of its own takes its key light from beside the camera rather than
+    /// from above it, so its shadow falls where the frame shows it (render --ground's staging).
+    bool keyLightBesideCamera = false;
 };
 
 bool isModelFile(const std::filesystem::path& path);
@@ -46,7 +49,8 @@ ModelContent fromGltfScene(GltfScene&& scene, const std::filesystem::path& path,
 /// Refuses content without a triangle (InputError naming the file); turns +z up to +y if asked.
 void finishModelContent(ModelContent& content, const std::filesystem::path& path, bool zUp);
 /// The frame's camera (a file camera, the bounds framed from view's angles, or view's placement),
-/// the lights (the file's, else a key light above the camera), background and culling.
+/// the lights (the file's, else a key light above the camera, or beside it for
+/// view.keyLightBesideCamera), background and culling.
 void frameModelScene(Scene& scene, const Bounds& bounds, const std::vector<Camera>& fileCameras,
                      const std::vector<raster::Light>& fileLights, const ModelSceneOptions& view,
                      const std::filesystem::path& path);
