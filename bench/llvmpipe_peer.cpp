@@ -5,6 +5,7 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -231,12 +232,27 @@ struct Program {
         lightCosInner, lightCosOuter;
 };
 
-/// The features of a mesh's draw, as #defines for the shaders.
-std::string definesFor(const scene::Mesh& m, const raster::Lighting& lighting) {
-    const bool textured = m.texCoords.size() == m.positions.size() && !m.texCoords.empty();
-    std::string d;
+/// The mesh's texture slots in texture-unit order; kSamplerNames names their samplers alike.
+std::array<const scene::MeshTexture*, 5> textureSlots(const scene::Mesh& m) {
+    return {&m.textures.baseColor, &m.textures.metallicRoughness, &m.textures.normal, &m.textures.occlusion,
+            &m.textures.emissive};
+}
+constexpr const char* kSamplerNames[] = {"baseColorTex", "metallicRoughnessTex", "normalTex", "occlusionTex", "emissiveTex"};
+
+/// What a mesh's draw reads and computes: the shader variant's #defines and the buffers upload()
+/// makes, from one place.
+struct MeshFeatures {
+    bool vertexColor, textured, normalTexture;
+    std::string defines;
+};
+
+MeshFeatures featuresOf(const scene::Mesh& m, const raster::Lighting& lighting) {
+    MeshFeatures f;
+    f.vertexColor = m.colors.size() == m.positions.size() && !m.colors.empty();
+    f.textured = m.texCoords.size() == m.positions.size() && !m.texCoords.empty();
+    f.normalTexture = f.textured && bool(m.textures.normal) && m.tangents.size() == m.positions.size();
     auto define = [&](bool on, const char* name) {
-        if (on) d += std::string("#define ") + name + "\n";
+        if (on) f.defines += std::string("#define ") + name + "\n";
     };
     bool onlyOneDirectional = lighting.lightCount == 1 && lighting.lights[0].type == raster::LightType::Directional;
     const bool mr = m.metallicRoughness && !m.unlit;
@@ -246,16 +262,16 @@ std::string definesFor(const scene::Mesh& m, const raster::Lighting& lighting) {
     define(mr, "METALLIC_ROUGHNESS");
     define(mr || pointOrSpot, "WORLD_POSITION");
     define(!mr && onlyOneDirectional, "ONE_DIRECTIONAL_LIGHT");
-    define(m.colors.size() == m.positions.size() && !m.colors.empty(), "VERTEX_COLOR");
-    define(textured, "TEXTURED");
-    define(textured && bool(m.textures.baseColor), "BASE_TEX");
-    define(textured && mr && bool(m.textures.metallicRoughness), "METALLIC_ROUGHNESS_TEX");
-    define(textured && bool(m.textures.normal) && m.tangents.size() == m.positions.size(), "NORMAL_TEX");
-    define(textured && bool(m.textures.occlusion), "OCCLUSION_TEX");
+    define(f.vertexColor, "VERTEX_COLOR");
+    define(f.textured, "TEXTURED");
+    define(f.textured && bool(m.textures.baseColor), "BASE_TEX");
+    define(f.textured && mr && bool(m.textures.metallicRoughness), "METALLIC_ROUGHNESS_TEX");
+    define(f.normalTexture, "NORMAL_TEX");
+    define(f.textured && bool(m.textures.occlusion), "OCCLUSION_TEX");
     define(m.emissive != glm::vec3(0.0f), "EMISSIVE");
-    define(textured && bool(m.textures.emissive), "EMISSIVE_TEX");
+    define(f.textured && bool(m.textures.emissive), "EMISSIVE_TEX");
     define(m.alphaMode == raster::AlphaMode::Mask, "MASK");
-    return d;
+    return f;
 }
 
 GLint wrapOf(raster::WrapMode w) {
@@ -315,8 +331,7 @@ size_t LlvmpipePeer::Impl::programFor(const std::string& defines) {
     p.ambient = at("ambient"), p.lightCount = at("lightCount"), p.lightType = at("lightType");
     p.lightPosition = at("lightPosition"), p.lightDirection = at("lightDirection"), p.lightIntensity = at("lightIntensity");
     p.lightRange = at("lightRange"), p.lightCosInner = at("lightCosInner"), p.lightCosOuter = at("lightCosOuter");
-    const char* samplers[] = {"baseColorTex", "metallicRoughnessTex", "normalTex", "occlusionTex", "emissiveTex"};
-    for (int i = 0; i < 5; ++i) p_glUniform1i(at(samplers[i]), i);
+    for (int unit = 0; unit < 5; ++unit) p_glUniform1i(at(kSamplerNames[unit]), unit);
     programs.push_back(p);
     return programs.size() - 1;
 }
@@ -406,21 +421,19 @@ void LlvmpipePeer::upload(const scene::Scene& scene) {
     };
     for (const scene::Mesh& mesh : scene.meshes) {
         MeshBuffers b;
-        const std::string defines = definesFor(mesh, scene.lighting);
-        b.program = impl_->programFor(defines);
+        const MeshFeatures features = featuresOf(mesh, scene.lighting);
+        b.program = impl_->programFor(features.defines);
         b.positions = buffer(GL_ARRAY_BUFFER, mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
         b.normals = buffer(GL_ARRAY_BUFFER, mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
-        if (defines.find("VERTEX_COLOR") != std::string::npos)
+        if (features.vertexColor)
             b.colors = buffer(GL_ARRAY_BUFFER, mesh.colors.data(), mesh.colors.size() * sizeof(glm::vec3));
-        if (defines.find("TEXTURED") != std::string::npos)
+        if (features.textured)
             b.uvs = buffer(GL_ARRAY_BUFFER, mesh.texCoords.data(), mesh.texCoords.size() * sizeof(glm::vec2));
-        if (defines.find("NORMAL_TEX") != std::string::npos)
+        if (features.normalTexture)
             b.tangents = buffer(GL_ARRAY_BUFFER, mesh.tangents.data(), mesh.tangents.size() * sizeof(glm::vec4));
         b.indices = buffer(GL_ELEMENT_ARRAY_BUFFER, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
         b.indexCount = GLsizei(mesh.indices.size());
-        const scene::MeshTexture* slots[] = {&mesh.textures.baseColor, &mesh.textures.metallicRoughness,
-                                             &mesh.textures.normal, &mesh.textures.occlusion, &mesh.textures.emissive};
-        for (const scene::MeshTexture* t : slots)
+        for (const scene::MeshTexture* t : textureSlots(mesh))
             if (t->texture) impl_->textureFor(*t->texture);
         impl_->meshes.push_back(b);
     }
@@ -482,8 +495,7 @@ double LlvmpipePeer::renderFrame(const scene::Scene& scene) {
         p_glUniform1f(p.occlusionStrength, mesh.occlusionStrength);
         p_glUniform1f(p.alphaCutoff, mesh.alphaCutoff);
         p_glUniform3fv(p.emissive, 1, glm::value_ptr(mesh.emissive));
-        const scene::MeshTexture* slots[] = {&mesh.textures.baseColor, &mesh.textures.metallicRoughness,
-                                             &mesh.textures.normal, &mesh.textures.occlusion, &mesh.textures.emissive};
+        const auto slots = textureSlots(mesh);
         for (int unit = 0; unit < 5; ++unit) {
             if (!slots[unit]->texture) continue;
             p_glActiveTexture(GL_TEXTURE0 + unit);
