@@ -128,8 +128,7 @@ private:
         // The last texture coordinates fetched (fetchAll): glTF's slots mostly share one
         // size and one transform, and then share the transformed UVs and the level of detail.
         struct FetchCoordinates {
-            bool valid = false;
-            int width = 0, height = 0;
+            int width = 0, height = 0;  // 0: none fetched yet (a texture is at least 1x1)
             UvTransform transform;
             float u[N], v[N], lod[N];
         } fetched;
@@ -204,7 +203,7 @@ private:
     static void fetchAll(const TextureBinding& b, PixelAttributes& a, int count, glm::vec4* out) {
         typename PixelAttributes::FetchCoordinates& c = a.fetched;
         const Texture& t = *b.texture;
-        if (!c.valid || c.width != t.width() || c.height != t.height() || c.transform.linear != b.transform.linear ||
+        if (c.width != t.width() || c.height != t.height() || c.transform.linear != b.transform.linear ||
             c.transform.offset != b.transform.offset) {
             const glm::mat2& m = b.transform.linear;
             for (int i = 0; i < count; ++i) {
@@ -213,7 +212,7 @@ private:
                 const glm::vec2 dy = m * glm::vec2(a.dUVdy[0][i], a.dUVdy[1][i]);
                 c.u[i] = uv.x, c.v[i] = uv.y, c.lod[i] = t.levelOfDetail(dx, dy);
             }
-            c.valid = true, c.width = t.width(), c.height = t.height(), c.transform = b.transform;
+            c.width = t.width(), c.height = t.height(), c.transform = b.transform;
         }
         t.sampleBatch(count, c.u, c.v, c.lod, out);
     }
