@@ -118,7 +118,7 @@ glm::vec4 Texture::sample(glm::vec2 uv, float lod) const { return gather(plan(uv
 // minification filter's level or levels.
 [[gnu::always_inline]] inline Texture::SamplePlan Texture::plan(glm::vec2 uv, float lod) const {
     SamplePlan p;
-    p.mix = false;
+    p.mix = false, p.weight = 0.0f;
     if (!(lod > 0.0f)) {  // magnification (also NaN)
         p.first = tap(0, filter_.magnifyNearest, uv);
         return p;
