@@ -18,7 +18,6 @@
 namespace cuberille::apps {
 namespace {
 
-RenderOptions parseJob(const std::string& line, bool quiet);
 std::vector<std::string> renderArguments(const nlohmann::json& job);
 
 // A job's key as render's long option: "pixel_error" and "pixel-error" are --pixel-error.
@@ -56,8 +55,7 @@ int runBatchCommand(const BatchOptions& o) {
         if (line.find_first_not_of(" \t\r") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
         ++jobs;
         try {
-            const RenderOptions job = parseJob(line, o.quiet);
-            checkRenderCommand(job);
+            const RenderOptions job = parseBatchJob(line, o.quiet);
             std::unique_ptr<render::LoadedScene>& scene = scenes[{job.scene, job.detail, job.zUp}];
             if (!scene) scene = std::make_unique<render::LoadedScene>(loadScene(job));
             runRenderCommand(job, *scene);
@@ -74,11 +72,9 @@ int runBatchCommand(const BatchOptions& o) {
     return failed > 0 ? 1 : 0;
 }
 
-namespace {
-
 // A job line parsed by the render command's own options (apps/render_options_cli.h), so it takes
 // what `render` takes and is refused as `render` would refuse it.
-RenderOptions parseJob(const std::string& line, bool quiet) {
+RenderOptions parseBatchJob(const std::string& line, bool quiet) {
     nlohmann::json job;
     try {
         job = nlohmann::json::parse(line);
@@ -107,8 +103,11 @@ RenderOptions parseJob(const std::string& line, bool quiet) {
     }
     applyRenderNames(names, o);
     o.quiet = o.quiet || quiet;
+    checkRenderCommand(o);
     return o;
 }
+
+namespace {
 
 std::vector<std::string> renderArguments(const nlohmann::json& job) {
     std::vector<std::string> arguments{"render", job["scene"].get<std::string>()};

@@ -10,6 +10,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "apps/render_command.h"
+
 namespace cuberille::apps {
 
 struct BatchOptions {
@@ -20,5 +22,9 @@ struct BatchOptions {
 void addBatchCommand(CLI::App& app, BatchOptions& o);
 
 int runBatchCommand(const BatchOptions& o);
+
+/// One line of a jobs file as the render it names, checked as `render` checks it (checkRenderCommand);
+/// throws scene::InputError with the message batch prints after the line's number.
+RenderOptions parseBatchJob(const std::string& line, bool quiet);
 
 }  // namespace cuberille::apps

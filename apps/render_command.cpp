@@ -29,6 +29,8 @@ void validateSequence(const RenderOptions& o) {
     if (o.turntable > 0 && kind == scene::FileKind::VoxelModel) throw InputError("--turntable: not for voxel models yet");
 }
 
+bool isSequence(const RenderOptions& o) { return o.turntable > 0 || o.animate > 0; }
+
 std::filesystem::path frameFileName(const std::filesystem::path& out, int frame) {
     char suffix[16];
     std::snprintf(suffix, sizeof suffix, "_%03d", frame);
@@ -128,13 +130,13 @@ raster::Image imageToWrite(const RenderOptions& o, const std::filesystem::path& 
     return render::displayImage(image, o.view, scene::fileKindOf(o.scene) != scene::FileKind::TriangleList);
 }
 
-// Frame `index` of a sequence (or the one frame, index < 0): its image, its stats kept for
-// {"frames": [...]}; the one frame's summary (a sequence prints one for all its frames).
+// Frame `index` of the command: its image, its stats kept for {"frames": [...]}; the one frame's
+// summary (a sequence prints one for all its frames).
 void writeFrame(const RenderOptions& o, int index, const RenderResult& r, nlohmann::json& frames) {
-    const std::filesystem::path file = index < 0 ? o.out : frameFileName(o.out, index);
+    const std::filesystem::path file = frameFile(o, index);
     writeImageAtomically(file, imageToWrite(o, file, r.image), imageWriteOptions(o));
     if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
-    if (!o.quiet && index < 0) printSummary(o, file, r);
+    if (!o.quiet && !isSequence(o)) printSummary(o, file, r);
 }
 
 // What a sequence's summary adds up over its frames.
@@ -169,32 +171,37 @@ void printSequenceSummary(const RenderOptions& o, int count, SequenceTotals t) {
     std::printf("; --stats has each frame\n");
 }
 
-// The frames of the command: one, --turntable N (the camera turned about the world's up axis by
-// 360/N degrees a frame) or --animate N (the animation posed at --time + i / --fps). The scene
-// is loaded once; the hierarchies the frustum cull and shadows need are built on the first frame
-// and, for an animation, refitted to each next pose (render/loaded_scene.h).
+// Frame `index` of the command: the one frame, or of --turntable N the camera turned about the
+// world's up axis by 360/N degrees a frame, or of --animate N the animation posed at --time + i / --fps.
+render::FrameSettings sequenceFrame(const RenderOptions& o, int index) {
+    render::FrameSettings frame = o;
+    if (o.turntable > 0) frame.orbitDegrees = 360.0f * float(index) / float(o.turntable);
+    if (o.animate > 0) frame.timeSeconds = o.timeSeconds + float(index) / o.fps;
+    return frame;
+}
+
+// The frames of the command. The scene is loaded once; the hierarchies the frustum cull and
+// shadows need are built on the first frame and, for an animation, refitted to each next pose
+// (render/loaded_scene.h).
 int renderFrames(const render::LoadedScene& scene, const RenderOptions& o) {
-    const bool sequence = o.turntable > 0 || o.animate > 0;
-    const int count = o.turntable > 0 ? o.turntable : o.animate > 0 ? o.animate : 1;
+    const bool sequence = isSequence(o);
+    const int count = frameCount(o);
     nlohmann::json frames = nlohmann::json::array();
     SequenceTotals totals;
     ProgressLine progress("frame", count, o.quiet);
     for (int i = 0; i < count; ++i) {
-        render::FrameSettings frame = o;
-        if (o.turntable > 0) frame.orbitDegrees = 360.0f * float(i) / float(o.turntable);
-        if (o.animate > 0) frame.timeSeconds = o.timeSeconds + float(i) / o.fps;
         std::optional<ElapsedLine> elapsed;
         if (!sequence) elapsed.emplace("rendering", o.quiet);  // a sequence counts its frames instead
-        RenderResult r = render::render(scene, frame);
+        RenderResult r = render::render(scene, sequenceFrame(o, i));
         elapsed.reset();
         if (i == 0) r.loadMs += scene.loadMs();
-        writeFrame(o, sequence ? i : -1, r, frames);  // what it writes does not depend on the orbit or time
+        writeFrame(o, i, r, frames);  // what it writes does not depend on the orbit or time
         addToTotals(r, totals);
         progress.update(i + 1);
     }
     progress.finish();
     if (sequence && !o.quiet) printSequenceSummary(o, count, std::move(totals));
-    if (!o.statsPath.empty()) writeJsonAtomically(o.statsPath, sequence ? nlohmann::json{{"frames", frames}} : frames[0]);
+    if (!o.statsPath.empty()) writeRenderStats(o, frames);
     return 0;
 }
 
@@ -206,6 +213,28 @@ int runRenderCommand(const RenderOptions& o) {
 }
 
 int runRenderCommand(const RenderOptions& o, const render::LoadedScene& scene) { return renderFrames(scene, o); }
+
+int frameCount(const RenderOptions& o) { return o.turntable > 0 ? o.turntable : o.animate > 0 ? o.animate : 1; }
+
+std::filesystem::path frameFile(const RenderOptions& o, int index) {
+    return isSequence(o) ? frameFileName(o.out, index) : o.out;
+}
+
+nlohmann::json renderFrameRun(const render::LoadedScene& scene, const RenderOptions& o, int first, int count) {
+    if (first < 0 || count < 0 || first + count > frameCount(o))
+        throw std::invalid_argument("renderFrameRun: frames outside the command's sequence");
+    nlohmann::json frames = nlohmann::json::array();
+    for (int i = first; i < first + count; ++i) {
+        const RenderResult r = render::render(scene, sequenceFrame(o, i));
+        writeImageAtomically(frameFile(o, i), imageToWrite(o, frameFile(o, i), r.image), imageWriteOptions(o));
+        frames.push_back(statsToJson(o, r));
+    }
+    return frames;
+}
+
+void writeRenderStats(const RenderOptions& o, const nlohmann::json& frames) {
+    writeJsonAtomically(o.statsPath, isSequence(o) ? nlohmann::json{{"frames", frames}} : frames.at(0));
+}
 
 void checkRenderCommand(const RenderOptions& o) {
     if (o.out.empty()) throw scene::InputError("--out: an output file is required (.png, .exr or .jpg)");

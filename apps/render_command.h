@@ -65,6 +65,17 @@ int runRenderCommand(const RenderOptions& options);
 /// The same with the scene already loaded (options.scene, .detail and .zUp as it was loaded with)
 /// and the options already checked by checkRenderCommand (batch checks each job before loading).
 int runRenderCommand(const RenderOptions& options, const render::LoadedScene& scene);
+/// How many frames the command writes: --turntable's or --animate's count, or 1.
+int frameCount(const RenderOptions& options);
+/// The file frame `index` is written to: --out itself for one frame, OUT_007.png in a sequence.
+std::filesystem::path frameFile(const RenderOptions& options, int index);
+/// Frames [first, first + count) of the command, rendered and written (atomically) as the whole
+/// command writes them, quietly; returns each frame's --stats object in order. A frame's image
+/// never depends on the frames before it (render/loaded_scene.h), so any split of a sequence into
+/// runs writes the same files: what a distributed run (python/cuberille/dask) relies on.
+nlohmann::json renderFrameRun(const render::LoadedScene& scene, const RenderOptions& options, int first, int count);
+/// The --stats file from every frame's object in order: the one object, or {"frames": [...]}.
+void writeRenderStats(const RenderOptions& options, const nlohmann::json& frames);
 /// What the command refuses before any work: no --out, an unwritable output, a bad sequence.
 void checkRenderCommand(const RenderOptions& options);
 

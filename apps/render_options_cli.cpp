@@ -146,4 +146,20 @@ void applyRenderNames(const RenderNames& names, RenderOptions& o) {
     }
 }
 
+RenderOptions parseRenderArguments(const std::vector<std::string>& arguments) {
+    CLI::App app;
+    RenderOptions o;
+    RenderNames names;
+    addRenderCommand(app, o, names);
+    std::vector<std::string> reversed{arguments.rbegin(), arguments.rend()};  // CLI11 takes them last first
+    reversed.push_back("render");
+    try {
+        app.parse(reversed);
+    } catch (const CLI::ParseError& e) {
+        throw scene::InputError(e.what());
+    }
+    applyRenderNames(names, o);
+    return o;
+}
+
 }  // namespace cuberille::apps

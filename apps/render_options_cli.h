@@ -4,6 +4,7 @@
 // with the same checks and messages.
 
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -27,5 +28,11 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names);
 /// The options read as names (--view, --shadows, --eye, ...) turned into `o`'s values; throws
 /// scene::InputError naming the option.
 void applyRenderNames(const RenderNames& names, RenderOptions& o);
+
+/// `render`'s arguments as a command line gives them (the scene and options, without "render"),
+/// parsed and turned into options by the command's own parser; throws scene::InputError with the
+/// message the command prints. How a program that drives the tool's work, such as the distributed
+/// runner (python/cuberille/dask), reads the command it was given.
+RenderOptions parseRenderArguments(const std::vector<std::string>& arguments);
 
 }  // namespace cuberille::apps

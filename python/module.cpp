@@ -13,7 +13,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "apps/batch_command.h"
 #include "apps/png_file.h"
+#include "apps/render_command.h"
+#include "apps/render_options_cli.h"
 #include "render/display_image.h"
 #include "render/fly.h"
 #include "render/renderer.h"
@@ -131,12 +134,56 @@ public:
     std::vector<std::string> animations() const { return scene_->animations(); }
     const std::vector<std::string>& warnings() const { return warnings_; }
     size_t cameras() const { return render::cameraCount(*scene_); }
+    const render::LoadedScene& loaded() const { return *scene_; }
     double loadMs() const { return scene_->loadMs(); }
 
 private:
     std::unique_ptr<render::LoadedScene> scene_;
     std::vector<std::string> warnings_;
     std::string stats_;
+};
+
+// A `render` command line (or a batch job line) read by the tool's own parser, so that a program
+// driving the tool's work — the distributed runner, python/cuberille/dask — takes the same options,
+// refuses the same input with the same messages, and writes the same files: run() renders a
+// contiguous run of the command's frames into their files.
+class PyRenderCommand {
+public:
+    explicit PyRenderCommand(apps::RenderOptions o) : o_(std::move(o)) {}
+
+    static PyRenderCommand fromArguments(const std::vector<std::string>& arguments) {
+        apps::RenderOptions o = apps::parseRenderArguments(arguments);
+        apps::checkRenderCommand(o);
+        return PyRenderCommand(std::move(o));
+    }
+    static PyRenderCommand fromJobLine(const std::string& line) { return PyRenderCommand(apps::parseBatchJob(line, true)); }
+
+    // Each frame's --stats object as JSON text, in order. `threadsIfUnset` stands for the
+    // command's --threads 0 (all cores): a worker sharing its machine with others gets its share.
+    std::vector<std::string> run(const PyScene& scene, int first, int count, int threadsIfUnset) {
+        apps::RenderOptions o = o_;
+        if (o.threads == 0) o.threads = threadsIfUnset;
+        nlohmann::json frames;
+        {
+            py::gil_scoped_release release;
+            frames = apps::renderFrameRun(scene.loaded(), o, first, count);
+        }
+        std::vector<std::string> out;
+        for (const auto& f : frames) out.push_back(f.dump());
+        return out;
+    }
+
+    void writeStats(const std::vector<std::string>& frames) const {
+        nlohmann::json all = nlohmann::json::array();
+        for (const auto& f : frames) all.push_back(nlohmann::json::parse(f));
+        apps::writeRenderStats(o_, all);
+    }
+
+    const apps::RenderOptions& options() const { return o_; }
+    std::string frameFile(int index) const { return apps::frameFile(o_, index).string(); }
+
+private:
+    apps::RenderOptions o_;
 };
 
 // A flight through a streamed voxel model (render/fly.h): every frame's statistics as a dict, and
@@ -210,6 +257,22 @@ PYBIND11_MODULE(_cuberille, m) {
         .def_property_readonly("warnings", &PyScene::warnings)
         .def_property_readonly("cameras", &PyScene::cameras)
         .def_property_readonly("load_ms", &PyScene::loadMs);
+    py::class_<PyRenderCommand>(m, "RenderCommand")
+        .def_static("from_arguments", &PyRenderCommand::fromArguments, py::arg("arguments"),
+                    "`cuberille render`'s arguments (the scene and options), checked as the command checks them")
+        .def_static("from_job_line", &PyRenderCommand::fromJobLine, py::arg("line"),
+                    "One line of a `cuberille batch` jobs file, checked as batch checks it")
+        .def("run", &PyRenderCommand::run, py::arg("scene"), py::arg("first"), py::arg("count"), py::arg("threads_if_unset") = 0,
+             "Renders and writes frames [first, first + count); each frame's stats as JSON text")
+        .def("write_stats", &PyRenderCommand::writeStats, py::arg("frames"), "Writes --stats from every frame's JSON text")
+        .def("frame_file", &PyRenderCommand::frameFile, py::arg("index"))
+        .def_property_readonly("frame_count", [](const PyRenderCommand& c) { return apps::frameCount(c.options()); })
+        .def_property_readonly("scene", [](const PyRenderCommand& c) { return c.options().scene; })
+        .def_property_readonly("detail", [](const PyRenderCommand& c) { return c.options().detail; })
+        .def_property_readonly("up_axis", [](const PyRenderCommand& c) { return std::string(c.options().zUp ? "z" : "y"); })
+        .def_property_readonly("threads", [](const PyRenderCommand& c) { return c.options().threads; })
+        .def_property_readonly("stats", [](const PyRenderCommand& c) { return c.options().statsPath.string(); })
+        .def_property_readonly("quiet", [](const PyRenderCommand& c) { return c.options().quiet; });
     m.def("fly", &fly, py::arg("model"), py::arg("path") = "orbit", py::arg("frames") = 120, py::arg("width") = 1280,
           py::arg("height") = 720, py::arg("msaa") = 4, py::arg("threads") = 0, py::arg("budget_mib") = 1024.0,
           py::arg("upload_limit_mib") = 0.0, py::arg("refine") = "full", py::arg("pixel_error") = 1.0f,

@@ -1,0 +1,89 @@
+#!/usr/bin/env python3
+"""How cuberille.dask scales from 1 to N worker processes on this machine, beside the tool itself.
+
+    PYTHONPATH=build/release/python /usr/bin/python3 bench/dask_scaling.py --cli build/release/apps/cuberille \\
+        [--model ../shared/data/gltf/DamagedHelmet/DamagedHelmet.glb] [--workers 1,2] [--runs 3]
+
+For each kind of work (a turntable, an animation, a batch of views) it times, in the same run:
+the tool on one machine (its whole process), and cuberille.dask on a LocalCluster of each worker
+count (the work only: the cluster is started before the clock and kept, as a user's cluster is).
+Prints the median of --runs and the speed-up against 1 worker; docs/scale-out.md holds the table.
+"""
+
+import argparse
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPOSITORY = Path(__file__).resolve().parents[1]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cli", required=True, help="the cuberille tool")
+    parser.add_argument("--model", default=str(REPOSITORY.parent / "shared/data/gltf/DamagedHelmet/DamagedHelmet.glb"))
+    parser.add_argument("--animated", default=str(REPOSITORY.parent / "shared/data/gltf/CesiumMan/CesiumMan.glb"))
+    parser.add_argument("--workers", default="1,2")
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--frames", type=int, default=24)
+    args = parser.parse_args()
+
+    from distributed import Client, LocalCluster
+    import cuberille.dask
+
+    work = Path(tempfile.mkdtemp(prefix="dask-scaling-"))
+    size = ["--width", "640", "--height", "480", "--msaa", "4"]
+    kinds = {
+        "turntable": [args.model, "--turntable", str(args.frames), *size],
+        "animation": [args.animated, "--animate", str(args.frames), "--shadows", "hybrid", *size],
+    }
+    jobs = work / "jobs.jsonl"
+    jobs.write_text("".join(json.dumps({"scene": args.model, "out": str(work / "batch" / f"v{i}.png"), "width": 640,
+                                        "height": 480, "msaa": 4, "azimuth": 360.0 * i / args.frames}) + "\n"
+                            for i in range(args.frames)))
+    (work / "batch").mkdir()
+
+    def tool(kind):
+        out = work / "tool"
+        out.mkdir(exist_ok=True)
+        command = [args.cli, "batch", str(jobs), "--quiet"] if kind == "batch" else \
+            [args.cli, "render", *kinds[kind], "--out", str(out / "f.png"), "--quiet"]
+        t0 = time.perf_counter()
+        subprocess.run(command, check=True)
+        return time.perf_counter() - t0
+
+    rows = {kind: {"tool": statistics.median(tool(kind) for _ in range(args.runs))} for kind in (*kinds, "batch")}
+    for workers in [int(w) for w in args.workers.split(",")]:
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
+                Client(cluster) as client:
+            for kind in rows:
+                times = []
+                for _ in range(args.runs):
+                    client.run(cuberille.dask._scenes.clear)  # every run loads its scenes, as the tool does
+                    out = work / f"dask{workers}"
+                    out.mkdir(exist_ok=True)
+                    t0 = time.perf_counter()
+                    if kind == "batch":
+                        cuberille.dask.batch(jobs, client)
+                    else:
+                        cuberille.dask.render([*kinds[kind], "--out", str(out / "f.png")], client)
+                    times.append(time.perf_counter() - t0)
+                rows[kind][workers] = statistics.median(times)
+    counts = [int(w) for w in args.workers.split(",")]
+    print(f"{args.frames} frames a kind, 640x480, 4 samples; median of {args.runs}; {os.cpu_count()} cores")
+    print(f"{'work':<10} {'tool (s)':>9} " + " ".join(f"{f'{w} worker(s) (s)':>16}" for w in counts) +
+          " " + " ".join(f"{f'speed-up x{w}':>12}" for w in counts[1:]))
+    for kind, r in rows.items():
+        print(f"{kind:<10} {r['tool']:9.2f} " + " ".join(f"{r[w]:16.2f}" for w in counts) + " " +
+              " ".join(f"{r[counts[0]] / r[w]:12.2f}" for w in counts[1:]))
+    shutil.rmtree(work)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,237 @@
+"""Cuberille's work on a Dask cluster, with the same files as one machine.
+
+    from distributed import Client, LocalCluster
+    import cuberille.dask
+
+    with LocalCluster(n_workers=2, threads_per_worker=1) as cluster, Client(cluster) as client:
+        cuberille.dask.render(["model.glb", "--turntable", "36", "--out", "frames/f.png"], client)
+        cuberille.dask.batch("jobs.jsonl", client)
+
+`python3 -m cuberille.dask render|batch ...` is the command line over these (docs/scale-out.md).
+
+How the work is split, and why the files are the same as the tool's:
+- A command is read by the tool's own parser (cuberille._cuberille.RenderCommand), here and again
+  on each worker, so it takes the same options and refuses bad ones with the same messages.
+- A sequence (--turntable, --animate) is cut into contiguous runs of frames, one task each. A
+  frame's image never depends on the frames before it (render/loaded_scene.h), only the work does:
+  a run's first frame builds the hierarchies the later frames of the run refit.
+- Each worker process loads a scene once and keeps it for every later task that names it with the
+  same --detail and --up-axis (`_scene`).
+- Every file is written under a temporary name and renamed (apps/atomic_file.h), so a task retried
+  after its worker died rewrites whole files; the temporary files a killed worker left are removed
+  once every task has finished (`_remove_leftovers`). Outputs go where the command names them: the
+  workers and this process must see the same file system.
+"""
+
+import glob
+import json
+import math
+import os
+import sys
+import time
+
+from .. import Scene, _cuberille
+from .._cuberille import InputError
+
+__all__ = ["BatchReport", "RenderReport", "batch", "render"]
+
+
+class RenderReport:
+    """What render() did: the files written in frame order, each frame's statistics (the dicts
+    --stats holds), the tasks and workers it used and its wall time."""
+
+    def __init__(self, files, frame_stats, tasks, workers, seconds, warnings):
+        self.files, self.frame_stats, self.tasks, self.workers = files, frame_stats, tasks, workers
+        self.seconds, self.warnings = seconds, warnings
+
+
+class BatchReport:
+    """What batch() did: how many jobs ran, the failures as (line number, message) in line order,
+    how many scene loads the workers made, and the wall time."""
+
+    def __init__(self, jobs, failures, scene_loads, seconds, warnings):
+        self.jobs, self.failures, self.scene_loads, self.seconds, self.warnings = jobs, failures, scene_loads, seconds, warnings
+
+
+def render(arguments, client, *, frames_per_task=None, progress=None):
+    """Runs `cuberille render ARGUMENTS` (the scene and options, as on the command line) on the
+    client's cluster. Raises InputError as the tool refuses: a bad option before any task, a bad
+    scene file from the first task that reads it (the other tasks are cancelled). `progress`, if
+    given, is called with (frames done, frames in all) as runs finish."""
+    started = time.perf_counter()
+    arguments = [os.fspath(a) for a in arguments]
+    command = _cuberille.RenderCommand.from_arguments(arguments)
+    count = command.frame_count
+    workers = _worker_count(client)
+    per_task = frames_per_task or _frames_per_task(count, workers)
+    runs = [(first, min(per_task, count - first)) for first in range(0, count, per_task)]
+    threads = _threads_per_worker(client)
+    futures = [client.submit(_render_run, arguments, first, n, threads, pure=False, key=f"cuberille-render-{first}-{_stamp()}")
+               for first, n in runs]
+    results, done = {}, 0
+    from distributed import as_completed
+
+    try:
+        for future in as_completed(futures):
+            result = future.result()
+            if "error" in result:
+                raise InputError(result["error"])
+            results[result["first"]] = result
+            done += result["count"]
+            if progress:
+                progress(done, count)
+    finally:
+        client.cancel(futures)
+    files = [command.frame_file(i) for i in range(count)]
+    _remove_leftovers(files)
+    frame_stats = [s for first, _ in runs for s in results[first]["stats"]]
+    if command.stats:
+        command.write_stats(frame_stats)
+        _remove_leftovers([command.stats])
+    warnings = _unique(w for first, _ in runs for w in results[first]["warnings"])
+    return RenderReport(files, [json.loads(s) for s in frame_stats], len(runs), workers,
+                        time.perf_counter() - started, warnings)
+
+
+def batch(jobs_path, client, *, progress=None):
+    """Runs a `cuberille batch` jobs file on the client's cluster, one task a job. A job that fails
+    is reported with its line number and the message the tool gives; the others go on. Raises
+    InputError if the jobs file cannot be read."""
+    started = time.perf_counter()
+    jobs_path = os.fspath(jobs_path)
+    try:
+        with open(jobs_path, encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except OSError as e:
+        raise InputError(f"{jobs_path}: cannot open file ({e.strerror})") from None
+    numbered = [(n, line) for n, line in enumerate(lines, start=1)
+                if line.strip(" \t\r") and not line.lstrip(" \t").startswith("#")]
+    threads = _threads_per_worker(client)
+    futures = {client.submit(_batch_job, line, threads, pure=False, key=f"cuberille-job-{n}-{_stamp()}"): n
+               for n, line in numbered}
+    from distributed import as_completed
+
+    failures, loads, warnings, done = [], 0, [], 0
+    for future in as_completed(futures):
+        n = futures[future]
+        try:
+            result = future.result()
+        except Exception as e:  # a failure while working, not bad input: reported as the tool reports it
+            result = {"error": str(e), "loaded": False, "warnings": [], "files": []}
+        if "error" in result:
+            failures.append((n, result["error"]))
+        loads += result["loaded"]
+        warnings += result["warnings"]
+        _remove_leftovers(result["files"])
+        done += 1
+        if progress:
+            progress(done, len(numbered))
+    return BatchReport(len(numbered), sorted(failures), loads, time.perf_counter() - started, _unique(warnings))
+
+
+# What runs on the workers: module-level functions, so Dask sends them by name and each worker
+# process keeps this module's scene cache between tasks.
+
+_scenes = {}
+
+
+def _scene(command):
+    """The worker's loaded scene for the command, and whether this call loaded it."""
+    key = (command.scene, command.detail, command.up_axis)
+    if key in _scenes:
+        return _scenes[key], False
+    scene = Scene(command.scene, detail=command.detail, up_axis=command.up_axis)
+    _scenes[key] = scene
+    return scene, True
+
+
+def _render_run(arguments, first, count, threads):
+    try:
+        command = _cuberille.RenderCommand.from_arguments(arguments)
+        scene, _ = _scene(command)
+        stats = command.run(scene._scene, first, count, threads)
+    except InputError as e:  # returned, not raised: bad input is not retried, and the message stays the tool's
+        return {"error": str(e)}
+    return {"first": first, "count": count, "stats": stats, "warnings": scene.warnings}
+
+
+def _batch_job(line, threads):
+    try:
+        command = _cuberille.RenderCommand.from_job_line(line)
+        scene, loaded = _scene(command)
+        files = [command.frame_file(i) for i in range(command.frame_count)] + ([command.stats] if command.stats else [])
+        stats = command.run(scene._scene, 0, command.frame_count, threads)
+        if command.stats:
+            command.write_stats(stats)
+        return {"loaded": loaded, "warnings": scene.warnings, "files": files}
+    except InputError as e:
+        return {"error": str(e), "loaded": False, "warnings": [], "files": []}
+
+
+# Details.
+
+def _worker_count(client):
+    return max(1, len(client.scheduler_info().get("workers", {})))
+
+
+def _threads_per_worker(client):
+    """Render threads for a command that did not choose --threads: the cores of a worker's machine
+    shared among the worker processes on it, so two workers on two cores do not each run two (the
+    fewest any machine of the cluster gives, since a task does not choose its worker)."""
+    cores = client.run(os.cpu_count)  # worker address -> its machine's cores
+    per_host = {}
+    for address in cores:
+        host = address.rsplit(":", 1)[0]
+        per_host[host] = per_host.get(host, 0) + 1
+    shares = [(cores[a] or 1) // per_host[a.rsplit(":", 1)[0]] for a in cores]
+    return max(1, min(shares, default=os.cpu_count() or 1))
+
+
+def _frames_per_task(frames, workers):
+    """Runs of frames: four a worker, so a slow or lost worker costs a quarter of its share, while
+    a run stays long enough for its frames to reuse the hierarchies its first frame built."""
+    return max(1, math.ceil(frames / (4 * workers)))
+
+
+def _remove_leftovers(files):
+    """Temporary files (apps/atomic_file.cpp names them .NAME.tmpPID) left by a worker killed while
+    writing: every task has finished, so none of them is still being written."""
+    for path in files:
+        folder, name = os.path.split(path)
+        for leftover in glob.glob(os.path.join(glob.escape(folder or "."), glob.escape("." + name) + ".tmp*")):
+            try:
+                os.remove(leftover)
+            except OSError:
+                pass
+
+
+def _unique(items):
+    seen, out = set(), []
+    for item in items:
+        if item not in seen:
+            seen.add(item)
+            out.append(item)
+    return out
+
+
+_counter = [0]
+
+
+def _stamp():
+    """Keys unique within this process, so two runs of the same command are two sets of tasks."""
+    _counter[0] += 1
+    return f"{os.getpid()}-{_counter[0]}"
+
+
+def _print_progress(what):
+    """A progress line on a terminal, nothing when piped (DESIGN.md's command-line conventions)."""
+    if not sys.stderr.isatty():
+        return None
+
+    def show(done, total):
+        sys.stderr.write(f"\r{what}: {done}/{total}")
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    return show

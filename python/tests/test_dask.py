@@ -1,0 +1,138 @@
+"""cuberille.dask on a LocalCluster of two worker processes against the tool on one machine: the
+same files bit for bit for a turntable, an animation and a batch; a worker killed mid-run costs
+nothing but time; bad input fails with the tool's message and the other jobs finish."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+distributed = pytest.importorskip("distributed", reason="Dask's python3-distributed is not installed (.ci/install-deps)")
+
+import cuberille
+import cuberille.dask
+
+
+@pytest.fixture(scope="module")
+def client():
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+        with distributed.Client(cluster) as c:
+            yield c
+
+
+def run_cli(cli, *arguments, cwd=None):
+    return subprocess.run([cli, *map(str, arguments)], cwd=cwd, capture_output=True, text=True)
+
+
+def files_of(folder):
+    """Every file in the folder, hidden ones included (a leftover temporary file is one)."""
+    return {p.name: p.read_bytes() for p in sorted(Path(folder).iterdir())}
+
+
+def sequence_case(examples, kind):
+    if kind == "turntable":
+        return [examples / "knot.obj", "--turntable", "12", "--width", "96", "--height", "72", "--msaa", "4",
+                "--shadows", "raytraced"]
+    return [examples / "spinning-box.gltf", "--animate", "9", "--fps", "6", "--width", "96", "--height", "72",
+            "--shadows", "hybrid", "--frustum-cull"]
+
+
+@pytest.mark.parametrize("kind", ["turntable", "animation"])
+def test_a_sequence_writes_the_files_the_cli_writes(examples, cli, client, tmp_path, kind):
+    (tmp_path / "cli").mkdir(), (tmp_path / "dask").mkdir()
+    arguments = sequence_case(examples, kind)
+    assert run_cli(cli, "render", *arguments, "--out", tmp_path / "cli" / "f.png", "--quiet").returncode == 0
+    # Runs of 2 frames: runs start mid-sequence, so a run's first frame builds what the tool's refits
+    report = cuberille.dask.render([*arguments, "--out", tmp_path / "dask" / "f.png", "--stats", tmp_path / "s.json"],
+                                   client, frames_per_task=2)
+    assert report.tasks > 1 and len(report.files) == len(report.frame_stats)
+    assert files_of(tmp_path / "dask") == files_of(tmp_path / "cli")
+    stats = json.loads((tmp_path / "s.json").read_text())
+    assert len(stats["frames"]) == len(report.files)
+
+
+def test_a_worker_killed_mid_run_leaves_every_frame_whole(examples, cli, client, tmp_path):
+    (tmp_path / "cli").mkdir(), (tmp_path / "dask").mkdir()
+    arguments = [examples / "knot.obj", "--turntable", "24", "--width", "320", "--height", "240", "--msaa", "4",
+                 "--shadows", "raytraced", "--threads", "1"]
+    assert run_cli(cli, "render", *arguments, "--out", tmp_path / "cli" / "f.png", "--quiet").returncode == 0
+    pids = client.run(os.getpid)
+    killed = []
+
+    def kill_one_worker(done, total):
+        if not killed:  # after the first run finished, while the others are being drawn
+            victim = sorted(pids.values())[0]
+            os.kill(victim, signal.SIGKILL)
+            killed.append(victim)
+
+    cuberille.dask.render([*arguments, "--out", tmp_path / "dask" / "f.png"], client, frames_per_task=1,
+                          progress=kill_one_worker)
+    assert killed and killed[0] not in client.run(os.getpid).values()  # the worker died (and its nanny restarted it)
+    assert files_of(tmp_path / "dask") == files_of(tmp_path / "cli")  # no frame missing, torn or left as a temporary file
+    client.wait_for_workers(2)
+
+
+def test_a_batch_writes_the_files_the_cli_writes_and_a_bad_job_fails_alone(examples, cli, client, tmp_path):
+    (tmp_path / "cli").mkdir(), (tmp_path / "dask").mkdir()
+    jobs = []
+    for azimuth in (0, 120, 240):
+        jobs.append({"scene": str(examples / "torus.ply"), "out": f"torus-{azimuth}.png", "width": 80, "height": 60,
+                     "msaa": 4, "azimuth": azimuth})
+    jobs.append({"scene": str(examples / "missing.ply"), "out": "missing.png"})
+    jobs.append({"scene": str(examples / "spinning-box.gltf"), "out": "box.png", "width": 80, "height": 60,
+                 "time": 0.5, "shadows": "hybrid", "stats": "box.json"})
+    jobs.append({"scene": str(examples / "knot.obj"), "out": "knot.png", "msaa": 3})
+    text = "# a comment, then the jobs\n\n" + "\n".join(json.dumps(j) for j in jobs) + "\n"
+    for folder in ("cli", "dask"):
+        (tmp_path / folder / "jobs.jsonl").write_text(text)
+    expected = run_cli(cli, "batch", "jobs.jsonl", "--quiet", cwd=tmp_path / "cli")
+    assert expected.returncode == 1
+
+    # The jobs' relative outputs are the workers' and this process's folder: the cluster's processes started here
+    here = os.getcwd()
+    os.chdir(tmp_path / "dask")
+    try:
+        remote_cwd = client.run(os.getcwd)
+        client.run(os.chdir, str(tmp_path / "dask"))
+        report = cuberille.dask.batch("jobs.jsonl", client)
+    finally:
+        for address, folder in remote_cwd.items():
+            client.run(os.chdir, folder, workers=[address])
+        os.chdir(here)
+    assert report.jobs == 6
+    messages = [f"cuberille batch: jobs.jsonl:{line}: {message}" for line, message in report.failures]
+    assert messages == expected.stderr.splitlines()  # the same lines, messages and order as the tool
+    cli_files, dask_files = files_of(tmp_path / "cli"), files_of(tmp_path / "dask")
+    assert cli_files.keys() == dask_files.keys()
+    for name in cli_files:
+        if name != "box.json":  # --stats holds times
+            assert dask_files[name] == cli_files[name], name
+    assert json.loads(dask_files["box.json"]).keys() == json.loads(cli_files["box.json"]).keys()
+
+
+def test_the_command_line_gives_the_tools_files_and_exit_codes(examples, cli, tmp_path):
+    (tmp_path / "cli").mkdir(), (tmp_path / "dask").mkdir()
+    arguments = [examples / "torus.ply", "--turntable", "4", "--width", "64", "--height", "48"]
+    assert run_cli(cli, "render", *arguments, "--out", tmp_path / "cli" / "t.png", "--quiet").returncode == 0
+    command = [sys.executable, "-m", "cuberille.dask", "render", *map(str, arguments), "--out",
+               str(tmp_path / "dask" / "t.png"), "--workers", "2"]
+    done = subprocess.run(command, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "4 frames" in done.stdout
+    assert files_of(tmp_path / "dask") == files_of(tmp_path / "cli")
+
+    bad = [str(examples / "missing.ply"), "--out", str(tmp_path / "x.png")]
+    tool = run_cli(cli, "render", *bad)
+    ours = subprocess.run([sys.executable, "-m", "cuberille.dask", "render", *bad, "--workers", "1"],
+                          capture_output=True, text=True)
+    assert (ours.returncode, ours.stderr) == (tool.returncode, tool.stderr) == (2, tool.stderr)
+    assert "missing.ply" in ours.stderr
+
+    bad_option = subprocess.run([sys.executable, "-m", "cuberille.dask", "render", str(examples / "torus.ply"),
+                                 "--msaa", "3", "--out", str(tmp_path / "y.png")], capture_output=True, text=True)
+    assert bad_option.returncode == 2 and bad_option.stderr == run_cli(cli, "render", examples / "torus.ply", "--msaa",
+                                                                       "3", "--out", tmp_path / "y.png").stderr
