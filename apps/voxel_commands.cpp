@@ -54,6 +54,7 @@ nlohmann::json pyramidJson(const lod::PyramidStats& p) {
             {"blocksPerLevel", p.blocksPerLevel},
             {"voxelsPerLevel", p.voxelsPerLevel},
             {"skirtFaces", p.skirtFaces},
+            {"hiddenFacesCleared", p.hiddenFacesCleared},
             {"simplifyMs", p.simplifyMs}};
 }
 

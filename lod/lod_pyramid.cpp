@@ -46,6 +46,39 @@ void linkChildren(std::vector<VoxelBlock>& blocks) {
     }
 }
 
+/// Faces no camera can see: a face whose neighbour across it, in the same block, holds a voxel
+/// is covered by that voxel wherever it could be seen from, so it is cleared; a voxel inside a
+/// thick shell (all six neighbours present) loses every face and draws nothing (issue 25: a
+/// conservative surface is two to three voxels thick). Only neighbours in the same block count:
+/// the block across a boundary may be drawn at another level, or not at all, and there the
+/// skirt decides. Run after simplification, so a parent's mask still unites its children's.
+/// Returns the faces cleared.
+uint64_t clearHiddenFaces(VoxelBlock& b, uint32_t blockSize) {
+    const uint32_t n = blockSize;
+    std::vector<uint64_t> occupied((size_t(n) * n * n + 63) / 64, 0);
+    auto index = [n](glm::uvec3 p) { return size_t(p.x) + size_t(n) * (size_t(p.y) + size_t(n) * size_t(p.z)); };
+    auto has = [&](glm::uvec3 p) { return (occupied[index(p) >> 6] >> (index(p) & 63)) & 1u; };
+    for (uint32_t packed : b.voxels) {
+        const size_t i = index(voxel::voxelPositionInBlock(packed));
+        occupied[i >> 6] |= uint64_t(1) << (i & 63);
+    }
+    uint64_t cleared = 0;
+    for (uint32_t& packed : b.voxels) {
+        const glm::uvec3 p = voxel::voxelPositionInBlock(packed);
+        const uint8_t before = voxel::voxelFaceMask(packed);
+        uint8_t faces = before;
+        for (int axis = 0; axis < 3; ++axis) {
+            glm::uvec3 q = p;
+            if (p[axis] + 1 < n && (q[axis] = p[axis] + 1, has(q))) faces &= uint8_t(~(1u << (2 * axis)));
+            q = p;
+            if (p[axis] > 0 && (q[axis] = p[axis] - 1, has(q))) faces &= uint8_t(~(2u << (2 * axis)));
+        }
+        cleared += uint64_t(__builtin_popcount(faces ^ before));
+        packed = voxel::packVoxel(p.x, p.y, p.z, faces);
+    }
+    return cleared;
+}
+
 uint64_t addSkirts(VoxelBlock& b, uint32_t blockSize) {
     uint64_t added = 0;
     for (uint32_t& packed : b.voxels) {
@@ -95,9 +128,12 @@ void buildLodPyramid(voxel::VoxelModel& model, const PyramidOptions& options, Py
         stats.voxelsPerLevel.insert(stats.voxelsPerLevel.begin(), voxels);
     }
     linkChildren(model.blocks);
-    std::vector<uint64_t> skirts(model.blocks.size(), 0);
-    raster::parallelFor(model.blocks.size(), [&](size_t i) { skirts[i] = addSkirts(model.blocks[i], model.blockSize); });
-    for (uint64_t s : skirts) stats.skirtFaces += s;
+    std::vector<uint64_t> skirts(model.blocks.size(), 0), hidden(model.blocks.size(), 0);
+    raster::parallelFor(model.blocks.size(), [&](size_t i) {
+        if (options.clearHiddenFaces) hidden[i] = clearHiddenFaces(model.blocks[i], model.blockSize);
+        skirts[i] = addSkirts(model.blocks[i], model.blockSize);
+    });
+    for (size_t i = 0; i < skirts.size(); ++i) stats.skirtFaces += skirts[i], stats.hiddenFacesCleared += hidden[i];
     stats.levels = levels;
     stats.simplifyMs = raster::nowMs() - t0;
     if (statsOut) *statsOut = stats;

@@ -6,6 +6,9 @@
 // the index of the first and an 8-bit mask of the octants present. The root is the single block
 // of the coarsest level, which a renderer keeps resident.
 //
+// Hidden faces: an active face with a voxel across it in the same block can never be seen and is
+// cleared (a voxel inside a thick conservative shell draws nothing).
+//
 // Skirts: every voxel on a block's boundary gets the face on that boundary marked active, so a
 // block drawn next to a neighbour at another level (or next to source triangles) closes the gap
 // between them instead of showing a crack (section 4.3). They are added after simplification, so
@@ -22,12 +25,14 @@ enum class SimplifyMethod { Serial, Parallel };
 struct PyramidOptions {
     SimplifyMethod method = SimplifyMethod::Parallel;
     uint32_t maxLevels = 0;  // 0: down to a single block; 1: level 0 only (skirts and links still)
+    bool clearHiddenFaces = true;  // false keeps the voxelizer's masks (to measure what clearing saves)
 };
 
 struct PyramidStats {
     uint32_t levels = 0;
     std::vector<uint64_t> blocksPerLevel, voxelsPerLevel;
     uint64_t skirtFaces = 0;  // faces the skirts activated
+    uint64_t hiddenFacesCleared = 0;  // active faces with a voxel across them in the block
     double simplifyMs = 0;
 };
 

@@ -6,6 +6,7 @@
 
 #include "raster/clock.h"
 #include "raster/parallel.h"
+#include "scene/mesh.h"
 #include "voxel/packing.h"
 
 namespace cuberille::lod {
@@ -137,9 +138,16 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
                 if (source.acquire(outside, BlockParts::kVoxels))
                     expand.push_back({outside, false, {}}), roles.push_back(kShowOutside);
     }
-    triangleTints_.resize(o.coloring == BlockColoring::Model ? 0 : triangleBlocks.size());
+    // A model without colours of its own (the voxelizer stored white) is drawn in the albedo a mesh
+    // file without colours gets (scene::Mesh::color), so a voxel frame matches the source
+    // triangles rendered directly: issue 25 measures its quality against them.
+    const glm::vec3 uncolouredAlbedo = scene::Mesh{}.color;
+    const glm::vec3* modelColor = model.hasColors ? nullptr : &uncolouredAlbedo;
+    triangleTints_.resize(o.coloring == BlockColoring::Model && !modelColor ? 0 : triangleBlocks.size());
     for (size_t k = 0; k < triangleTints_.size(); ++k) {
-        const glm::vec3 tint = o.coloring == BlockColoring::Level ? lodSourceTrianglesColor() : kSourceTrianglesColor;
+        const glm::vec3 tint = o.coloring == BlockColoring::Model   ? uncolouredAlbedo
+                               : o.coloring == BlockColoring::Level ? lodSourceTrianglesColor()
+                                                                    : kSourceTrianglesColor;
         triangleTints_[k].assign(source.triangles(triangleBlocks[k]).positions.size(), tint);
     }
     stats.expandMs = raster::nowMs() - t0;
@@ -198,7 +206,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
                                                   : kVisibleBlockColor;
             faces_[i].clear();
             voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[i],
-                                    o.coloring == BlockColoring::Model ? nullptr : &tint,
+                                    o.coloring == BlockColoring::Model ? modelColor : &tint,
                                     d.standIn ? &d.region : nullptr);
         });
         stats.expandMs += raster::nowMs() - t0;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <map>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -186,6 +187,47 @@ TEST(Skirts, BlockBoundaryVoxelsShowTheirBoundaryFaces) {
             if (p.z == 0) { EXPECT_TRUE(f & voxel::kFaceNegZ); }
             if (p.z == 63) { EXPECT_TRUE(f & voxel::kFacePosZ); }
         }
+}
+
+// Every voxel of every level: a face is cleared exactly when a voxel of the same block lies across
+// it (brute force over the block's positions), and nothing else of the mask changes.
+TEST(HiddenFaces, AFaceIsClearedExactlyWhenAVoxelOfItsBlockLiesAcrossIt) {
+    VoxelModel cleared = sphereModel(256), kept = sphereModel(256);
+    lod::PyramidStats stats;
+    lod::buildLodPyramid(cleared, {}, &stats);
+    lod::buildLodPyramid(kept, {.clearHiddenFaces = false});
+    ASSERT_EQ(cleared.blocks.size(), kept.blocks.size());
+    uint64_t clearedFaces = 0, silentVoxels = 0;
+    for (size_t b = 0; b < kept.blocks.size(); ++b) {
+        const VoxelBlock &with = cleared.blocks[b], &without = kept.blocks[b];
+        ASSERT_EQ(with.voxels.size(), without.voxels.size());
+        std::set<std::tuple<uint32_t, uint32_t, uint32_t>> positions;
+        for (uint32_t packed : without.voxels) {
+            const glm::uvec3 p = voxel::voxelPositionInBlock(packed);
+            positions.insert({p.x, p.y, p.z});
+        }
+        for (size_t i = 0; i < without.voxels.size(); ++i) {
+            const glm::uvec3 p = voxel::voxelPositionInBlock(without.voxels[i]);
+            ASSERT_EQ(p, voxel::voxelPositionInBlock(with.voxels[i]));
+            uint8_t across = 0;
+            for (int axis = 0; axis < 3; ++axis)
+                for (int side = 0; side < 2; ++side) {
+                    glm::ivec3 q(p);
+                    q[axis] += side == 0 ? 1 : -1;
+                    if (glm::all(glm::greaterThanEqual(q, glm::ivec3(0))) &&
+                        glm::all(glm::lessThan(q, glm::ivec3(int(kept.blockSize)))) &&
+                        positions.count({uint32_t(q.x), uint32_t(q.y), uint32_t(q.z)}))
+                        across |= uint8_t(1u << (2 * axis + side));
+                }
+            const uint8_t before = voxel::voxelFaceMask(without.voxels[i]);
+            EXPECT_EQ(voxel::voxelFaceMask(with.voxels[i]), uint8_t(before & ~across)) << "block " << b << ", voxel " << i;
+            clearedFaces += uint64_t(__builtin_popcount(before & across));
+            silentVoxels += before != 0 && (before & ~across) == 0;
+        }
+    }
+    EXPECT_EQ(stats.hiddenFacesCleared, clearedFaces);
+    EXPECT_GT(clearedFaces, 0u);
+    EXPECT_GT(silentVoxels, 0u) << "a voxel inside the conservative shell draws nothing";
 }
 
 TEST(BlockOctree, SurvivesTheVoxelFile) {
