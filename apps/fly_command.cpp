@@ -162,7 +162,8 @@ std::string flyCsv(const FlyResult& r) {
     csv << "frame,settling,frame_ms,traversal_ms,io_wait_ms,upload_ms,raster_ms,requested_bytes,loaded_bytes,"
            "uploaded_bytes,revived_bytes,dropped_bytes,staged_bytes,resident_voxel_bytes,resident_vertex_bytes,"
            "resident_index_bytes,free_list_bytes,defragmentations,failed_blocks,requests,missing_blocks,stand_ins,"
-           "holes,triangle_blocks,occlusion_culled,faces,covered_pixels,faces_per_covered_pixel,process_resident_bytes";
+           "holes,triangle_blocks,occlusion_culled,faces,faces_between_samples,covered_pixels,faces_per_covered_pixel,"
+           "process_resident_bytes";
     for (size_t l = 0; l < levels; ++l) csv << ",drawn_level_" << l;
     csv << "\n";
     char ms[160];
@@ -177,7 +178,7 @@ std::string flyCsv(const FlyResult& r) {
             << s.freeListBytes[0] + s.freeListBytes[1] + s.freeListBytes[2] << ',' << s.defragmentations << ','
             << s.failedBlocks << ',' << s.requests << ',' << f.voxel.missingBlocks << ',' << f.voxel.standIns << ','
             << f.voxel.holes << ',' << f.voxel.triangleBlocksDrawn << ',' << f.voxel.occlusionCulled << ','
-            << f.voxel.facesEmitted << ',' << f.voxel.coveredPixels << ',' << fixed3(f.voxel.facesPerCoveredPixel()) << ','
+            << f.voxel.facesEmitted << ',' << f.voxel.facesBetweenSamples << ',' << f.voxel.coveredPixels << ',' << fixed3(f.voxel.facesPerCoveredPixel()) << ','
             << (i < r.residentBytes.size() ? r.residentBytes[i] : 0);
         for (size_t l = 0; l < levels; ++l)
             csv << ',' << (l < f.voxel.selection.drawnPerLevel.size() ? f.voxel.selection.drawnPerLevel[l] : 0);

@@ -3,13 +3,30 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "raster/clock.h"
 #include "raster/parallel.h"
+#include "raster/sample_pattern.h"
 #include "scene/mesh.h"
 #include "voxel/packing.h"
 
 namespace cuberille::lod {
+namespace {
+
+/// The frame's sample positions for voxel::SampleFootprint, in pixels from the pixel's top-left
+/// corner (raster/sample_pattern.h gives them in 1/16 pixel from its centre).
+voxel::SampleFootprint sampleFootprint(const glm::dmat4& clipFromWorld, const raster::FramebufferDesc& frame) {
+    voxel::SampleFootprint f;
+    f.clipFromModel = clipFromWorld;
+    f.widthPixels = frame.widthPixels, f.heightPixels = frame.heightPixels;
+    const raster::SamplePattern& pattern = raster::standardSamplePattern(frame.samples);
+    for (int i = 0; i < pattern.count; ++i)
+        f.samples.push_back({0.5 + pattern.dx[size_t(i)] / 16.0, 0.5 + pattern.dy[size_t(i)] / 16.0});
+    return f;
+}
+
+}  // namespace
 
 glm::vec3 levelColor(uint32_t level) {
     static const glm::vec3 palette[8] = {{0.9f, 0.2f, 0.2f}, {0.95f, 0.6f, 0.1f}, {0.9f, 0.9f, 0.2f}, {0.3f, 0.85f, 0.3f},
@@ -187,6 +204,8 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     // scratch. So a frame holds the faces of one chunk, not of every block it draws, whatever
     // the model's size (docs/streaming.md, memory). Where the flushes fall does not change the
     // image (raster/pipeline.h).
+    std::optional<voxel::SampleFootprint> footprint;
+    if (o.leaveOutFacesBetweenSamples) footprint = sampleFootprint(glm::dmat4(clipFromWorld), pipeline.framebuffer().desc());
     for (size_t first = 0, count = 0; first < expand.size(); first += count) {
         size_t chunkVoxels = 0;
         for (count = 0; first + count < expand.size() && count < kBlocksPerExpansionChunk &&
@@ -207,7 +226,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
             faces_[i].clear();
             voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[i],
                                     o.coloring == BlockColoring::Model ? modelColor : &tint,
-                                    d.standIn ? &d.region : nullptr);
+                                    d.standIn ? &d.region : nullptr, footprint ? &*footprint : nullptr);
         });
         stats.expandMs += raster::nowMs() - t0;
         for (size_t i = 0; i < count; ++i) {
@@ -219,6 +238,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
             if (shown) continue;
             stats.voxelsExpanded += f.voxels;
             stats.facesEmitted += f.faces;
+            stats.facesBetweenSamples += f.facesBetweenSamples;
             ++(roles[k] == kTest ? stats.visibilityTests : stats.voxelBlocksDrawn);
         }
         pipeline.flush();

@@ -43,6 +43,9 @@ struct VoxelRenderOptions {
     /// selected as seen from this one. No visibility tests are drawn (they would answer for the
     /// wrong view); do not call readOcclusion after such a frame.
     const scene::Camera* viewFrom = nullptr;
+    /// Leave out faces that cover no sample before they become vertices (voxel::SampleFootprint):
+    /// the same image; false draws them all, to measure what it saves.
+    bool leaveOutFacesBetweenSamples = true;
 };
 
 /// A camera beside, behind and above `main`, looking at its target from about three times as far,
@@ -55,6 +58,7 @@ struct VoxelFrameStats {
     uint64_t occlusionCulled = 0;    // selected voxel blocks skipped: hidden in the last frame
     uint64_t visibilityTests = 0;    // blocks drawn with colour writes off to test them
     uint64_t voxelsExpanded = 0, facesEmitted = 0, hybridTriangles = 0;
+    uint64_t facesBetweenSamples = 0;  // camera-facing faces left out before drawing: they cover no sample
     uint64_t missingBlocks = 0;  // selected but not resident (asked for)
     uint64_t standIns = 0;       // missing blocks an ancestor was drawn for
     uint64_t holes = 0;          // missing blocks nothing was drawn for (partial refinement)

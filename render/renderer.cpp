@@ -437,6 +437,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                       {"hybridTriangles", v.hybridTriangles},
                       {"voxelsExpanded", v.voxelsExpanded},
                       {"facesEmitted", v.facesEmitted},
+                      {"facesBetweenSamples", v.facesBetweenSamples},
                       {"coveredPixels", v.coveredPixels},
                       {"facesPerCoveredPixel", v.facesPerCoveredPixel()},
                       {"selectMs", v.selectMs},

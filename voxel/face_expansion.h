@@ -20,9 +20,33 @@ struct FaceMesh {
     std::vector<glm::vec3> positions, normals, colors;  // model units; linear colours
     std::vector<uint32_t> indices;
     uint64_t voxels = 0, faces = 0;
+    uint64_t facesBetweenSamples = 0;  // camera-facing active faces left out: they cover no sample
 
-    void clear() { positions.clear(), normals.clear(), colors.clear(), indices.clear(), voxels = faces = 0; }
+    void clear() {
+        positions.clear(), normals.clear(), colors.clear(), indices.clear();
+        voxels = faces = facesBetweenSamples = 0;
+    }
 };
+
+/// Where the frame's samples are, so expansion can leave out faces that cover none of them: the
+/// small-primitive culling a GPU does before set-up, done here before a face costs four vertices.
+/// At pixel error 1 a voxel is smaller than a pixel, and most camera-facing faces fall between
+/// sample positions (on the dragon at 1280x720, about nine in ten): the rasterizer would
+/// transform, set up and drop every one of them. A face is left out only when no sample lies in
+/// its projected quad widened by kFootprintMarginPixels on every side, so the image is the same
+/// bits as drawing it (VoxelFootprint.LeavingOutFacesBetweenSamplesLeavesTheImageBitForBit).
+struct SampleFootprint {
+    glm::dmat4 clipFromModel{1.0};  // the draw's matrix (Direct3D clip space: 0 <= z <= w)
+    int widthPixels = 0, heightPixels = 0;
+    std::vector<glm::dvec2> samples;  // the pattern's positions, pixels from a pixel's top-left corner
+};
+
+/// How far a face's projected quad is widened before asking whether it holds a sample. The
+/// rasterizer projects the face's float corners with the float matrix and snaps them to 1/256
+/// pixel; this test projects the exact corners in double. The two differ by float rounding
+/// (relative 2^-24 of the clip coordinates: a thousandth of a pixel at 4K for any camera this
+/// renderer frames) plus half a subpixel (1/512 pixel); 1/16 pixel covers both many times over.
+constexpr double kFootprintMarginPixels = 1.0 / 16.0;
 
 /// The world box of one voxel of a block (at the block's level).
 struct VoxelBoxes {
@@ -54,10 +78,12 @@ struct VoxelRegion {
     glm::uvec3 lo{0}, hi{0};
 };
 
-/// Appends the camera-facing active faces of every voxel of the block (or of the region).
-/// overrideColor, when given, replaces the voxels' colours (debug views).
+/// Appends the camera-facing active faces of every voxel of the block (or of the region); with a
+/// footprint, only those that may cover one of its samples. overrideColor, when given, replaces
+/// the voxels' colours (debug views).
 void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& cameraPosition,
-                      FaceMesh& out, const glm::vec3* overrideColor = nullptr, const VoxelRegion* region = nullptr);
+                      FaceMesh& out, const glm::vec3* overrideColor = nullptr, const VoxelRegion* region = nullptr,
+                      const SampleFootprint* footprint = nullptr);
 inline void expandVoxelFaces(const VoxelModel& model, const VoxelBlock& block, const glm::dvec3& cameraPosition,
                              FaceMesh& out, const glm::vec3* overrideColor = nullptr) {
     expandVoxelFaces(model, BlockVoxels::of(block), cameraPosition, out, overrideColor);

@@ -131,11 +131,13 @@ class _client:
         if self.own["scheduler"]:
             self.client = Client(self.own["scheduler"])
         else:
-            logging.getLogger("distributed").setLevel(logging.ERROR)  # a worker restarted after a crash is reported by Dask at WARNING
+            # Dask's own warnings (a worker restarted after a crash, an event loop slow under load) stay
+            # out of stderr, here and in the worker processes: stderr carries the tool's messages.
+            logging.getLogger("distributed").setLevel(logging.ERROR)
             # ":0": a free port for the scheduler's HTTP server (the dashboard where Bokeh is installed),
             # never a warning that the default 8787 is taken by another cluster
             self.cluster = LocalCluster(n_workers=self.own["workers"], threads_per_worker=1, processes=True,
-                                        dashboard_address=":0")
+                                        dashboard_address=":0", silence_logs=logging.ERROR)
             self.client = Client(self.cluster)
         link = self.client.dashboard_link if _have("bokeh") else None
         if link and not self.quiet:
