@@ -142,7 +142,7 @@ void addFlyCommand(CLI::App& app, cuberille::apps::FlyOptions& o) {
                     "Missing blocks: full (a resident ancestor stands in: always closed) or partial (holes while "
                     "loading)")
         ->capture_default_str();
-    fly->add_option("--pixel-error", o.pixelError, "Refine blocks until a voxel projects to at most this many pixels")
+    fly->add_option("--pixel-error", o.pixelError, "Refine blocks until a voxel's edge projects to at most this many pixels")
         ->capture_default_str();
     fly->add_flag("--no-hybrid", o.noHybrid, "Never draw source triangles");
     fly->add_flag("--no-occlusion", o.noOcclusion, "No occlusion culling");

@@ -92,7 +92,7 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
                        "rest on first touch by a ray) or rebuild (a new tree every frame)")
         ->capture_default_str();
     render->add_option("--pixel-error", o.pixelError,
-                       "Voxel models: refine blocks until a voxel projects to at most this many pixels "
+                       "Voxel models: refine blocks until a voxel's edge projects to at most this many pixels "
                        "(0: always the finest level)")
         ->capture_default_str();
     render->add_option("--voxel-resolution", o.voxelResolution,

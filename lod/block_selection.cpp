@@ -48,14 +48,14 @@ void blockBounds(const voxel::VoxelModel& model, const voxel::VoxelBlock& block,
 
 double projectedVoxelPixels(const voxel::VoxelModel& model, const voxel::VoxelBlock& block, const glm::dvec3& camera,
                             const SelectionOptions& o) {
-    const double diagonal = voxel::VoxelBoxes(model, block).voxelSize * std::sqrt(3.0);
-    if (o.orthographic) return diagonal * o.viewportHeightPixels / (2.0 * o.orthographicHalfHeight);
+    const double edge = voxel::VoxelBoxes(model, block).voxelSize;
+    if (o.orthographic) return edge * o.viewportHeightPixels / (2.0 * o.orthographicHalfHeight);
     glm::dvec3 lo, hi;
     blockBounds(model, block, lo, hi);
     const double d = distanceToBox(camera, lo, hi);
     if (d <= 0.0) return std::numeric_limits<double>::infinity();
     const double focalPixels = o.viewportHeightPixels / (2.0 * std::tan(o.verticalFovRadians / 2.0));
-    return diagonal * focalPixels / d;
+    return edge * focalPixels / d;
 }
 
 BlockSelection selectBlocks(const voxel::VoxelModel& model, const glm::dmat4& clipFromModel, const glm::dvec3& camera,

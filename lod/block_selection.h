@@ -45,9 +45,12 @@ BlockSelection selectBlocks(const voxel::VoxelModel& model, const glm::dmat4& cl
 /// The tight model-space bounds of a block's voxels.
 void blockBounds(const voxel::VoxelModel& model, const voxel::VoxelBlock& block, glm::dvec3& lo, glm::dvec3& hi);
 
-/// An upper bound on the size, in pixels, of any voxel of the block on screen: the voxel's
-/// diagonal (it bounds the cube's projection) over the nearest distance from the camera to the
-/// block's bounds. Infinite when the camera is inside them.
+/// An upper bound on the size, in pixels, of any voxel of the block on screen: the voxel's edge
+/// over the nearest distance from the camera to the block's bounds. The thesis's bound (Chajdas
+/// 2015, section 4.3: "the projected size of a voxel never exceeds the size of a pixel"); its
+/// edge, not its diagonal, which would refine one level further for a √3 that no image shows
+/// (docs/voxelization.md measures both against the source triangles). Infinite when the camera
+/// is inside them.
 double projectedVoxelPixels(const voxel::VoxelModel& model, const voxel::VoxelBlock& block, const glm::dvec3& camera,
                             const SelectionOptions& options);
 

@@ -67,7 +67,7 @@ TEST(LodBound, NoDrawnVoxelProjectsBeyondThePixelError) {
                     const glm::dvec3 lo = boxes.lowCorner(voxel::voxelPositionInBlock(packed));
                     const double d = distanceToBox(eye, lo, lo + boxes.voxelSize);
                     ASSERT_GT(d, 0.0) << "a voxel around the camera was drawn";
-                    EXPECT_LE(boxes.voxelSize * std::sqrt(3.0) * focal / d, pixelError * (1.0 + 1e-9))
+                    EXPECT_LE(boxes.voxelSize * focal / d, pixelError * (1.0 + 1e-9))
                         << "level " << b.level;
                 }
             }
@@ -265,7 +265,7 @@ TEST(HiddenFaces, ClearingThemDrawsFewerFacesAndLeavesTheImageAsItWas) {
 TEST(VoxelFootprint, LeavingOutFacesBetweenSamplesLeavesTheImageBitForBit) {
     const voxel::VoxelModel model = spherePyramid(512);
     const glm::dvec3 eyes[] = {{0.4, 0.3, 40.0}, {0.4, 0.3, 7.0}, {6.0, 2.5, -1.0}, {0.3, 2.35, 0.2}, {0.3, 0.1, 2.2}};
-    uint64_t leftOut = 0, drawn = 0, drawnWithout = 0;
+    uint64_t leftOut = 0, drawn = 0, drawnWithout = 0, farLeftOut = 0, farDrawn = 0;
     for (const glm::dvec3& eye : eyes)
         for (int samples : {1, 4, 16})
             for (bool occlusion : {false, true}) {
@@ -282,13 +282,14 @@ TEST(VoxelFootprint, LeavingOutFacesBetweenSamplesLeavesTheImageBitForBit) {
                     for (int frame = 0; frame < (occlusion ? 2 : 1); ++frame) images[i] = renderColor(scene, o, &stats, samples);
                     (i == 0 ? drawn : drawnWithout) += stats.facesEmitted;
                     if (i == 0) leftOut += stats.facesBetweenSamples;
+                    if (i == 0 && eye == eyes[0] && samples == 1)
+                        farLeftOut += stats.facesBetweenSamples, farDrawn += stats.facesEmitted;
                 }
                 EXPECT_EQ(images[0], images[1]);
             }
     EXPECT_EQ(drawn + leftOut, drawnWithout);
-    // Measured: 1.52M faces left out, 2.16M drawn over these views and sample counts (at 16 samples
-    // few fall between samples).
-    EXPECT_GT(leftOut, drawn / 2) << "faces of sub-pixel voxels fall between samples";
+    EXPECT_GT(farLeftOut, 0u);
+    EXPECT_GT(farLeftOut, farDrawn) << "far away, at one sample, most faces fall between samples";
 }
 
 TEST(Occlusion, VisibilityViewShowsNoCulledBlockFromTheMainCamera) {
