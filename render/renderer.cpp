@@ -466,6 +466,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                         {"markedPixels", st.markedPixels},
                         {"markedShare", st.receiverPixels ? double(st.markedPixels) / double(st.receiverPixels) : 0.0},
                         {"raysTraced", st.raysTraced},
+                        {"mapsDrawn", st.mapsDrawn},
+                        {"mapsKept", st.mapsKept},
                         {"thinTriangles", st.thinTriangles},
                         {"bvhBuildMs", sh.bvhBuildMs},
                         {"adjacencyMs", sh.adjacencyMs},

@@ -47,6 +47,7 @@ void SceneShadows::gatherCasters(const scene::Scene& s) {
     }
     bounds_ = {};
     for (const glm::vec3& p : positions_) bounds_.grow(p);
+    castersVersion_ = rt::nextCastersVersion();  // a new pose: every light's map is drawn again
 }
 
 // The adjacency matches edges by position, so a pose that pulls apart two vertices that shared a
@@ -89,7 +90,8 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     const rt::ShadowCasters shadowCasters{.mesh = casters,
                                           .bvh = bvh_ ? &*bvh_ : nullptr,
                                           .bounds = bounds_,
-                                          .adjacency = adjacency_.empty() ? nullptr : &adjacency_};
+                                          .adjacency = adjacency_.empty() ? nullptr : &adjacency_,
+                                          .version = castersVersion_};
     rt::computeShadows(surfaces, s.lighting, shadowCasters, options_, gpu_, masks_);
     stats.shadows = masks_.stats;
     for (int l = 0; l < lighting.lightCount; ++l)

@@ -71,6 +71,7 @@ private:
     std::vector<uint32_t> indices_;
     std::vector<rt::CasterRange> ranges_;
     rt::Aabb bounds_;
+    uint64_t castersVersion_ = 0;  // a fresh rt::nextCastersVersion() per pose: maps are kept while it stays
     std::optional<rt::DeformingBvh> bvh_;  // hybrid and raytraced only
     rt::MeshAdjacency adjacency_;  // hybrid only: thin casters are looked for at silhouettes
     /// What construction or update() did (builds, refits and their times), for the next run() to

@@ -114,6 +114,21 @@ void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size, rast
 
 }  // namespace
 
+namespace {
+
+/// Whether two maps' faces project the world alike, every matrix and plane bit for bit.
+bool sameProjections(const std::vector<ShadowMapFace>& a, const std::vector<ShadowMapFace>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i)
+        if (a[i].viewFromWorld != b[i].viewFromWorld || a[i].clipFromWorld != b[i].clipFromWorld ||
+            a[i].texelFromWorld != b[i].texelFromWorld || a[i].perspective != b[i].perspective ||
+            a[i].nearPlane != b[i].nearPlane || a[i].farPlane != b[i].farPlane || a[i].halfExtent != b[i].halfExtent)
+            return false;
+    return true;
+}
+
+}  // namespace
+
 ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size,
                             raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld) {
     ShadowMap map;
@@ -121,8 +136,9 @@ ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& 
     return map;
 }
 
-void ShadowMap::redraw(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size,
-                       raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld) {
+bool ShadowMap::redraw(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size,
+                       raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld,
+                       uint64_t castersVersion) {
     std::vector<ShadowMapFace> faces;
     switch (light.type) {
         case raster::LightType::Directional:
@@ -139,15 +155,20 @@ void ShadowMap::redraw(const raster::Light& light, const TriangleMeshView& caste
                 faces.push_back(perspectiveFace(light.position, axis, glm::radians(45.0f), bounds));
             break;
     }
+    for (ShadowMapFace& f : faces) f.texelFromWorld = texelTransform(f, size);
+    if (castersVersion != 0 && castersVersion == castersVersion_ && size == size_ && light.position == lightPosition_ &&
+        sameProjections(faces, faces_))
+        return false;  // kept: the same casters seen through the same projections
     for (size_t i = 0; i < faces.size(); ++i) {
         ShadowMapFace& f = faces[i];
         if (i < faces_.size()) f.depth = std::move(faces_[i].depth);  // every texel is written below
-        f.texelFromWorld = texelTransform(f, size);
         drawDepth(f, casters, size, gpu);
     }
     size_ = size;
     lightPosition_ = light.position;
+    castersVersion_ = castersVersion;
     faces_ = std::move(faces);
+    return true;
 }
 
 glm::vec3 ShadowMap::project(int face, const glm::vec3& p) const {

@@ -54,9 +54,14 @@ public:
                             int sizeTexels, raster::Pipeline& gpu, std::span<const glm::vec3> focus = {},
                             float focusMarginWorld = 0.0f);
     /// The same, drawn into this map: its faces' depth storage is reused (a renderer keeps one
-    /// map per light from frame to frame, so a frame's map costs no fresh pages).
-    void redraw(const raster::Light& light, const TriangleMeshView& casters, const Aabb& casterBounds, int sizeTexels,
-                raster::Pipeline& gpu, std::span<const glm::vec3> focus = {}, float focusMarginWorld = 0.0f);
+    /// map per light from frame to frame, so a frame's map costs no fresh pages). `castersVersion`
+    /// names the casters' current pose (ShadowCasters::version): when it, the size and every
+    /// face's projection are what this map was last drawn with, the depth already held is what a
+    /// fresh draw would write, and it is kept (returns false); otherwise drawn (returns true).
+    /// Version 0 never matches: always drawn.
+    bool redraw(const raster::Light& light, const TriangleMeshView& casters, const Aabb& casterBounds, int sizeTexels,
+                raster::Pipeline& gpu, std::span<const glm::vec3> focus = {}, float focusMarginWorld = 0.0f,
+                uint64_t castersVersion = 0);
 
     ShadowMapTexel locate(const glm::vec3& p) const;
     /// Linear depth at a texel; +inf outside the face or where no caster was drawn.
@@ -75,6 +80,7 @@ public:
 private:
     int size_ = 0;
     glm::vec3 lightPosition_{0.0f};  // point lights: the cube's centre
+    uint64_t castersVersion_ = 0;     // the casters' pose the depth was drawn from
     std::vector<ShadowMapFace> faces_;
 };
 

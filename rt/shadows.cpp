@@ -40,6 +40,8 @@ struct LightShadowStorage {
     ShadowMap map;
     std::vector<shadow_detail::FaceMarks> faces;  // per face of the map (hybrid, soft)
     shadow_detail::ThinMarkingScratch scratch;
+    bool marksValid = false;      // `faces` were made from `map` with `marksOptions`
+    ShadowOptions marksOptions;
 };
 
 void LightShadowStorageDelete::operator()(LightShadowStorage* storage) const { delete storage; }
@@ -158,12 +160,23 @@ public:
 
     /// The map, focused on the receivers in view; soft shadows widen it by how far sideways a
     /// ray to the light's disk can stray over the casters' depth (their bounding sphere's diameter).
-    void prepareMap(const ScreenSurfaces& surfaces) {
+    /// Returns whether the map was drawn (false: kept from the last frame, and with it the
+    /// marks, which depend on nothing else: the map, the casters and the options).
+    bool prepareMap(const ScreenSurfaces& surfaces, bool& marksValid, const ShadowOptions& marksOptions) {
         const float margin = options_.soft ? options_.lightRadius * glm::length(casters_.bounds.extent()) : 0.0f;
-        map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, surfaces.seenHull, margin);
-        if (options_.mode != ShadowMode::Hybrid && !options_.soft) return;
+        const bool drawn = map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, surfaces.seenHull,
+                                       margin, casters_.version);
+        if (drawn) marksValid = false;
+        if (options_.mode != ShadowMode::Hybrid && !options_.soft) return drawn;
+        if (!drawn && marksValid && sameMarkingOptions(marksOptions, options_)) return drawn;
         faces_.resize(size_t(map_.faceCount()));
         for (int f = 0; f < map_.faceCount(); ++f) prepareFace(f);
+        marksValid = true;
+        return drawn;
+    }
+
+    static bool sameMarkingOptions(const ShadowOptions& a, const ShadowOptions& b) {
+        return a.mode == b.mode && a.soft == b.soft && a.lightRadius == b.lightRadius && a.mapSizeTexels == b.mapSizeTexels;
     }
 
     /// The light's visibility at one receiver; sets *marked when rays decided it, adds rays.
@@ -667,6 +680,11 @@ public:
 
 }  // namespace
 
+uint64_t nextCastersVersion() {
+    static std::atomic<uint64_t> next{1};
+    return next.fetch_add(1, std::memory_order_relaxed);
+}
+
 bool castsShadows(const raster::Light& light) {
     return light.intensity.x > 0.0f || light.intensity.y > 0.0f || light.intensity.z > 0.0f;
 }
@@ -695,9 +713,17 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
         if (!castsShadows(light)) continue;
         ++out.stats.lightsShadowed;
         if (!out.storage[size_t(l)]) out.storage[size_t(l)].reset(new LightShadowStorage);
-        LightShadows shadows(light, casters, options, gpu, *out.storage[size_t(l)]);
+        LightShadowStorage& storage = *out.storage[size_t(l)];
+        LightShadows shadows(light, casters, options, gpu, storage);
         double t0 = raster::nowMs();
-        if (options.mode != ShadowMode::RayTraced) shadows.prepareMap(surfaces);
+        if (options.mode != ShadowMode::RayTraced) {
+            if (!shadows.prepareMap(surfaces, storage.marksValid, storage.marksOptions)) {
+                ++out.stats.mapsKept;
+            } else {
+                ++out.stats.mapsDrawn;
+            }
+            storage.marksOptions = options;
+        }
         out.stats.mapMs += raster::nowMs() - t0;
         out.stats.thinTriangles += shadows.thinTriangles();
         t0 = raster::nowMs();

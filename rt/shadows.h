@@ -51,6 +51,7 @@ struct ShadowStats {
     uint64_t markedPixels = 0;    // of those, the pairs given rays
     uint64_t raysTraced = 0;
     uint64_t thinTriangles = 0;  // hybrid: caster triangles marked conservatively, over lights and faces
+    int mapsDrawn = 0, mapsKept = 0;  // per light with a map: drawn this frame, or kept from the last
     double mapMs = 0.0;   // shadow maps drawn and their hybrid marks (thin casters, discontinuities)
     double maskMs = 0.0;  // every receiver decided: map lookups, marking, rays
 };
@@ -85,7 +86,14 @@ struct ShadowCasters {
     /// The mesh's edge adjacency (Hybrid): thin-caster marking keeps to the triangles at a
     /// silhouette from the light. Null: every thin triangle is marked.
     const MeshAdjacency* adjacency = nullptr;
+    /// Names the casters' pose: a light's map (and its hybrid marks) drawn for the same version,
+    /// through the same projection, is kept rather than drawn again. A renderer takes a fresh
+    /// one (nextCastersVersion) whenever the casters may have moved; 0: never kept.
+    uint64_t version = 0;
 };
+
+/// A version no casters have had before in this process.
+uint64_t nextCastersVersion();
 
 /// `gpu` draws the shadow maps; its render targets are reused from frame to frame.
 ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting,

@@ -175,5 +175,64 @@ INSTANTIATE_TEST_SUITE_P(Modes, AnimatedShadows, ::testing::Values(rt::ShadowMod
                              return p.param == rt::ShadowMode::Hybrid ? std::string("Hybrid") : std::string("RayTraced");
                          });
 
+
+// Maps kept while nothing they depend on moves (issue 27): a point light's cube and a spot light's
+// map do not depend on the camera, so a turntable draws them once; a sun's map is focused on the
+// receivers in view, so a moved camera draws it again. Every kept frame's masks are a fresh
+// stage's, bit for bit, and a new pose draws every map again.
+class KeptMaps : public ::testing::TestWithParam<rt::ShadowMode> {};
+
+TEST_P(KeptMaps, AMapIsKeptWhileTheLightAndCastersStayAndTheMasksAreAFreshStages) {
+    struct Case {
+        const char* name;
+        raster::LightType type;
+        bool keptAcrossCameras;
+    };
+    for (const Case c : {Case{"point", raster::LightType::Point, true}, Case{"spot", raster::LightType::Spot, true},
+                         Case{"directional", raster::LightType::Directional, false}}) {
+        SCOPED_TRACE(c.name);
+        scene::Scene s = sheetOverGround(still);
+        raster::Light& light = s.lighting.lights[0];
+        light.type = c.type;
+        light.position = {0.8f, 4.0f, 0.6f};
+        light.direction = glm::normalize(glm::vec3(-0.2f, -1.0f, -0.15f));
+        light.cosOuterCone = std::cos(0.9f), light.cosInnerCone = std::cos(0.7f);
+        light.range = 0.0f;
+        rt::ShadowOptions o;
+        o.mode = GetParam();
+        o.mapSizeTexels = 256;
+        render::SceneShadows stage(s, o);
+        render::ShadowFrameStats stats;
+        mask(stage, s, stats);
+        EXPECT_EQ(stats.shadows.mapsDrawn, 1);
+        const std::vector<float> again = mask(stage, s, stats);
+        EXPECT_EQ(stats.shadows.mapsKept, 1) << "nothing moved";
+        render::SceneShadows fresh(s, o);
+        render::ShadowFrameStats freshStats;
+        EXPECT_EQ(again, mask(fresh, s, freshStats));
+        EXPECT_GT(shadowedPixels(again), 0u);
+        for (const glm::vec3 eye : {glm::vec3(5, 3, -4), glm::vec3(-6, 5, 1)}) {  // a turntable's frames
+            s.camera.position = eye;
+            const std::vector<float> turned = mask(stage, s, stats);
+            EXPECT_EQ(stats.shadows.mapsKept, c.keptAcrossCameras ? 1 : 0);
+            EXPECT_EQ(stats.shadows.mapsDrawn, c.keptAcrossCameras ? 0 : 1);
+            render::SceneShadows reference(s, o);
+            EXPECT_EQ(turned, mask(reference, s, freshStats)) << "camera " << eye.x;
+        }
+        scene::Scene slidScene = sheetOverGround(slid);
+        slidScene.lighting = s.lighting, slidScene.camera = s.camera;
+        stage.update(slidScene);  // the casters moved: drawn again
+        const std::vector<float> moved = mask(stage, slidScene, stats);
+        EXPECT_EQ(stats.shadows.mapsDrawn, 1);
+        render::SceneShadows reference(slidScene, o);
+        EXPECT_EQ(moved, mask(reference, slidScene, freshStats));
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, KeptMaps, ::testing::Values(rt::ShadowMode::Map, rt::ShadowMode::Hybrid),
+                         [](const ::testing::TestParamInfo<rt::ShadowMode>& p) {
+                             return p.param == rt::ShadowMode::Hybrid ? std::string("Hybrid") : std::string("Map");
+                         });
+
 }  // namespace
 }  // namespace cuberille
