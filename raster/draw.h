@@ -126,6 +126,9 @@ struct DrawState {
     Lighting lighting;              // Lambert and MetallicRoughness
     MaterialTextures textures;      // bound slots need texCoords (normal also tangents)
     float metallic = 1.0f, roughness = 1.0f;  // MetallicRoughness factors
+    /// MetallicRoughness: the reflectance of the dielectric part at normal incidence, F0 =
+    /// ((ior - 1) / (ior + 1))² (glTF's 1.5 gives 0.04; KHR_materials_ior sets others).
+    float dielectricF0 = 0.04f;
     glm::vec3 emissive{0.0f};                 // linear RGB factor; Lambert and MetallicRoughness
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     glm::vec3 cameraPosition{0.0f};  // world space: the view vector of MetallicRoughness

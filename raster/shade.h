@@ -58,7 +58,7 @@ struct ConstantColorShader {
 /// tested per pixel. StageCounters records how often each effect ran.
 ///
 /// The BRDF (MetallicRoughness, glTF 2.0 appendix B): c_diff = albedo (1 - metallic),
-/// F0 = mix(0.04, albedo, metallic), alpha = roughness²; per light, with light intensity E
+/// F0 = mix(dielectricF0, albedo, metallic) (0.04 unless KHR_materials_ior), alpha = roughness²; per light, with light intensity E
 /// (pi x irradiance, see Light), E n.l ((1 - F) c_diff + pi F D V) with Schlick's F, the GGX
 /// D and the height-correlated Smith V. Ambient: ambient x occlusion x (c_diff + F0), a
 /// uniform environment without image-based lighting. Emissive is added last.
@@ -370,7 +370,7 @@ private:
             const float alpha2 = r * r * r * r;  // (roughness²)²
             const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
             const glm::vec3 diffuse = albedo * (1.0f - metallic);
-            const glm::vec3 f0 = glm::mix(glm::vec3(0.04f), albedo, metallic);
+            const glm::vec3 f0 = glm::mix(glm::vec3(s_.dielectricF0), albedo, metallic);
             const glm::vec3 n(a.normal[0][i], a.normal[1][i], a.normal[2][i]);
             const glm::vec3 p(a.position[0][i], a.position[1][i], a.position[2][i]);
             const glm::vec3 view = safeNormalize(s_.cameraPosition - p);

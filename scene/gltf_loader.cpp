@@ -80,7 +80,7 @@ private:
     static bool supportedExtension(const std::string& name) {
         static const std::set<std::string> kSupported = {"KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform",
                                                          "KHR_mesh_quantization", "KHR_materials_emissive_strength",
-                                                         "EXT_texture_webp"};
+                                                         "KHR_materials_ior", "EXT_texture_webp"};
         return kSupported.count(name) > 0;
     }
 
@@ -93,8 +93,8 @@ private:
             if (!supportedExtension(ext)) missing += (missing.empty() ? "" : ", ") + ext;
         if (!missing.empty())
             throw InputError(file_ + ": requires " + missing + ", which Cuberille cannot read yet (it reads KHR_lights_punctual, "
-                             "KHR_materials_unlit, KHR_texture_transform, KHR_mesh_quantization, KHR_materials_emissive_strength and "
-                             "EXT_texture_webp)");
+                             "KHR_materials_unlit, KHR_texture_transform, KHR_mesh_quantization, KHR_materials_emissive_strength, "
+                             "KHR_materials_ior and EXT_texture_webp)");
     }
 
     void warnAboutUnsupported() {
@@ -634,6 +634,15 @@ private:
                 const double s = strength.GetNumberAsDouble();
                 if (!(s >= 0.0) || !std::isfinite(s)) fail(where, "emissiveStrength must be a finite number, 0 or more");
                 m.emissive *= float(s);
+            }
+        }
+        // KHR_materials_ior: the dielectric reflectance the metallic-roughness BRDF starts from.
+        if (const auto it = mat.extensions.find("KHR_materials_ior"); it != mat.extensions.end()) {
+            const tinygltf::Value& ior = it->second.Get("ior");
+            if (ior.IsNumber()) {
+                const double v = ior.GetNumberAsDouble();
+                if (!(v >= 1.0 || v == 0.0) || !std::isfinite(v)) fail(where, "ior must be 1 or more, or 0");
+                m.ior = float(v);
             }
         }
         m.normalScale = float(mat.normalTexture.scale);

@@ -31,6 +31,14 @@ struct MeshTextures {
     MeshTexture emissive;           // multiplies the emissive factor
 };
 
+/// The reflectance of a dielectric at normal incidence against air, F0 = ((ior - 1) / (ior + 1))²
+/// (KHR_materials_ior), in double and rounded once: glTF's default 1.5 gives exactly the 0.04f
+/// the BRDF had fixed before, so a material without the extension shades to the same bits.
+inline float dielectricReflectance(float ior) {
+    const double r = (double(ior) - 1.0) / (double(ior) + 1.0);
+    return float(r * r);
+}
+
 struct Mesh {
     std::vector<glm::vec3> positions;
     std::vector<glm::vec3> normals;  // one per position
@@ -44,6 +52,7 @@ struct Mesh {
     raster::AlphaMode alphaMode = raster::AlphaMode::Opaque;
     float alphaCutoff = 0.5f;
     float metallic = 1.0f, roughness = 1.0f;
+    float ior = 1.5f;  // KHR_materials_ior: the dielectric part's index of refraction (0: F0 = 1)
     glm::vec3 emissive{0.0f};  // linear RGB factor
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     std::vector<float> alphas;         // per position, when vertex colours carry alpha

@@ -53,6 +53,7 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         d.state.lighting = shadowedLighting && m.alphaMode != raster::AlphaMode::Blend ? *shadowedLighting : lighting;
         d.state.metallic = m.metallic;
         d.state.roughness = m.roughness;
+        d.state.dielectricF0 = dielectricReflectance(m.ior);
         d.state.emissive = m.emissive;
         d.state.normalScale = m.normalScale;
         d.state.occlusionStrength = m.occlusionStrength;

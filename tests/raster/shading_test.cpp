@@ -79,9 +79,10 @@ Light directionalLight(const glm::vec3& travelling, const glm::vec3& intensity) 
 // shader is float and writes the GGX denominator without cancellation, so even a sharp
 // highlight (roughness 0.1) agrees to 2 parts in 10^4.
 glm::dvec3 referenceBrdf(glm::dvec3 albedo, double metallic, double roughness, glm::dvec3 n, glm::dvec3 v,
-                         glm::dvec3 l, glm::dvec3 intensity) {
+                         glm::dvec3 l, glm::dvec3 intensity, double ior = 1.5) {
     const glm::dvec3 diffuse = albedo * (1.0 - metallic);
-    const glm::dvec3 f0 = glm::mix(glm::dvec3(0.04), albedo, metallic);
+    const double dielectric = std::pow((ior - 1.0) / (ior + 1.0), 2.0);  // KHR_materials_ior; 0.04 at 1.5
+    const glm::dvec3 f0 = glm::mix(glm::dvec3(dielectric), albedo, metallic);
     const double a = roughness * roughness, a2 = a * a;
     const glm::dvec3 h = glm::normalize(l + v);
     const double nl = glm::dot(n, l), nv = glm::dot(n, v), nh = glm::dot(n, h), vh = glm::dot(v, h);
@@ -113,6 +114,35 @@ TEST(MetallicRoughness, MatchesTheReferenceBrdfAtEveryPixel) {
                 for (int c = 0; c < 3; ++c)
                     ASSERT_NEAR(at(img, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
                         << "metallic " << metallic << " roughness " << roughness << " at " << x << "," << y;
+            }
+    }
+}
+
+// KHR_materials_ior: the dielectric reflectance from the index of refraction, against the same
+// double-precision reference at every pixel, for water, diamond and the special value 0 (F0 = 1),
+// half-metallic too (the mix towards the albedo).
+TEST(MetallicRoughness, IndexOfRefractionSetsTheDielectricReflectanceAsTheReferenceDoes) {
+    const Quad quad;
+    const glm::dvec3 camera(8.0, 8.0, -20.0);
+    for (const auto& [ior, metallic] : {std::pair{1.33f, 0.0f}, {2.42f, 0.0f}, {0.0f, 0.0f}, {2.42f, 0.5f}}) {
+        DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+        d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
+        d.state.metallic = metallic;
+        d.state.roughness = 0.3f;
+        d.state.dielectricF0 = scene::dielectricReflectance(ior);
+        d.state.cameraPosition = glm::vec3(camera);
+        d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
+        d.state.lighting.lightCount = 1;
+        const raster::Image img = render(d).image;
+        for (int y = 0; y < kSize; ++y)
+            for (int x = 0; x < kSize; ++x) {
+                const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
+                const glm::dvec3 expected = referenceBrdf(glm::dvec3(0.8, 0.5, 0.2), metallic, 0.3, glm::dvec3(0, 0, -1),
+                                                          glm::normalize(camera - p),
+                                                          -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0), ior);
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_NEAR(at(img, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
+                        << "ior " << ior << " metallic " << metallic << " at " << x << "," << y;
             }
     }
 }

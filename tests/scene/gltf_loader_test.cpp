@@ -554,4 +554,25 @@ TEST(GltfLoader, EmissiveStrengthScalesTheEmissiveFactor) {
     EXPECT_EQ(s.meshes[0].emissive, glm::vec3(4.0f, 2.0f, 1.0f));
 }
 
+TEST(GltfLoader, IorSetsTheDielectricReflectanceAndABadOneIsRefused) {
+    EXPECT_EQ(dielectricReflectance(1.5f), 0.04f) << "glTF's default: the BRDF's fixed value before the extension";
+    EXPECT_EQ(dielectricReflectance(0.0f), 1.0f);
+    for (const auto& [ior, good] : {std::pair{1.33, true}, {2.42, true}, {0.0, true}, {0.5, false}, {-1.0, false}}) {
+        testing::GltfBuilder b;
+        const int accessor = b.positions(kQuad);
+        b.json()["extensionsUsed"] = {"KHR_materials_ior"};
+        const auto path = writeQuad(b, accessor, "ior", {{"extensions", {{"KHR_materials_ior", {{"ior", ior}}}}}});
+        if (!good) {
+            EXPECT_THROW(loadGltf(path, [](const std::string&) {}), InputError) << ior;
+            continue;
+        }
+        const GltfScene s = loadGltf(path, [](const std::string& w) { ADD_FAILURE() << w; });
+        ASSERT_EQ(s.meshes.size(), 1u);
+        EXPECT_EQ(s.meshes[0].ior, float(ior));
+    }
+    testing::GltfBuilder b;  // without the extension: glTF's 1.5
+    const GltfScene plain = loadGltf(writeQuad(b, b.positions(kQuad), "no-ior"), [](const std::string&) {});
+    EXPECT_EQ(plain.meshes[0].ior, 1.5f);
+}
+
 }  // namespace cuberille::scene
