@@ -93,58 +93,43 @@ glm::dvec3 referenceBrdf(glm::dvec3 albedo, double metallic, double roughness, g
     return intensity * nl * ((1.0 - f) * diffuse + M_PI * f * d * vis);
 }
 
-TEST(MetallicRoughness, MatchesTheReferenceBrdfAtEveryPixel) {
+// A quad of albedo (0.8, 0.5, 0.2) under one sun, shaded with the metallic-roughness BRDF,
+// against referenceBrdf at every pixel.
+void expectTheReferenceBrdfAtEveryPixel(float metallic, float roughness, float ior) {
     const Quad quad;
     const glm::dvec3 camera(8.0, 8.0, -20.0);
-    for (const auto& [metallic, roughness] : {std::pair{0.0f, 0.5f}, {1.0f, 0.3f}, {0.5f, 1.0f}, {0.0f, 0.1f}}) {
-        DrawCall d = quad.call(ShadingModel::MetallicRoughness);
-        d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
-        d.state.metallic = metallic;
-        d.state.roughness = roughness;
-        d.state.cameraPosition = glm::vec3(camera);
-        d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
-        d.state.lighting.lightCount = 1;
-        const raster::Image img = render(d).image;
-        for (int y = 0; y < kSize; ++y)
-            for (int x = 0; x < kSize; ++x) {
-                const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
-                const glm::dvec3 expected = referenceBrdf(glm::dvec3(0.8, 0.5, 0.2), metallic, roughness,
-                                                          glm::dvec3(0, 0, -1), glm::normalize(camera - p),
-                                                          -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0));
-                for (int c = 0; c < 3; ++c)
-                    ASSERT_NEAR(at(img, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
-                        << "metallic " << metallic << " roughness " << roughness << " at " << x << "," << y;
-            }
-    }
+    DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+    d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
+    d.state.metallic = metallic;
+    d.state.roughness = roughness;
+    d.state.dielectricF0 = scene::dielectricReflectance(ior);
+    d.state.cameraPosition = glm::vec3(camera);
+    d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
+    d.state.lighting.lightCount = 1;
+    const raster::Image img = render(d).image;
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
+            const glm::dvec3 expected = referenceBrdf(glm::dvec3(0.8, 0.5, 0.2), metallic, roughness, glm::dvec3(0, 0, -1),
+                                                      glm::normalize(camera - p),
+                                                      -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0), ior);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(at(img, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
+                    << "metallic " << metallic << " roughness " << roughness << " ior " << ior << " at " << x << "," << y;
+        }
+}
+
+TEST(MetallicRoughness, MatchesTheReferenceBrdfAtEveryPixel) {
+    for (const auto& [metallic, roughness] : {std::pair{0.0f, 0.5f}, {1.0f, 0.3f}, {0.5f, 1.0f}, {0.0f, 0.1f}})
+        expectTheReferenceBrdfAtEveryPixel(metallic, roughness, 1.5f);
 }
 
 // KHR_materials_ior: the dielectric reflectance from the index of refraction, against the same
 // double-precision reference at every pixel, for water, diamond and the special value 0 (F0 = 1),
 // half-metallic too (the mix towards the albedo).
 TEST(MetallicRoughness, IndexOfRefractionSetsTheDielectricReflectanceAsTheReferenceDoes) {
-    const Quad quad;
-    const glm::dvec3 camera(8.0, 8.0, -20.0);
-    for (const auto& [ior, metallic] : {std::pair{1.33f, 0.0f}, {2.42f, 0.0f}, {0.0f, 0.0f}, {2.42f, 0.5f}}) {
-        DrawCall d = quad.call(ShadingModel::MetallicRoughness);
-        d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
-        d.state.metallic = metallic;
-        d.state.roughness = 0.3f;
-        d.state.dielectricF0 = scene::dielectricReflectance(ior);
-        d.state.cameraPosition = glm::vec3(camera);
-        d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
-        d.state.lighting.lightCount = 1;
-        const raster::Image img = render(d).image;
-        for (int y = 0; y < kSize; ++y)
-            for (int x = 0; x < kSize; ++x) {
-                const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
-                const glm::dvec3 expected = referenceBrdf(glm::dvec3(0.8, 0.5, 0.2), metallic, 0.3, glm::dvec3(0, 0, -1),
-                                                          glm::normalize(camera - p),
-                                                          -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0), ior);
-                for (int c = 0; c < 3; ++c)
-                    ASSERT_NEAR(at(img, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
-                        << "ior " << ior << " metallic " << metallic << " at " << x << "," << y;
-            }
-    }
+    for (const auto& [ior, metallic] : {std::pair{1.33f, 0.0f}, {2.42f, 0.0f}, {0.0f, 0.0f}, {2.42f, 0.5f}})
+        expectTheReferenceBrdfAtEveryPixel(metallic, 0.3f, ior);
 }
 
 TEST(MetallicRoughness, AmbientAndEmissiveAddWithoutLights) {
