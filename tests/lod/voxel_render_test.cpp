@@ -74,6 +74,34 @@ TEST(LodBound, NoDrawnVoxelProjectsBeyondThePixelError) {
         }
 }
 
+// The other side of the bound: selection refines no further than it must. Every drawn block below
+// the root was reached because its parent was too coarse by the same bound (the parent's voxels,
+// at its nearest point, project beyond the pixel error asked for).
+TEST(LodBound, NoBlockIsRefinedFurtherThanThePixelErrorAsks) {
+    const voxel::VoxelModel m = spherePyramid(512);
+    std::vector<int64_t> parentOf(m.blocks.size(), -1);
+    for (size_t i = 0; i < m.blocks.size(); ++i)
+        for (int k = 0; k < __builtin_popcount(m.blocks[i].childMask); ++k) parentOf[m.blocks[i].firstChild + size_t(k)] = int64_t(i);
+    lod::SelectionOptions o;
+    o.viewportHeightPixels = 720;
+    o.verticalFovRadians = 0.7f;
+    size_t refined = 0;
+    for (float pixelError : {1.0f, 4.0f})
+        for (const glm::dvec3& eye : {glm::dvec3(0.3, 0.1, 12.0), glm::dvec3(5.0, 3.0, 2.0), glm::dvec3(40.0, -30.0, 25.0)}) {
+            o.pixelError = pixelError;
+            const glm::mat4 clip = cameraAt(eye).clipFromWorld(16.0f / 9.0f);
+            const lod::BlockSelection s = lod::selectBlocks(m, glm::dmat4(clip), eye, o);
+            ASSERT_FALSE(s.voxelBlocks.empty());
+            for (uint32_t i : s.voxelBlocks) {
+                if (parentOf[i] < 0) continue;  // the root: nothing coarser to draw
+                ++refined;
+                EXPECT_GT(lod::projectedVoxelPixels(m, m.blocks[size_t(parentOf[i])], eye, o), pixelError)
+                    << "block " << i << " at level " << m.blocks[i].level << " was refined into needlessly";
+            }
+        }
+    EXPECT_GT(refined, 0u);
+}
+
 TEST(LodBound, HybridBlocksAreFinestLevelBlocksThatNeededRefining) {
     const voxel::VoxelModel m = spherePyramid(256);
     const glm::dvec3 eye(0.3, 0.1, 2.3);  // just outside the sphere: the nearest voxels are too coarse
