@@ -75,6 +75,14 @@ def main():
                         cuberille.dask.render([*kinds[kind], "--out", str(out / "f.png")], client)
                     times.append(time.perf_counter() - t0)
                 rows[kind][workers] = statistics.median(times)
+        if workers == int(args.workers.split(",")[-1]):
+            # What a task costs beyond its work: 1000 empty tasks through the same cluster.
+            with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as c2, \
+                    Client(c2) as client:
+                client.gather(client.map(_nothing, range(10), pure=False))  # warm
+                t0 = time.perf_counter()
+                client.gather(client.map(_nothing, range(1000), pure=False))
+                task_overhead_ms = time.perf_counter() - t0  # seconds for 1000 tasks: ms a task
     counts = [int(w) for w in args.workers.split(",")]
     print(f"{args.frames} frames a kind, 640x480, 4 samples; median of {args.runs}; {os.cpu_count()} cores")
     print(f"{'work':<10} {'tool (s)':>9} " + " ".join(f"{f'{w} worker(s) (s)':>16}" for w in counts) +
@@ -82,7 +90,12 @@ def main():
     for kind, r in rows.items():
         print(f"{kind:<10} {r['tool']:9.2f} " + " ".join(f"{r[w]:16.2f}" for w in counts) + " " +
               " ".join(f"{r[counts[0]] / r[w]:12.2f}" for w in counts[1:]))
+    print(f"1000 empty tasks on {counts[-1]} workers: {task_overhead_ms:.2f} ms a task")
     shutil.rmtree(work)
+
+
+def _nothing(i):
+    return i
 
 
 if __name__ == "__main__":
