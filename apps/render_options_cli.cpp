@@ -58,6 +58,9 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
     render->add_flag("--ground", o.ground,
                      "Model files: stand the model on a grey floor (3 times its half-width around it) that catches its "
                      "shadows; the framing stays the model's");
+    render->add_flag("--shadow-catcher", o.shadowCatcher,
+                     "With --ground and --shadows: the floor shows the background where it is lit and only darkens "
+                     "it where the model's shadow falls (directional lights only)");
     render->add_flag("--orthographic", o.orthographic,
                      "A parallel projection: the target's plane at the size the perspective camera shows it "
                      "(--zoom narrows it)");

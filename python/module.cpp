@@ -65,6 +65,7 @@ render::FrameSettings frameSettings(int width, int height, int msaa, const py::k
         else if (k == "legend") f.legend = value.cast<bool>();
         else if (k == "frustum_cull") f.frustumCull = value.cast<bool>();
         else if (k == "ground") f.ground = value.cast<bool>();
+        else if (k == "shadow_catcher") f.shadowCatcher = value.cast<bool>();
         else if (k == "bvh_update") f.bvhUpdate = render::parseBvhUpdate(value.cast<std::string>());
         else if (k == "supersample") f.supersample = value.cast<int>();
         else if (k == "texture_filter") f.textureFilter = render::parseTextureFilter(value.cast<std::string>());

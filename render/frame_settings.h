@@ -56,6 +56,10 @@ struct FrameSettings {
     /// receives their shadows; the framing is the model's alone, and a model without lights of
     /// its own is lit from beside the camera (scene::ModelSceneOptions::keyLightBesideCamera).
     bool ground = false;
+    /// --shadow-catcher: with --ground and --shadows, the floor shows the background wherever it
+    /// is lit and only darkens it where a shadow falls (render/loaded_scene.cpp, catcherAlbedo),
+    /// so the model and its shadow sit on the page as a product shot's do.
+    bool shadowCatcher = false;
     rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit;  // how BVHs follow a new pose
     int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)
     TextureFilterOverride textureFilter = TextureFilterOverride::File;

@@ -78,9 +78,10 @@ void loadInto(LoadedScene::State& s) {
 /// kGroundReach times the model's larger horizontal half-extent (and at least its height) in
 /// each direction, so a shadow cast by a light up to about 60 degrees from the zenith falls on
 /// it; light grey, matte, one-sided (seen from above).
+constexpr float kGroundAlbedo = 0.6f;  // linear: a mid-light grey, below the usual white model
+
 scene::Mesh groundUnder(const scene::Bounds& b) {
     constexpr float kGroundReach = 3.0f;
-    constexpr float kGroundAlbedo = 0.6f;  // linear: a mid-light grey, below the usual white model
     const glm::vec3 size = b.max - b.min;
     const float half = kGroundReach * std::max({0.5f * size.x, 0.5f * size.z, size.y});
     const float cx = 0.5f * (b.min.x + b.max.x), cz = 0.5f * (b.min.z + b.max.z), y = b.min.y;
@@ -91,6 +92,24 @@ scene::Mesh groundUnder(const scene::Bounds& b) {
     m.indices = {0, 1, 2, 0, 2, 3};
     m.color = glm::vec3(kGroundAlbedo);
     return m;
+}
+
+/// The floor's albedo for --shadow-catcher: the background's linear colour over the irradiance a
+/// lit patch of floor receives (ambient plus every directional light's n.l), so the floor
+/// shades to the background where nothing shadows it and to the background times the fraction
+/// of light that arrives where something does. A point or spot light lights a floor unevenly,
+/// which no single albedo can undo: refused.
+glm::vec3 catcherAlbedo(const scene::Scene& s, const glm::vec3& backgroundLinear, const std::string& name) {
+    const glm::vec3 up(0.0f, 1.0f, 0.0f);
+    glm::vec3 irradiance = s.lighting.ambient;
+    for (int l = 0; l < s.lighting.lightCount; ++l) {
+        const raster::Light& light = s.lighting.lights[l];
+        if (light.type != raster::LightType::Directional)
+            throw scene::InputError("--shadow-catcher: " + name + " has a point or spot light, which lights the floor unevenly; "
+                             "the catcher needs directional lights only");
+        irradiance += light.intensity * std::max(0.0f, glm::dot(up, -glm::normalize(light.direction)));
+    }
+    return backgroundLinear / glm::max(irradiance, glm::vec3(1e-6f));
 }
 
 // Built-in scenes and PLY and OBJ files are read whole here; a glTF is parsed here and posed by
@@ -165,6 +184,11 @@ void LoadedScene::State::groundFor(const FrameSettings& f) {
     } else if (!f.ground && groundHeld) {
         posed.meshes.pop_back();
         groundHeld = false;
+    }
+    if (groundHeld) {  // after frameFor: the catcher's albedo answers this frame's lights
+        const glm::vec4 background = f.background ? clearColorFor(*f.background) : posed.background;
+        posed.meshes.back().color =
+            f.shadowCatcher ? catcherAlbedo(posed, glm::vec3(background), name) : glm::vec3(kGroundAlbedo);
     }
 }
 

@@ -92,6 +92,11 @@ void validate(const State& s, const FrameSettings& o) {
         throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
     if (o.frustumCull && !threeD) throw InputError("--frustum-cull: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.ground && (!threeD || s.procedural)) throw InputError("--ground: only for model files (glTF, PLY, OBJ), not " + s.name);
+    if (o.shadowCatcher && !o.ground) throw InputError("--shadow-catcher: needs --ground (the floor that catches the shadow)");
+    if (o.shadowCatcher && sh.mode == rt::ShadowMode::None)
+        throw InputError("--shadow-catcher: needs --shadows map, hybrid or raytraced (without them there is no shadow to catch)");
+    if (o.shadowCatcher && hasAlpha(o))
+        throw InputError("--shadow-catcher: needs an opaque --background (the floor is drawn in it)");
     if (o.placement && !threeD) throw InputError("--eye: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.placement && o.cameraIndex >= 0) throw InputError("--eye and --camera-index: one camera or the other");
     if (o.placement && !(o.placement->verticalFovDegrees >= 0.0f && o.placement->verticalFovDegrees < 180.0f))

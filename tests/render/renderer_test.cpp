@@ -310,5 +310,56 @@ TEST(Ground, TheFloorCatchesTheModelsShadowAndComesAndGoesWithTheSetting) {
     fs::remove_all(dir);
 }
 
+// --shadow-catcher: the floor vanishes into the background where it is lit, and only the shadow
+// darkens it. Every pixel of the catcher's frame is the model as the plain floor's frame draws it
+// (the floor's albedo touches nothing else), the background to float rounding, or the
+// background darkened; the darkened ones are exactly the floor pixels the plain floor shows in
+// shadow (hard ray-traced shadows at one sample: a pixel is lit or not). No shadows, no floor or
+// a transparent background is refused.
+TEST(Ground, AShadowCatcherShowsTheBackgroundWhereLitAndDarkensItOnlyInShadow) {
+    const fs::path dir = testing::uniqueTempPath("catcher");
+    fs::create_directories(dir);
+    const fs::path ply = writePillarPly(dir);
+    render::FrameSettings floor;
+    floor.width = 160, floor.height = 90, floor.ground = true;
+    floor.shadows.mode = rt::ShadowMode::RayTraced;
+    floor.background = glm::vec4(0.9f, 0.85f, 0.8f, 1.0f);
+    render::FrameSettings catcher = floor, unshadowed = floor;
+    catcher.shadowCatcher = true;
+    unshadowed.shadows.mode = rt::ShadowMode::None;
+    const render::LoadedScene scene(ply.string());
+    const raster::Image plain = render::render(scene, floor).image, caught = render::render(scene, catcher).image;
+    const raster::Image plainLit = render::render(scene, unshadowed).image;
+    const glm::vec3 background(render::clearColorFor(*floor.background));
+    int model = 0, lit = 0, shadowed = 0;
+    for (size_t i = 0; i < caught.rgba.size(); i += 4) {
+        auto rgb = [i](const raster::Image& image) { return glm::vec3(image.rgba[i], image.rgba[i + 1], image.rgba[i + 2]); };
+        const glm::vec3 c = rgb(caught), p = rgb(plain), l = rgb(plainLit);
+        const bool inPlainShadow = p.r + p.g + p.b < l.r + l.g + l.b - 1e-4f;
+        if (c == p && glm::any(glm::greaterThan(glm::abs(c - background), glm::vec3(1e-3f)))) {
+            ++model;
+        } else if (glm::all(glm::lessThanEqual(glm::abs(c - background), glm::vec3(2e-6f)))) {
+            ++lit;
+            EXPECT_FALSE(inPlainShadow) << "pixel " << i / 4 << ": lit here, in shadow on the plain floor";
+        } else {
+            ASSERT_TRUE(glm::all(glm::lessThan(c, background))) << "pixel " << i / 4 << " neither model, background nor shadow";
+            ++shadowed;
+            EXPECT_TRUE(inPlainShadow) << "pixel " << i / 4 << ": shadowed here, lit on the plain floor";
+        }
+    }
+    EXPECT_GT(model, 100) << "the pillar";
+    EXPECT_GT(shadowed, 100) << "its shadow, caught";
+    EXPECT_GT(lit, int(caught.rgba.size() / 4) / 2) << "the lit floor and the sky: the background";
+
+    render::FrameSettings bad = catcher;
+    bad.shadows.mode = rt::ShadowMode::None;
+    EXPECT_THROW(render::render(scene, bad), scene::InputError);
+    bad = catcher, bad.ground = false;
+    EXPECT_THROW(render::render(scene, bad), scene::InputError);
+    bad = catcher, bad.background = glm::vec4(1.0f, 1.0f, 1.0f, 0.5f);
+    EXPECT_THROW(render::render(scene, bad), scene::InputError);
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace cuberille
