@@ -256,6 +256,20 @@ fs::path writePillarPly(const fs::path& dir) {
     return path;
 }
 
+// The pillar in a temporary folder (removed afterwards), and a small frame of it on the floor with
+// ray-traced shadows.
+struct PillarOnTheFloor {
+    fs::path dir, ply;
+    render::FrameSettings frame;
+    explicit PillarOnTheFloor(const std::string& name) : dir(testing::uniqueTempPath(name)) {
+        fs::create_directories(dir);
+        ply = writePillarPly(dir);
+        frame.width = 160, frame.height = 90, frame.ground = true;
+        frame.shadows.mode = rt::ShadowMode::RayTraced;
+    }
+    ~PillarOnTheFloor() { fs::remove_all(dir); }
+};
+
 // Pixels darker in `shadowed` than in `lit` by more than rounding, and whether any got brighter.
 std::pair<int, bool> darkenedPixels(const raster::Image& shadowed, const raster::Image& lit) {
     int darker = 0;
@@ -274,12 +288,9 @@ std::pair<int, bool> darkenedPixels(const raster::Image& shadowed, const raster:
 // floor comes and goes with the setting on one loaded scene, whose frames stay those of a fresh
 // load; a built-in scene, which has its own ground, refuses it.
 TEST(Ground, TheFloorCatchesTheModelsShadowAndComesAndGoesWithTheSetting) {
-    const fs::path dir = testing::uniqueTempPath("ground");
-    fs::create_directories(dir);
-    const fs::path ply = writePillarPly(dir);
-    render::FrameSettings frame;
-    frame.width = 160, frame.height = 90, frame.ground = true;
-    frame.shadows.mode = rt::ShadowMode::RayTraced;
+    const PillarOnTheFloor pillar("ground");
+    const fs::path& ply = pillar.ply;
+    const render::FrameSettings frame = pillar.frame;
     render::FrameSettings unshadowed = frame;
     unshadowed.shadows.mode = rt::ShadowMode::None;
     render::FrameSettings bare = frame;
@@ -307,7 +318,6 @@ TEST(Ground, TheFloorCatchesTheModelsShadowAndComesAndGoesWithTheSetting) {
     render::FrameSettings builtIn;
     builtIn.ground = true;
     EXPECT_THROW(render::render(render::LoadedScene("field"), builtIn), scene::InputError);
-    fs::remove_all(dir);
 }
 
 // --shadow-catcher: the floor vanishes into the background where it is lit, and only the shadow
@@ -317,12 +327,9 @@ TEST(Ground, TheFloorCatchesTheModelsShadowAndComesAndGoesWithTheSetting) {
 // shadow (hard ray-traced shadows at one sample: a pixel is lit or not). No shadows, no floor or
 // a transparent background is refused.
 TEST(Ground, AShadowCatcherShowsTheBackgroundWhereLitAndDarkensItOnlyInShadow) {
-    const fs::path dir = testing::uniqueTempPath("catcher");
-    fs::create_directories(dir);
-    const fs::path ply = writePillarPly(dir);
-    render::FrameSettings floor;
-    floor.width = 160, floor.height = 90, floor.ground = true;
-    floor.shadows.mode = rt::ShadowMode::RayTraced;
+    const PillarOnTheFloor pillar("catcher");
+    const fs::path& ply = pillar.ply;
+    render::FrameSettings floor = pillar.frame;
     floor.background = glm::vec4(0.9f, 0.85f, 0.8f, 1.0f);
     render::FrameSettings catcher = floor, unshadowed = floor;
     catcher.shadowCatcher = true;
@@ -358,7 +365,6 @@ TEST(Ground, AShadowCatcherShowsTheBackgroundWhereLitAndDarkensItOnlyInShadow) {
     EXPECT_THROW(render::render(scene, bad), scene::InputError);
     bad = catcher, bad.background = glm::vec4(1.0f, 1.0f, 1.0f, 0.5f);
     EXPECT_THROW(render::render(scene, bad), scene::InputError);
-    fs::remove_all(dir);
 }
 
 }  // namespace
