@@ -98,7 +98,7 @@ def test_a_batch_writes_the_files_the_cli_writes_and_a_bad_job_fails_alone(examp
     try:
         remote_cwd = client.run(os.getcwd)
         client.run(os.chdir, str(tmp_path / "dask"))
-        report = cuberille.dask.batch("jobs.jsonl", client)
+        report = cuberille.dask.batch("jobs.jsonl", client, jobs_per_task=2)  # a task holds a failing job and a good one
     finally:
         for address, folder in remote_cwd.items():
             client.run(os.chdir, folder, workers=[address])

@@ -93,10 +93,12 @@ def render(arguments, client, *, frames_per_task=None, progress=None):
                         time.perf_counter() - started, warnings)
 
 
-def batch(jobs_path, client, *, progress=None):
-    """Runs a `cuberille batch` jobs file on the client's cluster, one task a job. A job that fails
-    is reported with its line number and the message the tool gives; the others go on. Raises
-    InputError if the jobs file cannot be read."""
+def batch(jobs_path, client, *, jobs_per_task=None, progress=None):
+    """Runs a `cuberille batch` jobs file on the client's cluster, in tasks of consecutive job lines
+    (`jobs_per_task`; by default four tasks a worker, as render's runs). A job that fails is
+    reported with its line number and the message the tool gives; the others go on. Raises
+    InputError if the jobs file cannot be read. `progress`, if given, is called with (jobs done,
+    jobs in all) as tasks finish."""
     started = time.perf_counter()
     jobs_path = os.fspath(jobs_path)
     try:
@@ -106,24 +108,27 @@ def batch(jobs_path, client, *, progress=None):
         raise InputError(f"{jobs_path}: cannot open file ({e.strerror})") from None
     numbered = [(n, line) for n, line in enumerate(lines, start=1)
                 if line.strip(" \t\r") and not line.lstrip(" \t").startswith("#")]
+    per_task = jobs_per_task or _frames_per_task(len(numbered), _worker_count(client))
+    groups = [numbered[i:i + per_task] for i in range(0, len(numbered), per_task)]
     threads = _threads_per_worker(client)
-    futures = {client.submit(_batch_job, line, threads, pure=False, key=f"cuberille-job-{n}-{_stamp()}"): n
-               for n, line in numbered}
+    futures = {client.submit(_batch_jobs, group, threads, pure=False, key=f"cuberille-jobs-{group[0][0]}-{_stamp()}"): group
+               for group in groups}
     from distributed import as_completed
 
     failures, loads, warnings, done = [], 0, [], 0
     for future in as_completed(futures):
-        n = futures[future]
+        group = futures[future]
         try:
-            result = future.result()
-        except Exception as e:  # a failure while working, not bad input: reported as the tool reports it
-            result = {"error": str(e), "loaded": False, "warnings": [], "files": []}
-        if "error" in result:
-            failures.append((n, result["error"]))
-        loads += result["loaded"]
-        warnings += result["warnings"]
-        _remove_leftovers(result["files"])
-        done += 1
+            results = future.result()
+        except Exception as e:  # a failure while working, not bad input: each job of the task reported with it
+            results = [{"error": str(e), "loaded": False, "warnings": [], "files": []} for _ in group]
+        for (n, _), result in zip(group, results):
+            if "error" in result:
+                failures.append((n, result["error"]))
+            loads += result["loaded"]
+            warnings += result["warnings"]
+            _remove_leftovers(result["files"])
+        done += len(group)
         if progress:
             progress(done, len(numbered))
     return BatchReport(len(numbered), sorted(failures), loads, time.perf_counter() - started, _unique(warnings))
@@ -153,6 +158,11 @@ def _render_run(arguments, first, count, threads):
     except InputError as e:  # returned, not raised: bad input is not retried, and the message stays the tool's
         return {"error": str(e)}
     return {"first": first, "count": count, "stats": stats, "warnings": scene.warnings}
+
+
+def _batch_jobs(group, threads):
+    """Each (line number, job line) of the group in turn; a job's failure does not stop the next."""
+    return [_batch_job(line, threads) for _, line in group]
 
 
 def _batch_job(line, threads):
@@ -188,8 +198,10 @@ def _threads_per_worker(client):
 
 
 def _frames_per_task(frames, workers):
-    """Runs of frames: four a worker, so a slow or lost worker costs a quarter of its share, while
-    a run stays long enough for its frames to reuse the hierarchies its first frame built."""
+    """Runs of frames (or of batch jobs): four a worker, so a slow or lost worker costs a quarter
+    of its share, while a run stays long enough for its frames to reuse the hierarchies its first
+    frame built, and a batch of many small jobs costs a few tasks, not one each (a task costs
+    about 2 ms of the scheduler's time: docs/scale-out.md)."""
     return max(1, math.ceil(frames / (4 * workers)))
 
 

@@ -18,12 +18,13 @@ Cuberille's commands on a Dask cluster, writing the files the tool writes (docs/
 commands:
   render SCENE [OPTIONS]   `cuberille render` with any of its options (cuberille render --help);
                            --turntable and --animate frames run as tasks of contiguous frames
-  batch JOBS.jsonl         `cuberille batch`: one task a job line
+  batch JOBS.jsonl         `cuberille batch`: tasks of consecutive job lines
 
 options of every command:
   --scheduler ADDRESS      a running Dask scheduler (tcp://host:8786); default: a LocalCluster here
   --workers N              the LocalCluster's worker processes (default: this machine's cores)
-  --frames-per-task N      render: frames in one task (default: a quarter of a worker's share)
+  --frames-per-task N      frames (render) or job lines (batch) in one task (default: a quarter
+                           of a worker's share)
   --quiet                  print only failures
 """
 
@@ -70,7 +71,8 @@ def main(argv):
             jobs = [a for a in rest if a != "--quiet"]
             if len(jobs) != 1 or jobs[0].startswith("-"):
                 raise InputError("batch: one jobs file and no other options (batch JOBS.jsonl)")
-            report = cd.batch(jobs[0], client, progress=None if quiet else cd._print_progress("jobs"))
+            report = cd.batch(jobs[0], client, jobs_per_task=own["frames_per_task"],
+                              progress=None if quiet else cd._print_progress("jobs"))
             _print_warnings(report.warnings, quiet)
             for line, message in report.failures:
                 sys.stderr.write(f"cuberille batch: {jobs[0]}:{line}: {message}\n")
