@@ -83,25 +83,20 @@ RenderOptions parseBatchJob(const std::string& line, bool quiet) {
     }
     if (!job.is_object()) throw scene::InputError("not a JSON object");
     if (!job.contains("scene") || !job["scene"].is_string()) throw scene::InputError("\"scene\": a string is required");
-    CLI::App app;
-    RenderOptions o;
-    RenderNames names;
-    const CLI::App* render = addRenderCommand(app, o, names);
-    for (const auto& [key, value] : job.items()) {
-        const std::string name = optionName(key);
-        bool known = key == "scene";
-        for (const CLI::Option* option : render->get_options())
-            for (const std::string& n : option->get_lnames()) known = known || n == name;
-        if (!known) throw scene::InputError("\"" + key + "\": render has no option --" + name);
+    {  // a key render has no option for is named as the job's, not as CLI11's "extra argument"
+        CLI::App app;
+        RenderOptions unused;
+        RenderNames unusedNames;
+        const CLI::App* render = addRenderCommand(app, unused, unusedNames);
+        for (const auto& [key, value] : job.items()) {
+            const std::string name = optionName(key);
+            bool known = key == "scene";
+            for (const CLI::Option* option : render->get_options())
+                for (const std::string& n : option->get_lnames()) known = known || n == name;
+            if (!known) throw scene::InputError("\"" + key + "\": render has no option --" + name);
+        }
     }
-    std::vector<std::string> arguments = renderArguments(job);
-    std::reverse(arguments.begin(), arguments.end());  // CLI11 takes them last first
-    try {
-        app.parse(arguments);
-    } catch (const CLI::ParseError& e) {
-        throw scene::InputError(e.what());
-    }
-    applyRenderNames(names, o);
+    RenderOptions o = parseRenderArguments(renderArguments(job));
     o.quiet = o.quiet || quiet;
     checkRenderCommand(o);
     return o;
@@ -109,8 +104,9 @@ RenderOptions parseBatchJob(const std::string& line, bool quiet) {
 
 namespace {
 
+// The job as `render`'s arguments on a command line: the scene, then each option.
 std::vector<std::string> renderArguments(const nlohmann::json& job) {
-    std::vector<std::string> arguments{"render", job["scene"].get<std::string>()};
+    std::vector<std::string> arguments{job["scene"].get<std::string>()};
     for (const auto& [key, value] : job.items()) {
         if (key == "scene") continue;
         const std::string option = "--" + optionName(key);

@@ -130,11 +130,17 @@ raster::Image imageToWrite(const RenderOptions& o, const std::filesystem::path& 
     return render::displayImage(image, o.view, scene::fileKindOf(o.scene) != scene::FileKind::TriangleList);
 }
 
+// Frame `index` of the command's image, in its file; returns the file.
+std::filesystem::path writeFrameImage(const RenderOptions& o, int index, const RenderResult& r) {
+    const std::filesystem::path file = frameFile(o, index);
+    writeImageAtomically(file, imageToWrite(o, file, r.image), imageWriteOptions(o));
+    return file;
+}
+
 // Frame `index` of the command: its image, its stats kept for {"frames": [...]}; the one frame's
 // summary (a sequence prints one for all its frames).
 void writeFrame(const RenderOptions& o, int index, const RenderResult& r, nlohmann::json& frames) {
-    const std::filesystem::path file = frameFile(o, index);
-    writeImageAtomically(file, imageToWrite(o, file, r.image), imageWriteOptions(o));
+    const std::filesystem::path file = writeFrameImage(o, index, r);
     if (!o.statsPath.empty()) frames.push_back(statsToJson(o, r));
     if (!o.quiet && !isSequence(o)) printSummary(o, file, r);
 }
@@ -226,7 +232,7 @@ nlohmann::json renderFrameRun(const render::LoadedScene& scene, const RenderOpti
     nlohmann::json frames = nlohmann::json::array();
     for (int i = first; i < first + count; ++i) {
         const RenderResult r = render::render(scene, sequenceFrame(o, i));
-        writeImageAtomically(frameFile(o, i), imageToWrite(o, frameFile(o, i), r.image), imageWriteOptions(o));
+        writeFrameImage(o, i, r);
         frames.push_back(statsToJson(o, r));
     }
     return frames;
