@@ -2,12 +2,14 @@
 
 #include <charconv>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <deque>
 #include <map>
 #include <set>
+#include <string_view>
 #include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -77,11 +79,18 @@ private:
 
     // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
     // attribute is read through AccessorView, which takes any component type, normalised or not.
+    static constexpr std::array<std::string_view, 7> kSupportedExtensions = {
+        "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization",
+        "KHR_materials_emissive_strength", "KHR_materials_ior", "EXT_texture_webp"};
     static bool supportedExtension(const std::string& name) {
-        static const std::set<std::string> kSupported = {"KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform",
-                                                         "KHR_mesh_quantization", "KHR_materials_emissive_strength",
-                                                         "KHR_materials_ior", "EXT_texture_webp"};
-        return kSupported.count(name) > 0;
+        return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), name) != kSupportedExtensions.end();
+    }
+    // "A, B and C", in the order above: what refusals say the reader reads.
+    static std::string supportedExtensionList() {
+        std::string list;
+        for (size_t i = 0; i < kSupportedExtensions.size(); ++i)
+            list += (i == 0 ? "" : i + 1 == kSupportedExtensions.size() ? " and " : ", ") + std::string(kSupportedExtensions[i]);
+        return list;
     }
 
     // A file that requires an extension Cuberille cannot honour cannot be drawn as its author
@@ -92,9 +101,8 @@ private:
         for (const std::string& ext : model_.extensionsRequired)
             if (!supportedExtension(ext)) missing += (missing.empty() ? "" : ", ") + ext;
         if (!missing.empty())
-            throw InputError(file_ + ": requires " + missing + ", which Cuberille cannot read yet (it reads KHR_lights_punctual, "
-                             "KHR_materials_unlit, KHR_texture_transform, KHR_mesh_quantization, KHR_materials_emissive_strength, "
-                             "KHR_materials_ior and EXT_texture_webp)");
+            throw InputError(file_ + ": requires " + missing + ", which Cuberille cannot read yet (it reads " +
+                             supportedExtensionList() + ")");
     }
 
     void warnAboutUnsupported() {
