@@ -112,10 +112,6 @@ void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size, rast
     });
 }
 
-}  // namespace
-
-namespace {
-
 /// Whether two maps' faces project the world alike, every matrix and plane bit for bit.
 bool sameProjections(const std::vector<ShadowMapFace>& a, const std::vector<ShadowMapFace>& b) {
     if (a.size() != b.size()) return false;

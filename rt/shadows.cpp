@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "raster/clock.h"
 #include "raster/parallel.h"
@@ -40,8 +41,8 @@ struct LightShadowStorage {
     ShadowMap map;
     std::vector<shadow_detail::FaceMarks> faces;  // per face of the map (hybrid, soft)
     shadow_detail::ThinMarkingScratch scratch;
-    bool marksValid = false;      // `faces` were made from `map` with `marksOptions`
-    ShadowOptions marksOptions;
+    /// What `faces` were made from `map` with; empty when they are not the map's (it was drawn since).
+    std::optional<ShadowOptions> marksOptions;
 };
 
 void LightShadowStorageDelete::operator()(LightShadowStorage* storage) const { delete storage; }
@@ -152,7 +153,7 @@ public:
     LightShadows(const raster::Light& light, const ShadowCasters& casters, const ShadowOptions& options, raster::Pipeline& gpu,
                  LightShadowStorage& storage)
         : light_(light), casters_(casters), options_(options), gpu_(gpu), map_(storage.map), faces_(storage.faces),
-          scratch_(storage.scratch) {
+          scratch_(storage.scratch), marksOptions_(storage.marksOptions) {
         const float radius = 0.5f * glm::length(casters.bounds.extent());
         rayOffset_ = 1e-4f * std::max(radius, 1e-3f);
         if (options.soft) disk_ = diskSamples(std::max(1, options.softSamplesPerSide));
@@ -162,16 +163,16 @@ public:
     /// ray to the light's disk can stray over the casters' depth (their bounding sphere's diameter).
     /// Returns whether the map was drawn (false: kept from the last frame, and with it the
     /// marks, which depend on nothing else: the map, the casters and the options).
-    bool prepareMap(const ScreenSurfaces& surfaces, bool& marksValid, const ShadowOptions& marksOptions) {
+    bool prepareMap(const ScreenSurfaces& surfaces) {
         const float margin = options_.soft ? options_.lightRadius * glm::length(casters_.bounds.extent()) : 0.0f;
         const bool drawn = map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, surfaces.seenHull,
                                        margin, casters_.version);
-        if (drawn) marksValid = false;
+        if (drawn) marksOptions_.reset();
         if (options_.mode != ShadowMode::Hybrid && !options_.soft) return drawn;
-        if (!drawn && marksValid && sameMarkingOptions(marksOptions, options_)) return drawn;
+        if (marksOptions_ && sameMarkingOptions(*marksOptions_, options_)) return drawn;
         faces_.resize(size_t(map_.faceCount()));
         for (int f = 0; f < map_.faceCount(); ++f) prepareFace(f);
-        marksValid = true;
+        marksOptions_ = options_;
         return drawn;
     }
 
@@ -672,6 +673,7 @@ private:
     ShadowMap& map_;
     std::vector<FaceMarks>& faces_;
     ThinMarkingScratch& scratch_;
+    std::optional<ShadowOptions>& marksOptions_;  // LightShadowStorage::marksOptions
     uint64_t thinTriangles_ = 0;
 
 public:
@@ -713,17 +715,9 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
         if (!castsShadows(light)) continue;
         ++out.stats.lightsShadowed;
         if (!out.storage[size_t(l)]) out.storage[size_t(l)].reset(new LightShadowStorage);
-        LightShadowStorage& storage = *out.storage[size_t(l)];
-        LightShadows shadows(light, casters, options, gpu, storage);
+        LightShadows shadows(light, casters, options, gpu, *out.storage[size_t(l)]);
         double t0 = raster::nowMs();
-        if (options.mode != ShadowMode::RayTraced) {
-            if (!shadows.prepareMap(surfaces, storage.marksValid, storage.marksOptions)) {
-                ++out.stats.mapsKept;
-            } else {
-                ++out.stats.mapsDrawn;
-            }
-            storage.marksOptions = options;
-        }
+        if (options.mode != ShadowMode::RayTraced) ++(shadows.prepareMap(surfaces) ? out.stats.mapsDrawn : out.stats.mapsKept);
         out.stats.mapMs += raster::nowMs() - t0;
         out.stats.thinTriangles += shadows.thinTriangles();
         t0 = raster::nowMs();
