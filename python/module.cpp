@@ -271,9 +271,7 @@ PYBIND11_MODULE(_cuberille, m) {
         .def_property_readonly("scene", [](const PyRenderCommand& c) { return c.options().scene; })
         .def_property_readonly("detail", [](const PyRenderCommand& c) { return c.options().detail; })
         .def_property_readonly("up_axis", [](const PyRenderCommand& c) { return std::string(c.options().zUp ? "z" : "y"); })
-        .def_property_readonly("threads", [](const PyRenderCommand& c) { return c.options().threads; })
-        .def_property_readonly("stats", [](const PyRenderCommand& c) { return c.options().statsPath.string(); })
-        .def_property_readonly("quiet", [](const PyRenderCommand& c) { return c.options().quiet; });
+        .def_property_readonly("stats", [](const PyRenderCommand& c) { return c.options().statsPath.string(); });
     m.def("fly", &fly, py::arg("model"), py::arg("path") = "orbit", py::arg("frames") = 120, py::arg("width") = 1280,
           py::arg("height") = 720, py::arg("msaa") = 4, py::arg("threads") = 0, py::arg("budget_mib") = 1024.0,
           py::arg("upload_limit_mib") = 0.0, py::arg("refine") = "full", py::arg("pixel_error") = 1.0f,

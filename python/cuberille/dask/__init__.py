@@ -63,7 +63,7 @@ def render(arguments, client, *, frames_per_task=None, progress=None):
     command = _cuberille.RenderCommand.from_arguments(arguments)
     count = command.frame_count
     workers = _worker_count(client)
-    per_task = frames_per_task or _frames_per_task(count, workers)
+    per_task = frames_per_task or _items_per_task(count, workers)
     runs = [(first, min(per_task, count - first)) for first in range(0, count, per_task)]
     threads = _threads_per_worker(client)
     futures = [client.submit(_render_run, arguments, first, n, threads, pure=False, key=f"cuberille-render-{first}-{_stamp()}")
@@ -108,7 +108,7 @@ def batch(jobs_path, client, *, jobs_per_task=None, progress=None):
         raise InputError(f"{jobs_path}: cannot open file ({e.strerror})") from None
     numbered = [(n, line) for n, line in enumerate(lines, start=1)
                 if line.strip(" \t\r") and not line.lstrip(" \t").startswith("#")]
-    per_task = jobs_per_task or _frames_per_task(len(numbered), _worker_count(client))
+    per_task = jobs_per_task or _items_per_task(len(numbered), _worker_count(client))
     groups = [numbered[i:i + per_task] for i in range(0, len(numbered), per_task)]
     threads = _threads_per_worker(client)
     futures = {client.submit(_batch_jobs, group, threads, pure=False, key=f"cuberille-jobs-{group[0][0]}-{_stamp()}"): group
@@ -197,12 +197,12 @@ def _threads_per_worker(client):
     return max(1, min(shares, default=os.cpu_count() or 1))
 
 
-def _frames_per_task(frames, workers):
+def _items_per_task(items, workers):
     """Runs of frames (or of batch jobs): four a worker, so a slow or lost worker costs a quarter
     of its share, while a run stays long enough for its frames to reuse the hierarchies its first
     frame built, and a batch of many small jobs costs a few tasks, not one each (a task costs
     about 2 ms of the scheduler's time: docs/scale-out.md)."""
-    return max(1, math.ceil(frames / (4 * workers)))
+    return max(1, math.ceil(items / (4 * workers)))
 
 
 def _remove_leftovers(files):
