@@ -345,9 +345,10 @@ GLuint LlvmpipePeer::Impl::textureFor(const raster::Texture& t) {
     glBindTexture(GL_TEXTURE_2D, id);
     for (int level = 0; level < t.levelCount(); ++level) {
         const int w = t.width(level), h = t.height(level);
-        if (const uint32_t* packed = t.packedTexels(level)) {
+        if (t.format() != raster::TexelFormat::LinearFloat) {
             const GLint format = t.format() == raster::TexelFormat::Srgb8 ? GL_SRGB8_ALPHA8 : GL_RGBA8;
-            glTexImage2D(GL_TEXTURE_2D, level, format, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, packed);
+            const std::vector<uint32_t> packed = t.packedRows(level);
+            glTexImage2D(GL_TEXTURE_2D, level, format, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, packed.data());
             continue;
         }
         std::vector<glm::vec4> texels(size_t(w) * h);

@@ -1,6 +1,7 @@
 #include "raster/texture.h"
 
 #include "raster/srgb.h"
+#include "raster/texture_lanes.h"
 
 #include <algorithm>
 #include <array>
@@ -52,7 +53,9 @@ Texture::Texture(int width, int height, std::vector<glm::vec4> rgba, WrapMode wr
     : wrapU_(wrapU), wrapV_(wrapV), filter_(filter) {
     if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height))
         throw std::invalid_argument("texture: size does not match its texels");
-    levels_.push_back({width, height, std::move(rgba), {}});
+    allocateLevels(width, height);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) texels_[texelIndex(0, x, y)] = rgba[size_t(y) * width + x];
     buildMipChain();
 }
 
@@ -64,38 +67,61 @@ Texture::Texture(int width, int height, const std::vector<uint8_t>& rgba8, Texel
         throw std::invalid_argument("texture: size does not match its texels");
     decodeRgb_ = format == TexelFormat::Srgb8 ? srgb8Table() : unorm8Table();
     decodeAlpha_ = unorm8Table();
-    Level base{width, height, {}, std::vector<uint32_t>(size_t(width) * height)};
-    std::memcpy(base.packed.data(), rgba8.data(), rgba8.size());  // R in the low byte (little-endian)
+    allocateLevels(width, height);
     static_assert(std::endian::native == std::endian::little, "texels are packed little-endian");
-    levels_.push_back(std::move(base));
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)  // R in the low byte (little-endian)
+            std::memcpy(&packed_[texelIndex(0, x, y)], &rgba8[(size_t(y) * width + x) * 4], 4);
     buildMipChain();
+}
+
+// Every level's size and place, down to 1x1; each level's tiles start on a tile.
+void Texture::allocateLevels(int width, int height) {
+    size_t total = 0;
+    for (int w = width, h = height;; w = std::max(1, w / 2), h = std::max(1, h / 2)) {
+        const size_t tilesX = (size_t(w) + 3) / 4, tilesY = (size_t(h) + 3) / 4;
+        // Texel indices are 32-bit signed lanes in the lane sampler.
+        if (total + tilesX * tilesY * 16 > size_t(INT32_MAX)) throw std::invalid_argument("texture: too many texels");
+        const int level = levelCount();
+        levels_.push_back({w, h, uint32_t(total), uint32_t(tilesX * 16)});
+        tables_.width[level] = w, tables_.height[level] = h;
+        tables_.offset[level] = int32_t(total), tables_.tileRowStride[level] = int32_t(tilesX * 16);
+        total += tilesX * tilesY * 16;
+        if (w == 1 && h == 1) break;
+    }
+    if (format_ == TexelFormat::LinearFloat)
+        texels_.assign(total, glm::vec4(0.0f));
+    else
+        packed_.assign(total, 0u);
 }
 
 // 2x2 box filter in linear float, down to 1x1; an 8-bit level is stored again in its format.
 void Texture::buildMipChain() {
-    while (levels_.back().width > 1 || levels_.back().height > 1) {
-        const int level = levelCount() - 1;
-        const Level& src = levels_.back();
-        Level dst{std::max(1, src.width / 2), std::max(1, src.height / 2), {}, {}};
-        const size_t count = size_t(dst.width) * dst.height;
-        if (format_ == TexelFormat::LinearFloat)
-            dst.texels.resize(count);
-        else
-            dst.packed.resize(count);
+    for (int level = 1; level < levelCount(); ++level) {
+        const Level& src = levels_[level - 1];
+        const Level& dst = levels_[level];
         for (int y = 0; y < dst.height; ++y)
             for (int x = 0; x < dst.width; ++x) {
                 const int x0 = std::min(2 * x, src.width - 1), x1 = std::min(2 * x + 1, src.width - 1);
                 const int y0 = std::min(2 * y, src.height - 1), y1 = std::min(2 * y + 1, src.height - 1);
-                const glm::vec4 average = 0.25f * (texel(level, x0, y0) + texel(level, x1, y0) +
-                                                   texel(level, x0, y1) + texel(level, x1, y1));
-                const size_t i = size_t(y) * dst.width + x;
+                const glm::vec4 average = 0.25f * (texel(level - 1, x0, y0) + texel(level - 1, x1, y0) +
+                                                   texel(level - 1, x0, y1) + texel(level - 1, x1, y1));
+                const size_t i = texelIndex(level, x, y);
                 if (format_ == TexelFormat::LinearFloat)
-                    dst.texels[i] = average;
+                    texels_[i] = average;
                 else
-                    dst.packed[i] = pack(average, format_);
+                    packed_[i] = pack(average, format_);
             }
-        levels_.push_back(std::move(dst));
     }
+}
+
+std::vector<uint32_t> Texture::packedRows(int level) const {
+    if (format_ == TexelFormat::LinearFloat) return {};
+    const Level& l = levels_[level];
+    std::vector<uint32_t> rows(size_t(l.width) * l.height);
+    for (int y = 0; y < l.height; ++y)
+        for (int x = 0; x < l.width; ++x) rows[size_t(y) * l.width + x] = packed_[texelIndex(level, x, y)];
+    return rows;
 }
 
 [[gnu::always_inline]] inline int Texture::wrap(int i, int size, WrapMode mode) const {
@@ -161,7 +187,7 @@ glm::vec4 Texture::sample(glm::vec2 uv, float lod) const { return gather(plan(uv
     return t;
 }
 
-glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const { return texelAt(level, nearestIndex(level, uv)); }
+glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const { return texelAt(nearestIndex(level, uv)); }
 
 [[gnu::always_inline]] inline uint32_t Texture::nearestIndex(int level, glm::vec2 uv) const {
     const Level& l = levels_[level];
@@ -169,11 +195,10 @@ glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const { return texelAt
     if (!std::isfinite(x) || !std::isfinite(y)) x = y = 0.0f;
     x = std::clamp(x, -1e6f, 1e6f);
     y = std::clamp(y, -1e6f, 1e6f);
-    return uint32_t(wrap(int(std::floor(y)), l.height, wrapV_)) * uint32_t(l.width) +
-           uint32_t(wrap(int(std::floor(x)), l.width, wrapU_));
+    return uint32_t(texelIndex(level, wrap(int(std::floor(x)), l.width, wrapU_), wrap(int(std::floor(y)), l.height, wrapV_)));
 }
 
-glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(level, footprint(level, uv)); }
+glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(footprint(level, uv)); }
 
 [[gnu::always_inline]] inline Texture::BilinearFootprint Texture::footprint(int level, glm::vec2 uv) const {
     const Level& l = levels_[level];
@@ -184,19 +209,25 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(
     y = std::clamp(y, -1e6f, 1e6f);
     const float fx = std::floor(x), fy = std::floor(y);
     const int x0 = int(fx), y0 = int(fy);
-    const uint32_t xa = uint32_t(wrap(x0, l.width, wrapU_)), xb = uint32_t(wrap(x0 + 1, l.width, wrapU_));
-    const uint32_t ya = uint32_t(wrap(y0, l.height, wrapV_)) * uint32_t(l.width);
-    const uint32_t yb = uint32_t(wrap(y0 + 1, l.height, wrapV_)) * uint32_t(l.width);
-    return {{ya + xa, ya + xb, yb + xa, yb + xb}, x - fx, y - fy};
+    const int xa = wrap(x0, l.width, wrapU_), xb = wrap(x0 + 1, l.width, wrapU_);
+    const int ya = wrap(y0, l.height, wrapV_), yb = wrap(y0 + 1, l.height, wrapV_);
+    return {{uint32_t(texelIndex(level, xa, ya)), uint32_t(texelIndex(level, xb, ya)), uint32_t(texelIndex(level, xa, yb)),
+             uint32_t(texelIndex(level, xb, yb))},
+            x - fx, y - fy};
 }
 
-[[gnu::always_inline]] inline glm::vec4 Texture::blend(int level, const BilinearFootprint& f) const {
-    const glm::vec4 top = glm::mix(texelAt(level, f.index[0]), texelAt(level, f.index[1]), f.ax);
-    const glm::vec4 bottom = glm::mix(texelAt(level, f.index[2]), texelAt(level, f.index[3]), f.ax);
+[[gnu::always_inline]] inline glm::vec4 Texture::blend(const BilinearFootprint& f) const {
+    const glm::vec4 top = glm::mix(texelAt(f.index[0]), texelAt(f.index[1]), f.ax);
+    const glm::vec4 bottom = glm::mix(texelAt(f.index[2]), texelAt(f.index[3]), f.ax);
     return glm::mix(top, bottom, f.ay);
 }
 
 void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, glm::vec4* out) const {
+    if (format_ != TexelFormat::LinearFloat) {
+        const TexelPyramid pyramid{packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,
+                                   filter_, tables_.width, tables_.height, tables_.offset, tables_.tileRowStride};
+        return sampleLanes(pyramid, count, u, v, lod, out);
+    }
     // The plans of a run of points first, then their texels.
     constexpr int kRun = 64;
     SamplePlan plans[kRun];

@@ -1,0 +1,249 @@
+#include "raster/texture_lanes.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "raster/texture.h"
+
+// Compiled once per instruction set (see raster/tile_raster.cpp for how foreach_target.h works),
+// with Highway's operations written out: gathers and per-lane levels are not loops GCC
+// vectorises on its own.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "raster/texture_lanes.cpp"
+#include <hwy/foreach_target.h>  // must come before highway.h
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace cuberille::raster {
+namespace HWY_NAMESPACE {
+namespace {
+
+namespace hn = hwy::HWY_NAMESPACE;
+using DF = hn::ScalableTag<float>;
+using DI = hn::RebindToSigned<DF>;
+using DU = hn::RebindToUnsigned<DF>;
+using VF = hn::Vec<DF>;
+using VI = hn::Vec<DI>;
+using MF = hn::Mask<DF>;
+
+struct Texel {
+    VF r, g, b, a;
+};
+
+struct Footprint {
+    VI index[4];  // (xa, ya), (xb, ya), (xa, yb), (xb, yb), as Texture::BilinearFootprint
+    VF ax, ay;
+};
+
+Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v);
+Texel bilinear(const TexelPyramid& t, const Footprint& f);
+Texel texelsAt(const TexelPyramid& t, VI index);
+VF mix(VF a, VF b, VF weight);
+
+/// The taps one vector of points reads under the texture's filters (Texture::plan): a level and
+/// whether its tap is nearest, and for the mipmap-linear filters a second level and the weight.
+struct LanePlan {
+    VI first, second;
+    MF nearest;     // nearest taps (magnification and minification may differ)
+    MF mixLevels;   // lanes that mix the two levels
+    VF weight;
+};
+
+LanePlan plan(const TexelPyramid& t, VF lod) {
+    const DF df;
+    const DI di;
+    const TextureFilter& filter = t.filter;
+    // lod <= 0 (and NaN) magnifies: level 0. Otherwise lod is clamped to the last level first.
+    const MF minify = hn::Gt(lod, hn::Zero(df));
+    const MF none = hn::FirstN(df, 0);
+    const VF clamped = hn::IfThenElseZero(minify, hn::Min(lod, hn::Set(df, float(t.levelCount - 1))));
+    const VI last = hn::Set(di, t.levelCount - 1);
+    const bool minifyNearest = filter.minify == MinFilter::Nearest || filter.minify == MinFilter::NearestMipmapNearest ||
+                               filter.minify == MinFilter::NearestMipmapLinear;
+    const MF magnifyNearestLanes = filter.magnifyNearest ? hn::Not(minify) : none;
+    LanePlan p;
+    p.nearest = hn::Or(minifyNearest ? minify : none, magnifyNearestLanes);
+    p.mixLevels = none;
+    p.weight = hn::Zero(df);
+    p.first = p.second = hn::Zero(di);
+    switch (filter.minify) {
+        case MinFilter::Nearest:
+        case MinFilter::Linear: break;  // level 0
+        case MinFilter::NearestMipmapNearest:
+        case MinFilter::LinearMipmapNearest: {
+            // OpenGL's nearest level, ceil(lod + 0.5) - 1: lod rounded with ties down.
+            const VI rounded = hn::Sub(hn::ConvertTo(di, hn::Ceil(hn::Add(clamped, hn::Set(df, 0.5f)))), hn::Set(di, 1));
+            p.first = hn::IfThenElseZero(hn::RebindMask(di, minify), hn::Min(rounded, last));
+            break;
+        }
+        case MinFilter::NearestMipmapLinear:
+        case MinFilter::LinearMipmapLinear: {
+            p.first = hn::ConvertTo(di, clamped);  // clamped >= 0: truncation is floor
+            p.weight = hn::Sub(clamped, hn::ConvertTo(df, p.first));
+            p.second = hn::Min(hn::Add(p.first, hn::Set(di, 1)), last);
+            // Nearest taps are always mixed; bilinear ones only between levels.
+            p.mixLevels = hn::And(minify, minifyNearest ? minify : hn::Gt(p.weight, hn::Zero(df)));
+            break;
+        }
+    }
+    return p;
+}
+
+/// One tap per lane on the given levels: one texel where every lane's tap is nearest (glTF's
+/// NEAREST_MIPMAP_LINEAR, common in exported models, reads 2 texels a point and not 8).
+Texel tap(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
+    const Footprint f = footprint(t, level, nearest, u, v);
+    return hn::AllTrue(DF(), nearest) ? texelsAt(t, f.index[0]) : bilinear(t, f);
+}
+
+/// One vector of points: Texture::plan() then Texture::gather().
+Texel sample(const TexelPyramid& t, VF u, VF v, VF lod) {
+    const DF df;
+    const LanePlan p = plan(t, lod);
+    const Texel first = tap(t, p.first, p.nearest, u, v);
+    if (hn::AllFalse(df, p.mixLevels)) return first;
+    const Texel second = tap(t, p.second, p.nearest, u, v);
+    return {hn::IfThenElse(p.mixLevels, mix(first.r, second.r, p.weight), first.r),
+            hn::IfThenElse(p.mixLevels, mix(first.g, second.g, p.weight), first.g),
+            hn::IfThenElse(p.mixLevels, mix(first.b, second.b, p.weight), first.b),
+            hn::IfThenElse(p.mixLevels, mix(first.a, second.a, p.weight), first.a)};
+}
+
+/// glm::mix's arithmetic: a (1 - weight) + b weight.
+VF mix(VF a, VF b, VF weight) {
+    const VF one = hn::Set(DF(), 1.0f);
+    return hn::Add(hn::Mul(a, hn::Sub(one, weight)), hn::Mul(b, weight));
+}
+
+/// An integer texel coordinate f (held exactly in float) wrapped into [0, size).
+VF wrap(VF f, VF size, WrapMode mode);
+/// Where texel (x, y) of a level lies: the tile's row and column, then the texel in the tile.
+VI tiledIndex(VI x, VI y, VI offset, VI tileRowStride);
+
+Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
+    const DF df;
+    const DI di;
+    const VI width = hn::GatherIndex(di, t.width, level), height = hn::GatherIndex(di, t.height, level);
+    const VF w = hn::ConvertTo(df, width), h = hn::ConvertTo(df, height);
+    // Texel space with texel centres on integers (a nearest tap's: texel corners on integers);
+    // non-finite coordinates sample texel 0, and the rest are clamped far beyond any wrap
+    // period (Texture::footprint, Texture::nearestIndex).
+    const VF half = hn::IfThenZeroElse(nearest, hn::Set(df, 0.5f));
+    VF x = hn::Sub(hn::Mul(u, w), half), y = hn::Sub(hn::Mul(v, h), half);
+    const MF finite = hn::And(hn::IsFinite(x), hn::IsFinite(y));
+    const VF lo = hn::Set(df, -1e6f), hi = hn::Set(df, 1e6f);
+    x = hn::Min(hn::Max(hn::IfThenElseZero(finite, x), lo), hi);
+    y = hn::Min(hn::Max(hn::IfThenElseZero(finite, y), lo), hi);
+    const VF fx = hn::Floor(x), fy = hn::Floor(y);
+    const VF one = hn::Set(df, 1.0f);
+    const VI xa = hn::ConvertTo(di, wrap(fx, w, t.wrapU)), xb = hn::ConvertTo(di, wrap(hn::Add(fx, one), w, t.wrapU));
+    const VI ya = hn::ConvertTo(di, wrap(fy, h, t.wrapV)), yb = hn::ConvertTo(di, wrap(hn::Add(fy, one), h, t.wrapV));
+    const VI offset = hn::GatherIndex(di, t.offset, level), stride = hn::GatherIndex(di, t.tileRowStride, level);
+    return {{tiledIndex(xa, ya, offset, stride), tiledIndex(xb, ya, offset, stride), tiledIndex(xa, yb, offset, stride),
+             tiledIndex(xb, yb, offset, stride)},
+            hn::IfThenZeroElse(nearest, hn::Sub(x, fx)),
+            hn::IfThenZeroElse(nearest, hn::Sub(y, fy))};
+}
+
+/// f mod period for integers held in float: the quotient from a rounded reciprocal is off by at
+/// most one (|f| <= 1e6 + 1, so the relative error 2^-22 of f / period is below 1/4 of a
+/// period), which one step either way corrects; every product and difference is an integer
+/// below 2^24, so exact.
+VF modulo(VF f, VF period) {
+    const DF df;
+    const VF quotient = hn::Floor(hn::Mul(f, hn::Div(hn::Set(df, 1.0f), period)));
+    VF m = hn::Sub(f, hn::Mul(period, quotient));
+    m = hn::IfThenElse(hn::Lt(m, hn::Zero(df)), hn::Add(m, period), m);
+    return hn::IfThenElse(hn::Ge(m, period), hn::Sub(m, period), m);
+}
+
+VF wrap(VF f, VF size, WrapMode mode) {
+    const DF df;
+    switch (mode) {
+        case WrapMode::ClampToEdge: return hn::Min(hn::Max(f, hn::Zero(df)), hn::Sub(size, hn::Set(df, 1.0f)));
+        case WrapMode::Repeat: return modulo(f, size);
+        case WrapMode::MirroredRepeat: {
+            const VF period = hn::Add(size, size);
+            const VF m = modulo(f, period);
+            return hn::IfThenElse(hn::Lt(m, size), m, hn::Sub(hn::Sub(period, hn::Set(df, 1.0f)), m));
+        }
+    }
+    return hn::Zero(df);
+}
+
+VI tiledIndex(VI x, VI y, VI offset, VI tileRowStride) {
+    const DI di;
+    const VI three = hn::Set(di, 3);
+    const VI column = hn::Add(hn::ShiftLeft<4>(hn::ShiftRight<2>(x)), hn::And(x, three));
+    const VI row = hn::Add(hn::Mul(hn::ShiftRight<2>(y), tileRowStride), hn::ShiftLeft<2>(hn::And(y, three)));
+    return hn::Add(hn::Add(offset, row), column);
+}
+
+/// One texel per lane, decoded as Texture::texelAt decodes: linear bytes as b / 255 (computed,
+/// the value its table holds), sRGB colour bytes through the table (gathered: a gather is the
+/// slow part of a fetch, so only the three sRGB channels pay for one).
+VF unorm8(VI byte) { return hn::Div(hn::ConvertTo(DF(), byte), hn::Set(DF(), 255.0f)); }
+
+Texel texelsAt(const TexelPyramid& t, VI index) {
+    const DF df;
+    const DI di;
+    const DU du;
+    const VI packed = hn::BitCast(di, hn::GatherIndex(du, t.packed, index));
+    const VI byte = hn::Set(di, 0xFF);
+    const VI r = hn::And(packed, byte), g = hn::And(hn::ShiftRight<8>(packed), byte);
+    const VI b = hn::And(hn::ShiftRight<16>(packed), byte);
+    const VF alpha = unorm8(hn::BitCast(di, hn::ShiftRight<24>(hn::BitCast(du, packed))));
+    if (!t.srgb) return {unorm8(r), unorm8(g), unorm8(b), alpha};
+    return {hn::GatherIndex(df, t.decodeRgb, r), hn::GatherIndex(df, t.decodeRgb, g), hn::GatherIndex(df, t.decodeRgb, b),
+            alpha};
+}
+
+/// Texture::blend: the top pair and the bottom pair mixed across, then the two down.
+Texel bilinear(const TexelPyramid& t, const Footprint& f) {
+    const Texel t00 = texelsAt(t, f.index[0]), t10 = texelsAt(t, f.index[1]);
+    const Texel t01 = texelsAt(t, f.index[2]), t11 = texelsAt(t, f.index[3]);
+    auto channel = [&](VF Texel::* c) {
+        return mix(mix(t00.*c, t10.*c, f.ax), mix(t01.*c, t11.*c, f.ax), f.ay);
+    };
+    return {channel(&Texel::r), channel(&Texel::g), channel(&Texel::b), channel(&Texel::a)};
+}
+
+}  // namespace
+
+void sampleLanesOnTarget(const TexelPyramid& t, int count, const float* u, const float* v, const float* lod,
+                                  glm::vec4* out) {
+    const DF df;
+    const int lanes = int(hn::Lanes(df));
+    int i = 0;
+    for (; i + lanes <= count; i += lanes) {
+        const Texel s = sample(t, hn::LoadU(df, u + i), hn::LoadU(df, v + i), hn::LoadU(df, lod + i));
+        hn::StoreInterleaved4(s.r, s.g, s.b, s.a, df, reinterpret_cast<float*>(out + i));
+    }
+    if (i == count) return;
+    // The last points, padded to a whole vector with the point (0, 0) at level 0.
+    constexpr int kMaxLanes = HWY_MAX_BYTES / sizeof(float);
+    alignas(64) float uTail[kMaxLanes] = {}, vTail[kMaxLanes] = {}, lodTail[kMaxLanes] = {};
+    alignas(64) glm::vec4 outTail[kMaxLanes];
+    const int rest = count - i;
+    std::copy_n(u + i, rest, uTail), std::copy_n(v + i, rest, vTail), std::copy_n(lod + i, rest, lodTail);
+    const Texel s = sample(t, hn::Load(df, uTail), hn::Load(df, vTail), hn::Load(df, lodTail));
+    hn::StoreInterleaved4(s.r, s.g, s.b, s.a, df, reinterpret_cast<float*>(outTail));
+    std::copy_n(outTail, rest, out + i);
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace cuberille::raster
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace cuberille::raster {
+
+HWY_EXPORT(sampleLanesOnTarget);
+
+void sampleLanes(const TexelPyramid& texture, int count, const float* u, const float* v, const float* lod,
+                 glm::vec4* out) {
+    HWY_DYNAMIC_DISPATCH(sampleLanesOnTarget)(texture, count, u, v, lod, out);
+}
+
+}  // namespace cuberille::raster
+#endif  // HWY_ONCE

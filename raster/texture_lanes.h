@@ -1,0 +1,50 @@
+#pragma once
+// Texture fetches in vector lanes: raster/texture.h's trilinear filter for many points at once,
+// the way a GPU's texture unit serves a warp.
+//
+// A shade queue asks for one filtered texel per pixel, up to 64 pixels at a time, for each
+// texture a material binds (five on DamagedHelmet). One point at a time, that is a footprint,
+// two wraps and eight texel decodes in scalar code per point, and it was 61% of a DamagedHelmet
+// frame at one sample. Here each lane is a point: level of detail to levels and weight, texel
+// space, wrap modes, tiled addresses (Texture's 4x4 tiles) and the blends are lane arithmetic;
+// the eight texels and the sRGB decode table are gathers.
+//
+// The same bits as Texture::sample(), on every instruction set: the same IEEE operations in the
+// same order (no contraction), and the integer steps done exactly in float — texel coordinates
+// are integers below 2^24 there (texture space is clamped to +-1e6 first), so floor, the wrap's
+// modulo (a quotient corrected by one period either way) and the products are exact.
+// TextureLanes.SampleBitForBitOnEveryInstructionSet checks it.
+//
+// Every filter of glTF's samplers runs here (a nearest tap is a bilinear one with zero weights:
+// t00 (1 - 0) + t10 0 is t00 exactly for the finite texels of an 8-bit format); float texels go
+// to the one-point sampler, since only procedural textures and 16-bit images have them.
+
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+#include "raster/texture.h"
+
+namespace cuberille::raster {
+
+/// What the lane sampler reads of a texture: the tiled 8-bit storage, the sRGB decode table and,
+/// per level, its size and place (Texture's layout).
+struct TexelPyramid {
+    const uint32_t* packed;
+    bool srgb;                // TexelFormat::Srgb8: RGB through decodeRgb; else every byte is b / 255
+    const float* decodeRgb;   // 256 entries
+    int levelCount;
+    WrapMode wrapU, wrapV;
+    TextureFilter filter;
+    const int32_t* width;          // [levelCount] each
+    const int32_t* height;
+    const int32_t* offset;         // first texel of the level in `packed`
+    const int32_t* tileRowStride;  // texels per row of 4x4 tiles
+};
+
+/// out[i] = the filtered sample at (u[i], v[i]) with level of detail lod[i] under the texture's
+/// filters: Texture::sample(), bit for bit.
+void sampleLanes(const TexelPyramid& texture, int count, const float* u, const float* v, const float* lod,
+                          glm::vec4* out);
+
+}  // namespace cuberille::raster
