@@ -134,6 +134,11 @@ private:
         } fetched;
     };
 
+    /// One filtered texel per queued pixel, a channel per array.
+    struct FetchedTexels {
+        float r[N], g[N], b[N], a[N];
+    };
+
     // Perspective-correct weights of queued pixel i: screen weights clamped onto the triangle
     // (so the result is always a convex combination), times 1/w, renormalised. Shared by the
     // passes and the fused Lambert loop, so both compute the same weights.
@@ -200,7 +205,7 @@ private:
     // One filtered fetch per pixel through the binding's UV transform (applied to the
     // derivatives too, so the level of detail follows the transformed coordinates), for the
     // whole queue at once (Texture::sampleBatch overlaps the texel reads of its pixels).
-    static void fetchAll(const TextureBinding& b, PixelAttributes& a, int count, glm::vec4* out) {
+    static void fetchAll(const TextureBinding& b, PixelAttributes& a, int count, FetchedTexels& out) {
         typename PixelAttributes::FetchCoordinates& c = a.fetched;
         const Texture& t = *b.texture;
         if (c.width != t.width() || c.height != t.height() || c.transform.linear != b.transform.linear ||
@@ -210,20 +215,20 @@ private:
                 const glm::vec2 uv = b.transform.apply({a.uv[0][i], a.uv[1][i]});
                 const glm::vec2 dx = m * glm::vec2(a.dUVdx[0][i], a.dUVdx[1][i]);
                 const glm::vec2 dy = m * glm::vec2(a.dUVdy[0][i], a.dUVdy[1][i]);
-                c.u[i] = uv.x, c.v[i] = uv.y, c.lod[i] = t.levelOfDetail(dx, dy);
+                c.u[i] = uv.x, c.v[i] = uv.y, c.lod[i] = t.footprintTexels(dx, dy);
             }
+            for (int i = 0; i < count; ++i) c.lod[i] = Texture::levelOfFootprint(c.lod[i]);  // log2: a call per pixel
             c.width = t.width(), c.height = t.height(), c.transform = b.transform;
         }
-        t.sampleBatch(count, c.u, c.v, c.lod, out);
+        t.sampleBatch(count, c.u, c.v, c.lod, {out.r, out.g, out.b, out.a});
     }
 
     void applyBaseColorTexture(int count, PixelAttributes& a, StageCounters& counters) const {
-        glm::vec4 texels[N];
+        FetchedTexels texels;
         fetchAll(s_.textures.baseColor, a, count, texels);
         for (int i = 0; i < count; ++i) {
-            const glm::vec4& texel = texels[i];
-            a.albedo[0][i] *= texel.r, a.albedo[1][i] *= texel.g, a.albedo[2][i] *= texel.b;
-            a.alpha[0][i] *= texel.a;
+            a.albedo[0][i] *= texels.r[i], a.albedo[1][i] *= texels.g[i], a.albedo[2][i] *= texels.b[i];
+            a.alpha[0][i] *= texels.a[i];
         }
         counters.textureSamples += uint64_t(count);
     }
@@ -237,15 +242,15 @@ private:
             float tangent[4][N];
             interpolate<4>(v, layout_.tangent, count, a.w, tangent);
             const float scale = s_.normalScale;
-            glm::vec4 texels[N];
+            FetchedTexels texels;
             fetchAll(s_.textures.normal, a, count, texels);
             for (int i = 0; i < count; ++i) {
                 const glm::vec3 nrm = safeNormalize({a.normal[0][i], a.normal[1][i], a.normal[2][i]});
                 glm::vec3 tan(tangent[0][i], tangent[1][i], tangent[2][i]);
                 tan = safeNormalize(tan - nrm * glm::dot(nrm, tan));  // Gram-Schmidt
                 const glm::vec3 bitangent = glm::cross(nrm, tan) * (tangent[3][i] < 0.0f ? -1.0f : 1.0f);
-                const glm::vec4& texel = texels[i];
-                const glm::vec3 m(scale * (2.0f * texel.r - 1.0f), scale * (2.0f * texel.g - 1.0f), 2.0f * texel.b - 1.0f);
+                const glm::vec3 m(scale * (2.0f * texels.r[i] - 1.0f), scale * (2.0f * texels.g[i] - 1.0f),
+                                  2.0f * texels.b[i] - 1.0f);
                 const glm::vec3 n = tan * m.x + bitangent * m.y + nrm * m.z;
                 a.normal[0][i] = n.x, a.normal[1][i] = n.y, a.normal[2][i] = n.z;
             }
@@ -262,9 +267,9 @@ private:
 
     void occlusionFromTexture(int count, PixelAttributes& a, float* occlusion, StageCounters& counters) const {
         const float strength = s_.occlusionStrength;
-        glm::vec4 texels[N];
+        FetchedTexels texels;
         fetchAll(s_.textures.occlusion, a, count, texels);
-        for (int i = 0; i < count; ++i) occlusion[i] = 1.0f + strength * (texels[i].r - 1.0f);
+        for (int i = 0; i < count; ++i) occlusion[i] = 1.0f + strength * (texels.r[i] - 1.0f);
         counters.textureSamples += uint64_t(count);
     }
 
@@ -362,12 +367,16 @@ private:
         const int count = q.count;
         const Lighting& lighting = s_.lighting;
         const bool textured = layout_.texCoord >= 0 && s_.textures.metallicRoughness;
-        glm::vec4 texels[N];
-        if (textured) fetchAll(s_.textures.metallicRoughness, a, count, texels);
+        FetchedTexels texels;
+        if (textured) {
+            fetchAll(s_.textures.metallicRoughness, a, count, texels);
+        } else {  // factors times 1, exactly the factors: one loop, without a branch in it
+            std::fill_n(texels.g, count, 1.0f);
+            std::fill_n(texels.b, count, 1.0f);
+        }
         SurfaceAtPixels m;
         for (int i = 0; i < count; ++i) {
-            float metallic = s_.metallic, roughness = s_.roughness;
-            if (textured) metallic *= texels[i].b, roughness *= texels[i].g;
+            float metallic = s_.metallic * texels.b[i], roughness = s_.roughness * texels.g[i];
             metallic = std::clamp(metallic, 0.0f, 1.0f);
             // A floor on roughness: a perfect mirror's highlight is a delta no sample can hit.
             const float r = std::max(0.03f, std::clamp(roughness, 0.0f, 1.0f));
@@ -380,10 +389,10 @@ private:
             const glm::vec3 view = safeNormalize(s_.cameraPosition - p);
             m.nDotV[i] = std::max(glm::dot(n, view), 1e-4f);
             const glm::vec3 color = lighting.ambient * occlusion[i] * (diffuse + f0);
-            for (int k = 0; k < 3; ++k) {
-                m.diffuse[k][i] = diffuse[k], m.f0[k][i] = f0[k], m.view[k][i] = view[k];
-                a.radiance[k][i] = color[k];
-            }
+            m.diffuse[0][i] = diffuse.x, m.diffuse[1][i] = diffuse.y, m.diffuse[2][i] = diffuse.z;
+            m.f0[0][i] = f0.x, m.f0[1][i] = f0.y, m.f0[2][i] = f0.z;
+            m.view[0][i] = view.x, m.view[1][i] = view.y, m.view[2][i] = view.z;
+            a.radiance[0][i] = color.r, a.radiance[1][i] = color.g, a.radiance[2][i] = color.b;
         }
         for (int l = 0; l < lighting.lightCount; ++l) {
             const Light& light = lighting.lights[l];
@@ -405,13 +414,18 @@ private:
     // One light's term at every pixel: E n.l ((1 - F) c_diff + pi F D V), where n.l > 0.
     template <bool kDirectional>
     void addLight(const Light& light, const ShadeQueue& q, PixelAttributes& a, const SurfaceAtPixels& m) const {
+        float shadowed[N];  // the light's shadow mask at each pixel (x 1 is exact where there is none)
+        if (light.visibility)
+            for (int i = 0; i < q.count; ++i) shadowed[i] = light.visibility[q.pixelIndex[i]];
+        else
+            std::fill_n(shadowed, q.count, 1.0f);
         for (int i = 0; i < q.count; ++i) {
             Incident in;
             if constexpr (kDirectional)
                 in = {-light.direction, light.intensity};
             else
                 in = incident(light, a, i);
-            if (light.visibility) in.intensity *= light.visibility[q.pixelIndex[i]];
+            in.intensity *= shadowed[i];
             const glm::vec3 n(a.normal[0][i], a.normal[1][i], a.normal[2][i]);
             const glm::vec3 view(m.view[0][i], m.view[1][i], m.view[2][i]);
             const glm::vec3 f0(m.f0[0][i], m.f0[1][i], m.f0[2][i]);
@@ -434,17 +448,20 @@ private:
             const glm::vec3 term = in.intensity * nDotL * brdf;
             // A select, not a branch: an unlit pixel's term may be Inf or NaN, and is not added.
             const bool lit = nDotL > 0.0f;
-            for (int k = 0; k < 3; ++k) a.radiance[k][i] += lit ? term[k] : 0.0f;
+            a.radiance[0][i] += lit ? term.r : 0.0f;
+            a.radiance[1][i] += lit ? term.g : 0.0f;
+            a.radiance[2][i] += lit ? term.b : 0.0f;
         }
     }
 
     void addEmissive(int count, PixelAttributes& a, StageCounters& counters) const {
         const glm::vec3 e = s_.emissive;
         if (layout_.texCoord >= 0 && s_.textures.emissive) {
-            glm::vec4 texels[N];
+            FetchedTexels texels;
             fetchAll(s_.textures.emissive, a, count, texels);
-            for (int i = 0; i < count; ++i)
-                for (int k = 0; k < 3; ++k) a.radiance[k][i] += e[k] * texels[i][k];
+            const float* channel[3] = {texels.r, texels.g, texels.b};
+            for (int k = 0; k < 3; ++k)
+                for (int i = 0; i < count; ++i) a.radiance[k][i] += e[k] * channel[k][i];
             counters.textureSamples += uint64_t(count);
             return;
         }

@@ -222,7 +222,7 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(
     return glm::mix(top, bottom, f.ay);
 }
 
-void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, glm::vec4* out) const {
+void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out) const {
     if (format_ != TexelFormat::LinearFloat) {
         const TexelPyramid pyramid{packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,
                                    filter_, tables_.width, tables_.height, tables_.offset, tables_.tileRowStride};
@@ -234,7 +234,10 @@ void Texture::sampleBatch(int count, const float* u, const float* v, const float
     for (int start = 0; start < count; start += kRun) {
         const int n = std::min(kRun, count - start);
         for (int i = 0; i < n; ++i) plans[i] = plan({u[start + i], v[start + i]}, lod[start + i]);
-        for (int i = 0; i < n; ++i) out[start + i] = gather(plans[i]);
+        for (int i = 0; i < n; ++i) {
+            const glm::vec4 texel = gather(plans[i]);
+            out.r[start + i] = texel.r, out.g[start + i] = texel.g, out.b[start + i] = texel.b, out.a[start + i] = texel.a;
+        }
     }
 }
 
@@ -249,10 +252,5 @@ glm::vec4 Texture::sampleTrilinear(glm::vec2 uv, float lod) const {
     return t > 0.0f ? glm::mix(a, sampleBilinear(l1, uv), t) : a;
 }
 
-float Texture::levelOfDetail(glm::vec2 dUVdx, glm::vec2 dUVdy) const {
-    const glm::vec2 size{float(width()), float(height())};
-    const float rho = std::max(glm::length(dUVdx * size), glm::length(dUVdy * size));
-    return rho > 0.0f ? std::log2(rho) : 0.0f;
-}
 
 }  // namespace cuberille::raster

@@ -25,6 +25,8 @@
 // every texel row.
 // Thread-safety: immutable after construction; sampling is read-only.
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <new>
@@ -94,17 +96,31 @@ public:
     /// what the shade stage calls.
     glm::vec4 sample(glm::vec2 uv, float lod) const;
 
-    /// sample() at `count` points: out[i] = sample({u[i], v[i]}, lod[i]), bit for bit. The shade
-    /// stage fetches a queue of pixels at a time this way: every point's texel addresses are
-    /// found first and the texels read after, so the cache misses of many points overlap
-    /// instead of each waiting behind the last (how a GPU's texture unit hides them).
-    void sampleBatch(int count, const float* u, const float* v, const float* lod, glm::vec4* out) const;
+    /// Where sampleBatch() writes: one array per channel (structure-of-arrays, what the shade
+    /// stage's loops read), each of at least `count` floats.
+    struct Channels {
+        float *r, *g, *b, *a;
+    };
+    /// sample() at `count` points: (out.r[i], out.g[i], out.b[i], out.a[i]) = sample({u[i],
+    /// v[i]}, lod[i]), bit for bit. The shade stage fetches a queue of pixels at a time this way:
+    /// 8-bit texels in vector lanes (raster/texture_lanes.h), float texels a point at a time with
+    /// every point's texel addresses found before the texels are read, so the cache misses of
+    /// many points overlap instead of each waiting behind the last.
+    void sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out) const;
     glm::vec4 sampleNearest(int level, glm::vec2 uv) const;
     glm::vec4 sampleBilinear(int level, glm::vec2 uv) const;
     /// lod <= 0 samples level 0; fractional lods blend the two nearest levels.
     glm::vec4 sampleTrilinear(glm::vec2 uv, float lod) const;
-    /// Level of detail for UV derivatives per pixel step in x and y.
-    float levelOfDetail(glm::vec2 dUVdx, glm::vec2 dUVdy) const;
+    /// Level of detail for UV derivatives per pixel step in x and y:
+    /// levelOfFootprint(footprintTexels(...)), the two halves apart so a loop over pixels can
+    /// vectorise the first and call log2 in the second.
+    float levelOfDetail(glm::vec2 dUVdx, glm::vec2 dUVdy) const { return levelOfFootprint(footprintTexels(dUVdx, dUVdy)); }
+    /// The texels of level 0 a pixel step covers, the longer of the two steps.
+    float footprintTexels(glm::vec2 dUVdx, glm::vec2 dUVdy) const {
+        const glm::vec2 size{float(width()), float(height())};
+        return std::max(glm::length(dUVdx * size), glm::length(dUVdy * size));
+    }
+    static float levelOfFootprint(float texels) { return texels > 0.0f ? std::log2(texels) : 0.0f; }
 
 private:
     /// Storage aligned to a cache line, so that a 4x4 tile of 8-bit texels is one line.

@@ -211,24 +211,26 @@ Texel bilinear(const TexelPyramid& t, const Footprint& f) {
 }  // namespace
 
 void sampleLanesOnTarget(const TexelPyramid& t, int count, const float* u, const float* v, const float* lod,
-                                  glm::vec4* out) {
+                         Texture::Channels out) {
     const DF df;
     const int lanes = int(hn::Lanes(df));
     int i = 0;
     for (; i + lanes <= count; i += lanes) {
         const Texel s = sample(t, hn::LoadU(df, u + i), hn::LoadU(df, v + i), hn::LoadU(df, lod + i));
-        hn::StoreInterleaved4(s.r, s.g, s.b, s.a, df, reinterpret_cast<float*>(out + i));
+        hn::StoreU(s.r, df, out.r + i), hn::StoreU(s.g, df, out.g + i);
+        hn::StoreU(s.b, df, out.b + i), hn::StoreU(s.a, df, out.a + i);
     }
     if (i == count) return;
     // The last points, padded to a whole vector with the point (0, 0) at level 0.
     constexpr int kMaxLanes = HWY_MAX_BYTES / sizeof(float);
     alignas(64) float uTail[kMaxLanes] = {}, vTail[kMaxLanes] = {}, lodTail[kMaxLanes] = {};
-    alignas(64) glm::vec4 outTail[kMaxLanes];
+    alignas(64) float tail[4][kMaxLanes];
     const int rest = count - i;
     std::copy_n(u + i, rest, uTail), std::copy_n(v + i, rest, vTail), std::copy_n(lod + i, rest, lodTail);
     const Texel s = sample(t, hn::Load(df, uTail), hn::Load(df, vTail), hn::Load(df, lodTail));
-    hn::StoreInterleaved4(s.r, s.g, s.b, s.a, df, reinterpret_cast<float*>(outTail));
-    std::copy_n(outTail, rest, out + i);
+    hn::Store(s.r, df, tail[0]), hn::Store(s.g, df, tail[1]), hn::Store(s.b, df, tail[2]), hn::Store(s.a, df, tail[3]);
+    std::copy_n(tail[0], rest, out.r + i), std::copy_n(tail[1], rest, out.g + i);
+    std::copy_n(tail[2], rest, out.b + i), std::copy_n(tail[3], rest, out.a + i);
 }
 
 }  // namespace HWY_NAMESPACE
@@ -241,7 +243,7 @@ namespace cuberille::raster {
 HWY_EXPORT(sampleLanesOnTarget);
 
 void sampleLanes(const TexelPyramid& texture, int count, const float* u, const float* v, const float* lod,
-                 glm::vec4* out) {
+                 Texture::Channels out) {
     HWY_DYNAMIC_DISPATCH(sampleLanesOnTarget)(texture, count, u, v, lod, out);
 }
 

@@ -42,9 +42,9 @@ struct TexelPyramid {
     const int32_t* tileRowStride;  // texels per row of 4x4 tiles
 };
 
-/// out[i] = the filtered sample at (u[i], v[i]) with level of detail lod[i] under the texture's
-/// filters: Texture::sample(), bit for bit.
+/// Channel values at i = the filtered sample at (u[i], v[i]) with level of detail lod[i] under
+/// the texture's filters: Texture::sample(), bit for bit.
 void sampleLanes(const TexelPyramid& texture, int count, const float* u, const float* v, const float* lod,
-                          glm::vec4* out);
+                 Texture::Channels out);
 
 }  // namespace cuberille::raster

@@ -174,13 +174,16 @@ TEST(Texture, BatchSamplingIsSampleBitForBitUnderEveryFilter) {
                                             ? ramp(size.x, size.y, wrapU, wrapV)
                                             : Texture(size.x, size.y, bytes, format, wrapU, wrapV);
                             t.setFilter({magnifyNearest, minify});
-                            glm::vec4 batch[kPoints];
-                            t.sampleBatch(kPoints, u, v, lod, batch);
+                            float batchChannels[4][kPoints];
+                            t.sampleBatch(kPoints, u, v, lod,
+                                          {batchChannels[0], batchChannels[1], batchChannels[2], batchChannels[3]});
                             for (int i = 0; i < kPoints; ++i) {
+                                const glm::vec4 batch(batchChannels[0][i], batchChannels[1][i], batchChannels[2][i],
+                                                      batchChannels[3][i]);
                                 const glm::vec4 one = t.sample({u[i], v[i]}, lod[i]);
                                 const glm::vec4 reference = filteredReference(t, {u[i], v[i]}, lod[i]);
                                 for (int c = 0; c < 4; ++c) {
-                                    ASSERT_EQ(std::bit_cast<uint32_t>(batch[i][c]), std::bit_cast<uint32_t>(one[c]))
+                                    ASSERT_EQ(std::bit_cast<uint32_t>(batch[c]), std::bit_cast<uint32_t>(one[c]))
                                         << "point " << i << ", size " << size.x << "x" << size.y << ", format "
                                         << int(format) << ", wraps " << int(wrapU) << int(wrapV) << ", filter "
                                         << int(minify) << (magnifyNearest ? " nearest" : "");
