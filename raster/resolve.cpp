@@ -2,6 +2,10 @@
 
 #include <algorithm>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "raster/parallel.h"
 
 namespace cuberille::raster {
@@ -34,6 +38,27 @@ void forEachPixelByTile(const Framebuffer& fb, F&& f) {
     });
 }
 
+// A row of the resolved image, written past the caches: the image (33 MB at 1920x1080) is not
+// read again by this frame, and a plain store first reads each line it writes. Measured at one
+// sample, 1920x1080 (raster_bench): a frame of CesiumMan, mostly clear tiles, resolved in 2.1 ms
+// with plain stores.
+void streamRow(float* out, const glm::vec4* pixels, int count) {
+#if defined(__SSE2__)
+    if ((reinterpret_cast<uintptr_t>(out) & 15) == 0) {
+        for (int i = 0; i < count; ++i) _mm_stream_ps(out + 4 * i, _mm_loadu_ps(&pixels[i].r));
+        return;
+    }
+#endif
+    for (int i = 0; i < count; ++i)
+        for (int c = 0; c < 4; ++c) out[4 * i + c] = pixels[i][c];
+}
+
+void fenceStreamedRows() {
+#if defined(__SSE2__)
+    _mm_sfence();  // streamed stores are weakly ordered: publish them before the task ends
+#endif
+}
+
 // Perceptually ordered ramp for heat maps (black → blue → red → yellow → white).
 glm::vec4 heat(float t) {
     static const glm::vec3 stops[] = {{0, 0, 0}, {0.0f, 0.05f, 0.6f}, {0.8f, 0.05f, 0.05f},
@@ -49,16 +74,33 @@ void resolveColor(const Framebuffer& fb, Image& out) {
     prepare(fb, out);
     const int n = fb.samples();
     const double invN = 1.0 / n;
-    const glm::vec4 clear = fb.desc().clearColor;
-    forEachPixelByTile(fb, [&](int x, int y, size_t first, int tile) {
-        if (!fb.tileTouched(tile) || !fb.hasColor()) return store(out, x, y, clear);
-        const glm::vec4* s = fb.tileColor(tile) + first;
-        if (n == 1) return store(out, x, y, s[0]);
-        double sum[4] = {0, 0, 0, 0};
-        for (int i = 0; i < n; ++i)
-            for (int c = 0; c < 4; ++c) sum[c] += s[i][c];
-        store(out, x, y, glm::vec4(float(sum[0] * invN), float(sum[1] * invN),
-                                   float(sum[2] * invN), float(sum[3] * invN)));
+    // A tile row at a time: copied (one sample), averaged into a local row (more), or the clear
+    // colour (a tile nothing drew to), then streamed to the image.
+    parallelFor(size_t(fb.tilesY()), [&](size_t ty) {
+        glm::vec4 clearRow[kTileSizePixels], averaged[kTileSizePixels];
+        std::fill_n(clearRow, kTileSizePixels, fb.desc().clearColor);
+        for (int tx = 0; tx < fb.tilesX(); ++tx) {
+            const int tile = int(ty) * fb.tilesX() + tx;
+            const int x0 = tx * kTileSizePixels, y0 = int(ty) * kTileSizePixels;
+            const int w = std::min(fb.width() - x0, kTileSizePixels), h = std::min(fb.height() - y0, kTileSizePixels);
+            const bool drawn = fb.tileTouched(tile) && fb.hasColor();
+            for (int y = 0; y < h; ++y) {
+                const glm::vec4* row = drawn ? fb.tileColor(tile) + size_t(y) * kTileSizePixels * n : clearRow;
+                if (drawn && n > 1) {
+                    for (int x = 0; x < w; ++x) {
+                        const glm::vec4* s = row + size_t(x) * n;
+                        double sum[4] = {0, 0, 0, 0};
+                        for (int i = 0; i < n; ++i)
+                            for (int c = 0; c < 4; ++c) sum[c] += s[i][c];
+                        averaged[x] = glm::vec4(float(sum[0] * invN), float(sum[1] * invN), float(sum[2] * invN),
+                                                float(sum[3] * invN));
+                    }
+                    row = averaged;
+                }
+                streamRow(out.pixel(x0, y0 + y), row, w);
+            }
+        }
+        fenceStreamedRows();
     });
 }
 
