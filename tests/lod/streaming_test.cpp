@@ -45,13 +45,13 @@ raster::FramebufferDesc frameDesc() {
 std::vector<float> colorOf(const raster::Pipeline& p) {
     raster::Image image;
     raster::resolveColor(p.framebuffer(), image);
-    return image.rgba;
+    return {image.rgba.begin(), image.rgba.end()};
 }
 
 std::vector<float> depthOf(const raster::Pipeline& p) {
     raster::Image image;
     raster::resolveDepth(p.framebuffer(), image);
-    return image.rgba;
+    return {image.rgba.begin(), image.rgba.end()};
 }
 
 /// The image of a model wholly in memory (occlusion culling off: the reference image).

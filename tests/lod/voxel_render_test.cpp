@@ -210,7 +210,7 @@ std::vector<float> renderColor(lod::VoxelScene& scene, const lod::VoxelRenderOpt
     if (stats) *stats = s;
     raster::Image image;
     raster::resolveColor(p.framebuffer(), image);
-    return image.rgba;
+    return {image.rgba.begin(), image.rgba.end()};
 }
 
 TEST(Occlusion, ConvergedImageEqualsTheImageWithoutCulling) {
@@ -359,7 +359,7 @@ TEST(VoxelDeterminism, SameFrameForAnyThreadCount) {
         if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
         return image.rgba;
     };
-    const std::vector<float> one = render(testing::kThreadCounts[0]);
+    const auto one = render(testing::kThreadCounts[0]);
     EXPECT_EQ(one, render(testing::kThreadCounts[1]));
     EXPECT_EQ(one, render(testing::kThreadCounts[2]));
 }
