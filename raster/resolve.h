@@ -6,40 +6,21 @@
 // magnitude) and divides by the sample count, a power of two: the one rounding is the final
 // conversion to float. So k of N samples at value v resolve to float(k·v/N) (DESIGN.md, .tri).
 
-#include <memory>
-#include <utility>
 #include <vector>
+
+#include "raster/uninitialized_allocator.h"
 
 #include "raster/framebuffer.h"
 
 namespace cuberille::raster {
 
-/// Storage whose resize() leaves new elements unwritten (default-initialised floats), so the
-/// first write to an image's pages is the resolve's, on every thread, and not a zero-fill on
-/// one thread before it: for a 1080p frame in a fresh process, 33 MB of page faults.
-template <class T>
-struct UninitializedAllocator : std::allocator<T> {
-    template <class U>
-    struct rebind {
-        using other = UninitializedAllocator<U>;
-    };
-    UninitializedAllocator() = default;
-    template <class U>
-    UninitializedAllocator(const UninitializedAllocator<U>&) {}
-    template <class U>
-    void construct(U* p) noexcept {
-        ::new (static_cast<void*>(p)) U;
-    }
-    template <class U, class... Args>
-    void construct(U* p, Args&&... args) {
-        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-    }
-};
-
 /// Linear RGBA float image, row-major, top row first.
 struct Image {
     int width = 0, height = 0;
-    std::vector<float, UninitializedAllocator<float>> rgba;  // a resize leaves new values unset
+    // A resize leaves new values unwritten: the resolve writes every one, on its threads, so a
+    // fresh process takes the image's page faults there and not in a zero-fill on one thread
+    // first (33 MB at 1080p).
+    UninitializedVector<float> rgba;
 
     float* pixel(int x, int y) { return rgba.data() + (size_t(y) * width + x) * 4; }
     const float* pixel(int x, int y) const { return rgba.data() + (size_t(y) * width + x) * 4; }

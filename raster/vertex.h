@@ -14,6 +14,7 @@
 #include "raster/clip.h"
 #include "raster/draw.h"
 #include "raster/setup.h"
+#include "raster/uninitialized_allocator.h"
 
 namespace cuberille::raster {
 
@@ -36,10 +37,11 @@ struct VaryingLayout {
 static_assert(3 + 3 + 1 + 2 + 3 + 4 <= kMaxVaryings);
 
 struct VertexStageOutput {
-    std::vector<glm::vec4> clipPositions;
-    std::vector<uint8_t> outcodes;       // planes the vertex is outside of, or kInvalidVertex
-    std::vector<WindowVertex> window;    // valid where the outcode is 0
-    std::vector<float> varyings;         // vertex-major, layout.count floats per vertex
+    // Written for every vertex by the stage's threads; sized without a zero-fill before them.
+    UninitializedVector<glm::vec4> clipPositions;
+    UninitializedVector<uint8_t> outcodes;   // planes the vertex is outside of, or kInvalidVertex
+    std::vector<WindowVertex> window;        // valid where the outcode is 0
+    UninitializedVector<float> varyings;     // vertex-major, layout.count floats per vertex
     VaryingLayout layout;                // the draw's, derived once per flush
 
     void resize(size_t vertices, const VaryingLayout& varyingLayout);
