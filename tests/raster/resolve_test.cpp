@@ -70,6 +70,44 @@ TEST(Resolve, UntouchedTilesResolveToClearColor) {
     EXPECT_EQ(img.pixel(150, 70)[2], 0.75f);
 }
 
+// Every pixel of every channel, on a frame of ragged tiles where only some tiles are drawn to:
+// a touched tile's pixel is its samples' average (summed in double, as the contract says), an
+// untouched tile's the clear colour. The resolve writes a tile row at a time with streamed
+// stores; this is the check that no row, edge or tile is left out or misplaced.
+TEST(Resolve, EveryPixelIsItsSamplesAverageOrTheClearColour) {
+    for (int samples : {1, 4, 16}) {
+        scene::TriScene s;
+        s.positions = {{3.3f, 2.2f, 0}, {120.7f, 20.9f, 0}, {40.1f, 97.6f, 0}};
+        s.colors = {glm::vec4(0.1f, 0.7f, 0.3f, 1)};
+        raster::Pipeline p;
+        raster::FramebufferDesc d = frame(203, 141, samples);
+        d.clearColor = {0.25f, 0.5f, 0.75f, 0.125f};
+        drawFrame(p, d, s.drawCall());
+        raster::Image img;
+        raster::resolveColor(p.framebuffer(), img);
+        ASSERT_EQ(img.width, 203);
+        ASSERT_EQ(img.height, 141);
+        const raster::Framebuffer& fb = p.framebuffer();
+        int touched = 0, untouched = 0;
+        for (int y = 0; y < 141; ++y)
+            for (int x = 0; x < 203; ++x) {
+                const int tile = (y / raster::kTileSizePixels) * fb.tilesX() + x / raster::kTileSizePixels;
+                glm::vec4 expected = d.clearColor;
+                if (fb.tileTouched(tile)) {
+                    double sum[4] = {0, 0, 0, 0};
+                    for (int i = 0; i < samples; ++i)
+                        for (int c = 0; c < 4; ++c) sum[c] += sampleColor(fb, x, y, i)[c];
+                    for (int c = 0; c < 4; ++c) expected[c] = float(sum[c] / samples);
+                }
+                (fb.tileTouched(tile) ? touched : untouched)++;
+                for (int c = 0; c < 4; ++c)
+                    ASSERT_EQ(img.pixel(x, y)[c], expected[c]) << x << "," << y << " channel " << c << ", " << samples << " samples";
+            }
+        EXPECT_GT(touched, 0);
+        EXPECT_GT(untouched, 0);
+    }
+}
+
 }  // namespace
 }  // namespace cuberille::testing
 
