@@ -55,6 +55,19 @@ def test_a_sequence_writes_the_files_the_cli_writes(examples, cli, client, tmp_p
     assert len(stats["frames"]) == len(report.files)
 
 
+def test_the_temporary_files_of_a_killed_writer_are_removed_and_nothing_else(tmp_path):
+    """What a worker killed between writing and renaming leaves, in both of the tool's namings
+    (apps/atomic_file.cpp, apps/image_io.cpp), is removed; the outputs and a look-alike are not.
+    The killed-worker test below reaches this only when the kill lands mid-write."""
+    names = ["f_003.png", ".f_003.tmp4242.png", "stats.json", ".stats.json.tmp4242", ".f_003.png.tmp7",
+             "f_0030.png", ".f_0030.tmp1.png", "other.png"]
+    for name in names:
+        (tmp_path / name).write_bytes(b"x")
+    cuberille.dask._remove_leftovers([str(tmp_path / "f_003.png"), str(tmp_path / "stats.json")])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [".f_0030.tmp1.png", "f_0030.png", "f_003.png", "other.png", "stats.json"])
+
+
 def test_a_worker_killed_mid_run_leaves_every_frame_whole(examples, cli, client, tmp_path):
     (tmp_path / "cli").mkdir(), (tmp_path / "dask").mkdir()
     arguments = [examples / "knot.obj", "--turntable", "24", "--width", "320", "--height", "240", "--msaa", "4",

@@ -206,15 +206,21 @@ def _items_per_task(items, workers):
 
 
 def _remove_leftovers(files):
-    """Temporary files (apps/atomic_file.cpp names them .NAME.tmpPID) left by a worker killed while
-    writing: every task has finished, so none of them is still being written."""
+    """Temporary files left by a worker killed while writing: every task has finished, so none of
+    them is still being written. The tool names them .NAME.tmpPID (apps/atomic_file.cpp: stats,
+    depth planes) or, for images, whose writer picks the format by extension, .STEM.tmpPID.EXT
+    (apps/image_io.cpp)."""
     for path in files:
         folder, name = os.path.split(path)
-        for leftover in glob.glob(os.path.join(glob.escape(folder or "."), glob.escape("." + name) + ".tmp*")):
-            try:
-                os.remove(leftover)
-            except OSError:
-                pass
+        stem, extension = os.path.splitext(name)
+        folder = glob.escape(folder or ".")
+        patterns = [glob.escape("." + name) + ".tmp*", glob.escape("." + stem) + ".tmp*" + glob.escape(extension)]
+        for pattern in patterns:
+            for leftover in glob.glob(os.path.join(folder, pattern)):
+                try:
+                    os.remove(leftover)
+                except OSError:
+                    pass
 
 
 def _unique(items):
