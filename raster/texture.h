@@ -19,10 +19,10 @@
 // at least 1 texel).
 // Layout: each level's texels are stored in tiles of 4x4 (a 64-byte cache line of 8-bit texels,
 // the layout GPUs call tiled or swizzled), tiles row-major, all levels in one allocation aligned
-// to a cache line. A bilinear footprint then lies in one line 9 times in 16, and the footprints
-// of a block of pixels touch lines in proportion to their area instead of one line per texel
-// row: on DamagedHelmet at 1 sample, row-major levels made the texture fetches miss on almost
-// every texel row.
+// to a cache line. A bilinear footprint then lies in one line 9 times in 16 (row-major: never
+// both rows in one line), and the footprints of a block of pixels touch lines in proportion to
+// their area instead of one line per texel row they cross (a level of a 2048-texel image has
+// rows 8 KiB apart).
 // Thread-safety: immutable after construction; sampling is read-only.
 
 #include <algorithm>

@@ -1,7 +1,6 @@
 #include "raster/texture_lanes.h"
 
 #include <algorithm>
-#include <cstring>
 
 #include "raster/texture.h"
 

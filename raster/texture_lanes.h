@@ -13,7 +13,7 @@
 // same order (no contraction), and the integer steps done exactly in float — texel coordinates
 // are integers below 2^24 there (texture space is clamped to +-1e6 first), so floor, the wrap's
 // modulo (a quotient corrected by one period either way) and the products are exact.
-// TextureLanes.SampleBitForBitOnEveryInstructionSet checks it.
+// Texture.BatchSamplingIsSampleBitForBitUnderEveryFilter checks it (ctest runs it per set).
 //
 // Every filter of glTF's samplers runs here (a nearest tap is a bilinear one with zero weights:
 // t00 (1 - 0) + t10 0 is t00 exactly for the finite texels of an 8-bit format); float texels go
