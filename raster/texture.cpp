@@ -82,10 +82,9 @@ void Texture::allocateLevels(int width, int height) {
         const size_t tilesX = (size_t(w) + 3) / 4, tilesY = (size_t(h) + 3) / 4;
         // Texel indices are 32-bit signed lanes in the lane sampler.
         if (total + tilesX * tilesY * 16 > size_t(INT32_MAX)) throw std::invalid_argument("texture: too many texels");
-        const int level = levelCount();
-        levels_.push_back({w, h, uint32_t(total), uint32_t(tilesX * 16)});
-        tables_.width[level] = w, tables_.height[level] = h;
-        tables_.offset[level] = int32_t(total), tables_.tileRowStride[level] = int32_t(tilesX * 16);
+        const int level = levels_.count++;
+        levels_.width[level] = w, levels_.height[level] = h;
+        levels_.offset[level] = int32_t(total), levels_.tileRowStride[level] = int32_t(tilesX * 16);
         total += tilesX * tilesY * 16;
         if (w == 1 && h == 1) break;
     }
@@ -98,12 +97,11 @@ void Texture::allocateLevels(int width, int height) {
 // 2x2 box filter in linear float, down to 1x1; an 8-bit level is stored again in its format.
 void Texture::buildMipChain() {
     for (int level = 1; level < levelCount(); ++level) {
-        const Level& src = levels_[level - 1];
-        const Level& dst = levels_[level];
-        for (int y = 0; y < dst.height; ++y)
-            for (int x = 0; x < dst.width; ++x) {
-                const int x0 = std::min(2 * x, src.width - 1), x1 = std::min(2 * x + 1, src.width - 1);
-                const int y0 = std::min(2 * y, src.height - 1), y1 = std::min(2 * y + 1, src.height - 1);
+        const int srcWidth = width(level - 1), srcHeight = height(level - 1);
+        for (int y = 0; y < height(level); ++y)
+            for (int x = 0; x < width(level); ++x) {
+                const int x0 = std::min(2 * x, srcWidth - 1), x1 = std::min(2 * x + 1, srcWidth - 1);
+                const int y0 = std::min(2 * y, srcHeight - 1), y1 = std::min(2 * y + 1, srcHeight - 1);
                 const glm::vec4 average = 0.25f * (texel(level - 1, x0, y0) + texel(level - 1, x1, y0) +
                                                    texel(level - 1, x0, y1) + texel(level - 1, x1, y1));
                 const size_t i = texelIndex(level, x, y);
@@ -117,10 +115,10 @@ void Texture::buildMipChain() {
 
 std::vector<uint32_t> Texture::packedRows(int level) const {
     if (format_ == TexelFormat::LinearFloat) return {};
-    const Level& l = levels_[level];
-    std::vector<uint32_t> rows(size_t(l.width) * l.height);
-    for (int y = 0; y < l.height; ++y)
-        for (int x = 0; x < l.width; ++x) rows[size_t(y) * l.width + x] = packed_[texelIndex(level, x, y)];
+    const int w = width(level), h = height(level);
+    std::vector<uint32_t> rows(size_t(w) * h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) rows[size_t(y) * w + x] = packed_[texelIndex(level, x, y)];
     return rows;
 }
 
@@ -190,27 +188,27 @@ glm::vec4 Texture::sample(glm::vec2 uv, float lod) const { return gather(plan(uv
 glm::vec4 Texture::sampleNearest(int level, glm::vec2 uv) const { return texelAt(nearestIndex(level, uv)); }
 
 [[gnu::always_inline]] inline uint32_t Texture::nearestIndex(int level, glm::vec2 uv) const {
-    const Level& l = levels_[level];
-    float x = uv.x * float(l.width), y = uv.y * float(l.height);
+    const int w = width(level), h = height(level);
+    float x = uv.x * float(w), y = uv.y * float(h);
     if (!std::isfinite(x) || !std::isfinite(y)) x = y = 0.0f;
     x = std::clamp(x, -1e6f, 1e6f);
     y = std::clamp(y, -1e6f, 1e6f);
-    return uint32_t(texelIndex(level, wrap(int(std::floor(x)), l.width, wrapU_), wrap(int(std::floor(y)), l.height, wrapV_)));
+    return uint32_t(texelIndex(level, wrap(int(std::floor(x)), w, wrapU_), wrap(int(std::floor(y)), h, wrapV_)));
 }
 
 glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(footprint(level, uv)); }
 
 [[gnu::always_inline]] inline Texture::BilinearFootprint Texture::footprint(int level, glm::vec2 uv) const {
-    const Level& l = levels_[level];
+    const int w = width(level), h = height(level);
     // Texel space with texel centres on integers; non-finite coordinates sample texel 0.
-    float x = uv.x * float(l.width) - 0.5f, y = uv.y * float(l.height) - 0.5f;
+    float x = uv.x * float(w) - 0.5f, y = uv.y * float(h) - 0.5f;
     if (!std::isfinite(x) || !std::isfinite(y)) x = y = 0.0f;
     x = std::clamp(x, -1e6f, 1e6f);  // far beyond any wrap period; keeps the int conversion defined
     y = std::clamp(y, -1e6f, 1e6f);
     const float fx = std::floor(x), fy = std::floor(y);
     const int x0 = int(fx), y0 = int(fy);
-    const int xa = wrap(x0, l.width, wrapU_), xb = wrap(x0 + 1, l.width, wrapU_);
-    const int ya = wrap(y0, l.height, wrapV_), yb = wrap(y0 + 1, l.height, wrapV_);
+    const int xa = wrap(x0, w, wrapU_), xb = wrap(x0 + 1, w, wrapU_);
+    const int ya = wrap(y0, h, wrapV_), yb = wrap(y0 + 1, h, wrapV_);
     return {{uint32_t(texelIndex(level, xa, ya)), uint32_t(texelIndex(level, xb, ya)), uint32_t(texelIndex(level, xa, yb)),
              uint32_t(texelIndex(level, xb, yb))},
             x - fx, y - fy};
@@ -225,7 +223,7 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(
 void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out) const {
     if (format_ != TexelFormat::LinearFloat) {
         const TexelPyramid pyramid{packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,
-                                   filter_, tables_.width, tables_.height, tables_.offset, tables_.tileRowStride};
+                                   filter_, levels_.width, levels_.height, levels_.offset, levels_.tileRowStride};
         return sampleLanes(pyramid, count, u, v, lod, out);
     }
     // The plans of a run of points first, then their texels.
@@ -251,6 +249,5 @@ glm::vec4 Texture::sampleTrilinear(glm::vec2 uv, float lod) const {
     const glm::vec4 a = sampleBilinear(l0, uv);
     return t > 0.0f ? glm::mix(a, sampleBilinear(l1, uv), t) : a;
 }
-
 
 }  // namespace cuberille::raster

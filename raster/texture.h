@@ -76,9 +76,9 @@ public:
     WrapMode wrapU() const { return wrapU_; }
     WrapMode wrapV() const { return wrapV_; }
 
-    int width(int level = 0) const { return levels_[level].width; }
-    int height(int level = 0) const { return levels_[level].height; }
-    int levelCount() const { return int(levels_.size()); }
+    int width(int level = 0) const { return levels_.width[level]; }
+    int height(int level = 0) const { return levels_.height[level]; }
+    int levelCount() const { return levels_.count; }
     TexelFormat format() const { return format_; }
     /// Texel (x, y) of a level, decoded to linear RGBA.
     glm::vec4 texel(int level, int x, int y) const { return texelAt(texelIndex(level, x, y)); }
@@ -88,8 +88,8 @@ public:
 
     /// Where texel (x, y) of a level lies in the texture's storage (see Layout above).
     size_t texelIndex(int level, int x, int y) const {
-        const Level& l = levels_[level];
-        return l.offset + size_t(y >> 2) * l.tileRowStride + size_t((y & 3) << 2) + size_t((x >> 2) << 4) + size_t(x & 3);
+        return size_t(levels_.offset[level]) + size_t(y >> 2) * size_t(levels_.tileRowStride[level]) + size_t((y & 3) << 2) +
+               size_t((x >> 2) << 4) + size_t(x & 3);
     }
 
     /// With the texture's filters: lod <= 0 magnifies (level 0), lod > 0 minifies. This is
@@ -135,11 +135,6 @@ private:
         void deallocate(T* p, size_t) { ::operator delete(p, kAlignment); }
         friend bool operator==(const CacheLineAllocator&, const CacheLineAllocator&) { return true; }
     };
-    struct Level {
-        int width, height;
-        uint32_t offset;         // first texel in the storage
-        uint32_t tileRowStride;  // texels per row of tiles: 16 x ceil(width / 4)
-    };
     void allocateLevels(int width, int height);
     void buildMipChain();
     /// The four texels and weights sampleBilinear(level, uv) blends.
@@ -177,12 +172,14 @@ private:
     }
     int wrap(int i, int size, WrapMode mode) const;
 
-    std::vector<Level> levels_;
-    /// The levels again as the lane sampler gathers them (raster/texture_lanes.h).
-    struct LevelTables {
+    /// Each level's size and place, a table per field, as the lane sampler gathers them
+    /// (raster/texture_lanes.h) and the one-point sampler reads them.
+    struct Levels {
+        int count = 0;
         int32_t width[kMaxTextureLevels], height[kMaxTextureLevels];
-        int32_t offset[kMaxTextureLevels], tileRowStride[kMaxTextureLevels];
-    } tables_{};
+        int32_t offset[kMaxTextureLevels];         // first texel in the storage
+        int32_t tileRowStride[kMaxTextureLevels];  // texels per row of tiles: 16 x ceil(width / 4)
+    } levels_{};
     std::vector<glm::vec4, CacheLineAllocator<glm::vec4>> texels_;  // LinearFloat: every level
     std::vector<uint32_t, CacheLineAllocator<uint32_t>> packed_;    // 8-bit formats: every level
     WrapMode wrapU_, wrapV_;
