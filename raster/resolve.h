@@ -8,9 +8,8 @@
 
 #include <vector>
 
-#include "raster/uninitialized_allocator.h"
-
 #include "raster/framebuffer.h"
+#include "raster/uninitialized_allocator.h"
 
 namespace cuberille::raster {
 
