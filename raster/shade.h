@@ -297,6 +297,16 @@ private:
         return {l, light.intensity * attenuation};
     }
 
+    // The light's shadow mask at each queued pixel, gathered before a light's pass so the pass has
+    // no branch on it: 1 where the light has none (a product with 1 is exact, so an unshadowed
+    // light shades as if it were not multiplied in).
+    static void shadowMask(const Light& light, const ShadeQueue& q, float* out) {
+        if (light.visibility)
+            for (int i = 0; i < q.count; ++i) out[i] = light.visibility[q.pixelIndex[i]];
+        else
+            std::fill_n(out, q.count, 1.0f);
+    }
+
     // The common case (scans, PLY and OBJ models, the built-in scenes: one directional light,
     // no textures, no vertex alpha, no emissive) fused into one loop that never leaves
     // registers. The same arithmetic as the passes (weights, interpolation, normalised n.l), so
@@ -338,18 +348,20 @@ private:
             for (int i = 0; i < count; ++i) irradiance[k][i] = lighting.ambient[k] * occlusion[i];
         for (int l = 0; l < lighting.lightCount; ++l) {
             const Light& light = lighting.lights[l];
+            float shadowed[N];
+            shadowMask(light, q, shadowed);
             if (light.type == LightType::Directional) {  // the common case, vectorised
                 const glm::vec3 d = -light.direction, e = light.intensity;
                 for (int i = 0; i < count; ++i) {
                     const float c = std::max(0.0f, a.normal[0][i] * d.x + a.normal[1][i] * d.y + a.normal[2][i] * d.z);
-                    const float v = light.visibility ? light.visibility[q.pixelIndex[i]] : 1.0f;
+                    const float v = shadowed[i];
                     irradiance[0][i] += e.x * c * v, irradiance[1][i] += e.y * c * v, irradiance[2][i] += e.z * c * v;
                 }
             } else {
                 for (int i = 0; i < count; ++i) {
                     const Incident in = incident(light, a, i);
                     float c = std::max(0.0f, glm::dot(glm::vec3(a.normal[0][i], a.normal[1][i], a.normal[2][i]), in.toLight));
-                    if (light.visibility) c *= light.visibility[q.pixelIndex[i]];
+                    c *= shadowed[i];
                     for (int k = 0; k < 3; ++k) irradiance[k][i] += in.intensity[k] * c;
                 }
             }
@@ -414,11 +426,8 @@ private:
     // One light's term at every pixel: E n.l ((1 - F) c_diff + pi F D V), where n.l > 0.
     template <bool kDirectional>
     void addLight(const Light& light, const ShadeQueue& q, PixelAttributes& a, const SurfaceAtPixels& m) const {
-        float shadowed[N];  // the light's shadow mask at each pixel (x 1 is exact where there is none)
-        if (light.visibility)
-            for (int i = 0; i < q.count; ++i) shadowed[i] = light.visibility[q.pixelIndex[i]];
-        else
-            std::fill_n(shadowed, q.count, 1.0f);
+        float shadowed[N];
+        shadowMask(light, q, shadowed);
         for (int i = 0; i < q.count; ++i) {
             Incident in;
             if constexpr (kDirectional)
