@@ -181,6 +181,7 @@ void printSequenceSummary(const RenderOptions& o, int count, SequenceTotals t) {
 // world's up axis by 360/N degrees a frame, or of --animate N the animation posed at --time + i / --fps.
 render::FrameSettings sequenceFrame(const RenderOptions& o, int index) {
     render::FrameSettings frame = o;
+    frame.shadows.focus = o.shadowFocus.value_or(o.turntable > 0 ? rt::MapFocus::Scene : rt::MapFocus::View);
     if (o.turntable > 0) frame.orbitDegrees = 360.0f * float(index) / float(o.turntable);
     if (o.animate > 0) frame.timeSeconds = o.timeSeconds + float(index) / o.fps;
     return frame;

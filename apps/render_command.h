@@ -41,6 +41,9 @@ struct RenderOptions : render::FrameSettings {
     int turntable = 0;        // > 0: that many frames around the scene, OUT_000.ext ...
     int animate = 0;          // glTF, > 0: that many frames of the animation from --time, OUT_000.ext ...
     float fps = 30.0f;        // --animate: frames a second of animation time
+    /// --shadow-focus; unset (auto): MapFocus::Scene for --turntable, whose camera circles still
+    /// lights and casters (the sun's map is then drawn once), else View.
+    std::optional<rt::MapFocus> shadowFocus;
     std::filesystem::path out;
     std::filesystem::path statsPath;
     bool quiet = false;

@@ -122,6 +122,11 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
         ->capture_default_str();
     render->add_option("--soft-samples", o.shadows.softSamplesPerSide, "With --soft: N, for N x N rays per pixel")
         ->capture_default_str();
+    render->add_option("--shadow-focus", names.shadowFocus,
+                       "What a sun's shadow map covers: view (the casters over what the frame sees: finer texels, "
+                       "drawn again when the camera moves), scene (every caster: drawn once for a turntable or a "
+                       "batch of views) or auto (scene for --turntable, else view)")
+        ->capture_default_str();
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
     return render;
 }
@@ -129,6 +134,7 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
 void applyRenderNames(const RenderNames& names, RenderOptions& o) {
     o.view = parseView(names.view);
     o.shadows.mode = render::parseShadowMode(names.shadows);
+    if (names.shadowFocus != "auto") o.shadowFocus = render::parseMapFocus(names.shadowFocus);
     o.textureFilter = parseTextureFilter(names.textureFilter);
     o.depth = parseDepthConvention(names.depth);
     o.bvhUpdate = parseBvhUpdate(names.bvhUpdate);

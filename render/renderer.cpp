@@ -465,6 +465,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
         const rt::ShadowStats& st = sh.shadows;
         j["shadows"] = {{"mode", shadowModeName(sh.mode)},
                         {"soft", sh.soft},
+                        {"focus", mapFocusName(sh.focus)},
                         {"lightsShadowed", st.lightsShadowed},
                         {"casterTriangles", sh.casterTriangles},
                         {"receiverPixels", st.receiverPixels},

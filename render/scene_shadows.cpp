@@ -77,6 +77,7 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     stats = std::exchange(pending_, {});
     stats.mode = options_.mode;
     stats.soft = options_.soft;
+    stats.focus = options_.focus;
     stats.casterTriangles = indices_.size() / 3;
     raster::Lighting lighting = s.lighting;
     if (!active_) return lighting;
@@ -116,5 +117,13 @@ const char* shadowModeName(rt::ShadowMode mode) {
     }
     return "?";
 }
+
+rt::MapFocus parseMapFocus(const std::string& name) {
+    if (name == "view") return rt::MapFocus::View;
+    if (name == "scene") return rt::MapFocus::Scene;
+    throw scene::InputError("--shadow-focus: '" + name + "' is not auto, view or scene");
+}
+
+const char* mapFocusName(rt::MapFocus focus) { return focus == rt::MapFocus::View ? "view" : "scene"; }
 
 }  // namespace cuberille::render

@@ -22,6 +22,7 @@ namespace cuberille::render {
 struct ShadowFrameStats {
     rt::ShadowMode mode = rt::ShadowMode::None;
     bool soft = false;
+    rt::MapFocus focus = rt::MapFocus::View;
     rt::ShadowStats shadows;
     size_t casterTriangles = 0;
     double bvhBuildMs = 0.0;   // once per scene, reported with the first frame
@@ -86,5 +87,7 @@ private:
 
 rt::ShadowMode parseShadowMode(const std::string& name);  // throws scene::InputError
 const char* shadowModeName(rt::ShadowMode mode);
+rt::MapFocus parseMapFocus(const std::string& name);  // view or scene; throws scene::InputError
+const char* mapFocusName(rt::MapFocus focus);
 
 }  // namespace cuberille::render

@@ -159,14 +159,17 @@ public:
         if (options.soft) disk_ = diskSamples(std::max(1, options.softSamplesPerSide));
     }
 
-    /// The map, focused on the receivers in view; soft shadows widen it by how far sideways a
-    /// ray to the light's disk can stray over the casters' depth (their bounding sphere's diameter).
-    /// Returns whether the map was drawn (false: kept from the last frame, and with it the
-    /// marks, which depend on nothing else: the map, the casters and the options).
+    /// The map, focused on the receivers in view (MapFocus::View) or over every caster (Scene);
+    /// soft shadows widen a focus by how far sideways a ray to the light's disk can stray over the
+    /// casters' depth (their bounding sphere's diameter). Returns whether the map was drawn
+    /// (false: kept from the last frame, and with it the marks, which depend on nothing else:
+    /// the map, the casters and the options).
     bool prepareMap(const ScreenSurfaces& surfaces) {
         const float margin = options_.soft ? options_.lightRadius * glm::length(casters_.bounds.extent()) : 0.0f;
-        const bool drawn = map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, surfaces.seenHull,
-                                       margin, casters_.version);
+        const std::span<const glm::vec3> focus =
+            options_.focus == MapFocus::View ? std::span<const glm::vec3>(surfaces.seenHull) : std::span<const glm::vec3>();
+        const bool drawn =
+            map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, focus, margin, casters_.version);
         if (drawn) marksOptions_.reset();
         if (options_.mode != ShadowMode::Hybrid && !options_.soft) return drawn;
         if (marksOptions_ && sameMarkingOptions(*marksOptions_, options_)) return drawn;
@@ -177,7 +180,8 @@ public:
     }
 
     static bool sameMarkingOptions(const ShadowOptions& a, const ShadowOptions& b) {
-        return a.mode == b.mode && a.soft == b.soft && a.lightRadius == b.lightRadius && a.mapSizeTexels == b.mapSizeTexels;
+        return a.mode == b.mode && a.soft == b.soft && a.lightRadius == b.lightRadius && a.mapSizeTexels == b.mapSizeTexels &&
+               a.focus == b.focus;
     }
 
     /// The light's visibility at one receiver; sets *marked when rays decided it, adds rays.
@@ -731,6 +735,8 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
             const ScreenSurfaces::CameraRow row = surfaces.cameraRow(int(y));
             for (int x = 0; x < surfaces.width; ++x) {
                 const size_t i = y * surfaces.width + x;
+                if (x + ScreenSurfaces::kPlanePrefetchPixels < surfaces.width)
+                    surfaces.prefetchPlane(i + ScreenSurfaces::kPlanePrefetchPixels);
                 Surface surface;
                 if (!surfaces.covered(i) || !surfaces.surfaceAt(row, x, surface)) continue;
                 const Incidence in = incidence(light, toSun, surface.position, surface.normal);

@@ -35,6 +35,15 @@ namespace cuberille::rt {
 
 enum class ShadowMode : uint8_t { None, Map, Hybrid, RayTraced };
 
+/// What a directional light's map covers across the light (point and spot lights' maps cover
+/// their whole view either way).
+///   View   the casters over the receivers this frame sees (a focused map: texels where the
+///          camera looks), so a moved camera draws the map again;
+///   Scene  every caster, whatever the camera sees: coarser texels, but the map depends on the
+///          light and the casters alone, so a turntable or a batch of views keeps it (hybrid
+///          traces more of its pixels; its image is the same reference either way).
+enum class MapFocus : uint8_t { View, Scene };
+
 struct ShadowOptions {
     ShadowMode mode = ShadowMode::None;
     bool soft = false;
@@ -43,6 +52,7 @@ struct ShadowOptions {
     float lightRadius = 0.05f;
     int mapSizeTexels = 2048;
     int softSamplesPerSide = 4;  // N x N rays per pixel that needs them
+    MapFocus focus = MapFocus::View;
 };
 
 struct ShadowStats {

@@ -177,19 +177,23 @@ INSTANTIATE_TEST_SUITE_P(Modes, AnimatedShadows, ::testing::Values(rt::ShadowMod
 
 
 // Maps kept while nothing they depend on moves (issue 27): a point light's cube and a spot light's
-// map do not depend on the camera, so a turntable draws them once; a sun's map is focused on the
-// receivers in view, so a moved camera draws it again. Every kept frame's masks are a fresh
-// stage's, bit for bit, and a new pose draws every map again.
+// map do not depend on the camera, so a turntable draws them once; a sun's map focused on the
+// receivers in view (MapFocus::View) is drawn again when the camera moves, one covering every
+// caster (MapFocus::Scene, a turntable's) is kept. Every kept frame's masks are a fresh stage's,
+// bit for bit, and a new pose draws every map again.
 class KeptMaps : public ::testing::TestWithParam<rt::ShadowMode> {};
 
 TEST_P(KeptMaps, AMapIsKeptWhileTheLightAndCastersStayAndTheMasksAreAFreshStages) {
     struct Case {
         const char* name;
         raster::LightType type;
+        rt::MapFocus focus;
         bool keptAcrossCameras;
     };
-    for (const Case c : {Case{"point", raster::LightType::Point, true}, Case{"spot", raster::LightType::Spot, true},
-                         Case{"directional", raster::LightType::Directional, false}}) {
+    for (const Case c : {Case{"point", raster::LightType::Point, rt::MapFocus::View, true},
+                         Case{"spot", raster::LightType::Spot, rt::MapFocus::View, true},
+                         Case{"directional focused on the view", raster::LightType::Directional, rt::MapFocus::View, false},
+                         Case{"directional over the scene", raster::LightType::Directional, rt::MapFocus::Scene, true}}) {
         SCOPED_TRACE(c.name);
         scene::Scene s = sheetOverGround(still);
         raster::Light& light = s.lighting.lights[0];
@@ -201,6 +205,7 @@ TEST_P(KeptMaps, AMapIsKeptWhileTheLightAndCastersStayAndTheMasksAreAFreshStages
         rt::ShadowOptions o;
         o.mode = GetParam();
         o.mapSizeTexels = 256;
+        o.focus = c.focus;
         render::SceneShadows stage(s, o);
         render::ShadowFrameStats stats;
         mask(stage, s, stats);
