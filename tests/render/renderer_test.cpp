@@ -2,7 +2,9 @@
 // `displayPixels` gives are the bytes the tool writes to a PNG, and a loaded scene renders a frame
 // the same whatever it rendered before (another pose, camera, filter or size).
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -13,6 +15,7 @@
 #include "apps/png_file.h"
 #include "render/frame_memory.h"
 #include "render/renderer.h"
+#include "render/scene_state.h"
 #include "render/view_legend.h"
 #include "scene/input_error.h"
 #include "tests/scene/gltf_builder.h"
@@ -318,6 +321,103 @@ TEST(Ground, TheFloorCatchesTheModelsShadowAndComesAndGoesWithTheSetting) {
     render::FrameSettings builtIn;
     builtIn.ground = true;
     EXPECT_THROW(render::render(render::LoadedScene("field"), builtIn), scene::InputError);
+}
+
+// Where a ray in double precision meets a triangle (Moller-Trumbore): its distance along `d`, or
+// -1; `margin` gets how far inside the triangle it passes, in barycentric units (negative:
+// outside by that much), so a ray too close to an edge to decide can be told apart.
+double rayMeetsTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+                double* margin) {
+    const glm::dvec3 e1 = b - a, e2 = c - a, pv = glm::cross(d, e2);
+    const double det = glm::dot(e1, pv);
+    *margin = -1.0;
+    if (std::abs(det) < 1e-300) return -1.0;
+    const glm::dvec3 tv = o - a, qv = glm::cross(tv, e1);
+    const double u = glm::dot(tv, pv) / det, v = glm::dot(d, qv) / det;
+    *margin = std::min({u, v, 1.0 - u - v});
+    return glm::dot(e2, qv) / det;
+}
+
+// The floor's shadow against brute-force rays: for every pixel whose centre sees the floor, a
+// ray in double precision toward the key light is tested against every triangle of the model,
+// and the frame shows the pixel darker than the unshadowed frame exactly where that ray is
+// blocked — for ray-traced and hybrid shadows, a sun's map focused on the view or over the scene,
+// and turntable frames rendered one after another on one loaded scene (kept maps). Pixels left
+// undecided are those whose rays pass within kEdgeMargin of a triangle's edge (float rays may
+// land either side) or meet the model within kContactWorld of the floor (the ray offset and
+// hybrid's half-texel bias take contact shadows as lit: docs/ray_tracing.md).
+TEST(Ground, TheFloorsShadowIsWhereBruteForceRaysToTheLightAreBlocked) {
+    constexpr double kEdgeMargin = 1e-3, kContactWorld = 0.02;
+    const PillarOnTheFloor pillar("floor_rays");
+    const render::LoadedScene scene(pillar.ply.string());
+    const render::LoadedScene::State& state = render::SceneAccess::state(scene);
+    int decided = 0, undecided = 0;
+    for (const float orbit : {0.0f, 120.0f, 250.0f}) {
+        render::FrameSettings frame = pillar.frame;
+        frame.orbitDegrees = orbit;
+        render::FrameSettings unshadowed = frame;
+        unshadowed.shadows.mode = rt::ShadowMode::None;
+        const raster::Image lit = render::render(scene, unshadowed).image;
+        for (const rt::ShadowMode mode : {rt::ShadowMode::RayTraced, rt::ShadowMode::Hybrid})
+            for (const rt::MapFocus focus : {rt::MapFocus::View, rt::MapFocus::Scene}) {
+                SCOPED_TRACE(::testing::Message() << "orbit " << orbit << ", " << render::shadowModeName(mode) << ", focus "
+                                                  << render::mapFocusName(focus));
+                frame.shadows.mode = mode;
+                frame.shadows.focus = focus;
+                const raster::Image image = render::render(scene, frame).image;
+                const scene::Scene& posed = state.posed;  // the frame's camera, light and floor (the last mesh)
+                ASSERT_TRUE(state.groundHeld);
+                const glm::dmat4 worldFromClip = glm::inverse(glm::dmat4(posed.camera.clipFromWorld(float(frame.width) / float(frame.height))));
+                const glm::dvec3 eye(posed.camera.position), toLight = -glm::normalize(glm::dvec3(posed.lighting.lights[0].direction));
+                const scene::Mesh& floor = posed.meshes.back();
+                const double floorY = floor.positions[0].y;
+                for (int y = 0; y < frame.height; ++y)
+                    for (int x = 0; x < frame.width; ++x) {
+                        const glm::dvec4 clip(2.0 * (x + 0.5) / frame.width - 1.0, 1.0 - 2.0 * (y + 0.5) / frame.height, 0.5, 1.0);
+                        const glm::dvec4 w = worldFromClip * clip;
+                        const glm::dvec3 d = glm::dvec3(w) / w.w - eye;
+                        // The nearest surface along the pixel's ray: the floor, unless the model is nearer.
+                        double nearest = std::numeric_limits<double>::infinity(), margin = 0.0;
+                        bool floorSeen = false, nearEdge = false;
+                        for (size_t m = 0; m < posed.meshes.size(); ++m) {
+                            const scene::Mesh& mesh = posed.meshes[m];
+                            for (size_t t = 0; t < mesh.indices.size(); t += 3) {
+                                const double hit = rayMeetsTriangle(eye, d, mesh.positions[mesh.indices[t]], mesh.positions[mesh.indices[t + 1]],
+                                                            mesh.positions[mesh.indices[t + 2]], &margin);
+                                if (hit > 0.0 && std::abs(margin) < kEdgeMargin) nearEdge = true;
+                                if (hit > 0.0 && margin >= 0.0 && hit < nearest) nearest = hit, floorSeen = m + 1 == posed.meshes.size();
+                            }
+                        }
+                        if (!floorSeen || nearEdge) continue;
+                        const glm::dvec3 p = eye + nearest * d;
+                        // Blocked on its way to the sun by a triangle of the model?
+                        bool blocked = false, undecidable = false;
+                        for (size_t m = 0; m + 1 < posed.meshes.size(); ++m) {
+                            const scene::Mesh& mesh = posed.meshes[m];
+                            for (size_t t = 0; t < mesh.indices.size(); t += 3) {
+                                const double hit = rayMeetsTriangle(p, toLight, mesh.positions[mesh.indices[t]],
+                                                            mesh.positions[mesh.indices[t + 1]], mesh.positions[mesh.indices[t + 2]], &margin);
+                                if (!(hit > 0.0)) continue;
+                                if (std::abs(margin) < kEdgeMargin || (margin >= 0.0 && hit * toLight.y < kContactWorld))
+                                    undecidable = true;
+                                blocked = blocked || margin >= 0.0;
+                            }
+                        }
+                        if (undecidable) {
+                            ++undecided;
+                            continue;
+                        }
+                        ++decided;
+                        const size_t i = 4 * (size_t(y) * frame.width + x);
+                        const float shown = image.rgba[i] + image.rgba[i + 1] + image.rgba[i + 2];
+                        const float unlit = lit.rgba[i] + lit.rgba[i + 1] + lit.rgba[i + 2];
+                        EXPECT_EQ(shown < unlit - 1e-4f, blocked) << "pixel " << x << "," << y << " at y " << p.y - floorY;
+                    }
+            }
+    }
+    // Measured: 100,736 floor pixels decided over the twelve frames, 72 left undecided.
+    EXPECT_GT(decided, 50000) << "floor pixels checked";
+    EXPECT_LT(undecided, decided / 500) << "pixels left undecided";
 }
 
 // --shadow-catcher: the floor vanishes into the background where it is lit, and only the shadow
