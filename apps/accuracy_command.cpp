@@ -136,7 +136,7 @@ std::vector<std::string> knobArgs(const Knobs& k, const SceneTraits& t, bool sof
     if (t.textured) a.insert(a.end(), {"--texture-filter", k.textureFilter});
     if (t.shadowed) {
         a.insert(a.end(), {"--shadows", k.shadows});
-        if (k.shadows == "map" || k.shadows == "hybrid")
+        if (k.shadows == "map" || k.shadows == "hybrid" || k.shadows == "auto")
             a.insert(a.end(), {"--shadow-map-size", std::to_string(k.mapSizeTexels)});
         if (soft && k.shadows != "none") a.push_back("--soft");
     }
@@ -169,7 +169,7 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft) {
     }
     if (t.shadowed) {
         int i = 0;
-        for (const char* m : {"none", "map", "hybrid", "raytraced"}) {
+        for (const char* m : {"none", "map", "hybrid", "raytraced", "auto"}) {
             Knobs k = balanced;
             k.shadows = m;
             add("shadow mode", m, i++, k);

@@ -115,6 +115,10 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
                     st.receiverPixels ? 100.0 * double(st.markedPixels) / double(st.receiverPixels) : 0.0,
                     (unsigned long long)st.raysTraced, r.shadows->totalMs, r.shadows->bvhBuildMs, r.shadows->surfacesMs,
                     st.mapMs, st.maskMs);
+        if (r.shadows->mode == rt::ShadowMode::Auto)
+            std::printf("  auto: %d light%s hybrid, %d raytraced; predicted hybrid %.1f ms, raytraced %.1f ms; took %.1f ms\n",
+                        st.autoHybrid, st.autoHybrid == 1 ? "" : "s", st.autoRayTraced, st.predictedHybridMs,
+                        st.predictedRayTracedMs, st.mapMs + st.maskMs);
         if (r.shadows->bvhUpdated)
             std::printf("  shadow casters moved: bvh %s in %.1f ms, degradation %.3f\n", r.shadows->bvhRebuilt ? "rebuilt" : "refitted",
                         r.shadows->bvhUpdateMs, r.shadows->degradation);
@@ -182,7 +186,10 @@ void printSequenceSummary(const RenderOptions& o, int count, SequenceTotals t) {
 render::FrameSettings sequenceFrame(const RenderOptions& o, int index) {
     render::FrameSettings frame = o;
     frame.shadows.focus = o.shadowFocus.value_or(o.turntable > 0 ? rt::MapFocus::Scene : rt::MapFocus::View);
-    if (o.turntable > 0) frame.orbitDegrees = 360.0f * float(index) / float(o.turntable);
+    if (o.turntable > 0) {
+        frame.orbitDegrees = 360.0f * float(index) / float(o.turntable);
+        frame.shadows.sequenceFrames = o.turntable;  // lights and casters stay; the camera turns
+    }
     if (o.animate > 0) frame.timeSeconds = o.timeSeconds + float(index) / o.fps;
     return frame;
 }

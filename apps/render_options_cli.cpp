@@ -111,7 +111,8 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
         ->capture_default_str();
     render->add_option("--shadows", names.shadows,
                        "Shadows from the scene's lights: none, map (shadow maps), hybrid (maps, with shadow rays "
-                       "for the pixels a map may get wrong) or raytraced (a shadow ray per pixel, the reference)")
+                       "for the pixels a map may get wrong), raytraced (a shadow ray per pixel, the reference) or auto "
+                       "(per light and frame, hybrid or raytraced, whichever a cost model predicts cheaper)")
         ->capture_default_str();
     render->add_flag("--soft", o.shadows.soft, "Area lights: soft shadows (N x N rays where rays are traced)");
     render->add_option("--light-radius", o.shadows.lightRadius,

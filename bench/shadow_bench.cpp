@@ -3,17 +3,24 @@
 // time summed over the frames, each mode against the ray-traced reference run side by side in the
 // same process, and the share of pixels whose final colour differs from the reference's frame.
 //
-//   shadow_bench [--scenes vc,dragon,brainstem,helmet] [--frames 36] [--width 1280 --height 720]
-//                [--shadows hard,soft] [--modes raytraced,hybrid,auto]
+//   shadow_bench [--scenes vc,dragon,brainstem,helmet] [--frames 36,1] [--width 1280 --height 720]
+//                [--shadows hard,soft] [--modes hybrid,auto]
+//
+// `--frames 1` is a single frame as `cuberille render` draws it (the sun's map focused on the
+// view); more frames are a turntable as `--turntable N` draws it (the map over the whole scene,
+// kept, and auto told how many frames share it).
 //
 // The stage's time is everything it does for a frame (render::ShadowFrameStats::totalMs): the
 // visibility buffer, maps drawn or kept, marks, map lookups and rays; the BVH and edge adjacency,
-// built once per scene, are included in the first frame's. Each configuration renders its frames
-// in a fresh LoadedScene, so none inherits another's maps.
+// built once per scene, are added to the first frame's. Each mode renders in a LoadedScene of
+// its own, so none inherits another's maps, and the modes take turns frame by frame, so the
+// machine's drift (a third within a session on the shared CI VM) falls on all of them alike;
+// single frames are run five times and the median taken.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
 #include "bench/bench_support.h"
 #include "raster/parallel.h"
@@ -35,100 +42,134 @@ fs::path dataPath(const std::string& name) {
     return bench::scanPath(name, CUBERILLE_SOURCE_DIR);
 }
 
-struct Sequence {
-    double shadowMs = 0.0;       // the stage over every frame
-    double firstFrameMs = 0.0;   // of which the first frame (hierarchies built, maps first drawn)
-    uint64_t differingPixels = 0;  // against the reference's frames
-    uint64_t pixels = 0;
+/// One shadow mode's run of a turntable, in a scene of its own.
+struct ModeRun {
+    std::string mode;
+    render::FrameSettings settings;
+    std::unique_ptr<render::LoadedScene> scene;
+    double shadowMs = 0.0;        // the stage over every frame, with its one-off set-up
+    double firstFrameMs = 0.0;    // of which the first frame (hierarchies built, maps first drawn)
+    uint64_t differingPixels = 0, pixels = 0;  // against the reference's frames
     uint64_t markedPixels = 0, receiverPixels = 0;
     int mapsDrawn = 0, mapsKept = 0;
-    std::vector<raster::Image> images;
+    int autoHybrid = 0, autoRayTraced = 0;  // lights auto gave each mode, over the frames
 };
 
-/// The turntable `cuberille render --turntable frames` draws, in a scene of its own.
-Sequence turntable(const fs::path& path, const render::FrameSettings& base, int frames, const Sequence* reference) {
-    const render::LoadedScene scene(path.string());
-    Sequence q;
-    for (int i = 0; i < frames; ++i) {
-        render::FrameSettings f = base;
-        f.orbitDegrees = 360.0f * float(i) / float(frames);
-        render::RenderResult r = render::render(scene, f);
-        const render::ShadowFrameStats& s = *r.shadows;
-        q.shadowMs += s.totalMs;
-        if (i == 0) q.firstFrameMs = s.totalMs;
-        q.markedPixels += s.shadows.markedPixels;
-        q.receiverPixels += s.shadows.receiverPixels;
-        q.mapsDrawn += s.shadows.mapsDrawn;
-        q.mapsKept += s.shadows.mapsKept;
-        const raster::Image& image = r.image;
-        q.pixels += uint64_t(image.width) * uint64_t(image.height);
-        if (reference) {
-            const raster::Image& want = reference->images[size_t(i)];
-            for (int y = 0; y < image.height; ++y)
-                for (int x = 0; x < image.width; ++x) {
-                    const float *a = image.pixel(x, y), *b = want.pixel(x, y);
-                    q.differingPixels += a[0] != b[0] || a[1] != b[1] || a[2] != b[2] || a[3] != b[3];
-                }
-        } else {
-            q.images.push_back(std::move(r.image));
-        }
-    }
-    return q;
+/// A frame's shadow time with what the stage's construction built for it: the BVH, and the edge
+/// adjacency hybrid builds up front (auto finds its own within the frame, already in totalMs).
+double stageMs(const render::ShadowFrameStats& s, bool first, rt::ShadowMode mode) {
+    double ms = s.totalMs;
+    if (first) ms += s.bvhBuildMs + (mode == rt::ShadowMode::Auto ? 0.0 : s.adjacencyMs);
+    return ms;
 }
 
-void benchScene(const std::string& name, int frames, int width, int height, const std::vector<std::string>& penumbrae,
-                const std::vector<std::string>& modes) {
+/// Every mode's turntable, frame by frame in turn (the reference first), so the machine's drift
+/// falls on all of them alike.
+std::vector<ModeRun> turntables(const fs::path& path, const render::FrameSettings& base, int frames,
+                                const std::vector<std::string>& modes) {
+    std::vector<ModeRun> runs;
+    for (const std::string& mode : modes) {
+        ModeRun r{mode, base, std::make_unique<render::LoadedScene>(path.string())};
+        r.settings.shadows.mode = render::parseShadowMode(mode);
+        runs.push_back(std::move(r));
+    }
+    for (int i = 0; i < frames; ++i) {
+        raster::Image reference;
+        for (ModeRun& r : runs) {
+            render::FrameSettings f = r.settings;
+            f.orbitDegrees = 360.0f * float(i) / float(frames);
+            render::RenderResult result = render::render(*r.scene, f);
+            const render::ShadowFrameStats& s = *result.shadows;
+            const double ms = stageMs(s, i == 0, f.shadows.mode);
+            r.shadowMs += ms;
+            if (i == 0) r.firstFrameMs = ms;
+            r.markedPixels += s.shadows.markedPixels;
+            r.receiverPixels += s.shadows.receiverPixels;
+            r.mapsDrawn += s.shadows.mapsDrawn;
+            r.mapsKept += s.shadows.mapsKept;
+            r.autoHybrid += s.shadows.autoHybrid;
+            r.autoRayTraced += s.shadows.autoRayTraced;
+            const raster::Image& image = result.image;
+            r.pixels += uint64_t(image.width) * uint64_t(image.height);
+            if (&r == &runs.front()) {
+                reference = std::move(result.image);
+                continue;
+            }
+            for (size_t p = 0; p < image.rgba.size(); p += 4)
+                r.differingPixels += image.rgba[p] != reference.rgba[p] || image.rgba[p + 1] != reference.rgba[p + 1] ||
+                                     image.rgba[p + 2] != reference.rgba[p + 2] || image.rgba[p + 3] != reference.rgba[p + 3];
+        }
+    }
+    for (ModeRun& r : runs) r.scene.reset();  // a repeat's scenes (textures, maps) leave before the next loads
+    return runs;
+}
+
+void benchScene(const std::string& name, const std::vector<int>& frameCounts, int width, int height,
+                const std::vector<std::string>& penumbrae, const std::vector<std::string>& modes, int singleFrameRuns) {
     const fs::path path = dataPath(name);
     if (!fs::exists(path)) {
         std::printf("%s skipped: %s not found\n", name.c_str(), path.string().c_str());
         return;
     }
-    for (const std::string& penumbra : penumbrae) {
-        render::FrameSettings base;
-        base.width = width, base.height = height;
-        base.ground = true;
-        base.shadows.soft = penumbra == "soft";
-        base.shadows.focus = rt::MapFocus::Scene;  // what --turntable's auto focus chooses
-        base.shadows.mode = rt::ShadowMode::RayTraced;
-        const Sequence reference = turntable(path, base, frames, nullptr);
-        auto row = [&](const std::string& mode, const Sequence& q) {
-            std::printf("%-10s %-5s %-10s %10.0f %9.1f %7.2f %9.4f%% %8.2f%% %5d %5d\n", name.c_str(), penumbra.c_str(), mode.c_str(),
-                        q.shadowMs, q.firstFrameMs, q.shadowMs / reference.shadowMs,
-                        100.0 * double(q.differingPixels) / double(std::max<uint64_t>(1, q.pixels)),
-                        100.0 * double(q.markedPixels) / double(std::max<uint64_t>(1, q.receiverPixels)), q.mapsDrawn, q.mapsKept);
-        };
-        for (const std::string& mode : modes) {
-            if (mode == "raytraced") {
-                row(mode, reference);
-                continue;
+    std::vector<std::string> all{"raytraced"};
+    all.insert(all.end(), modes.begin(), modes.end());
+    for (const int frames : frameCounts)
+        for (const std::string& penumbra : penumbrae) {
+            render::FrameSettings base;
+            base.width = width, base.height = height;
+            base.ground = true;
+            base.shadows.soft = penumbra == "soft";
+            // What the command line chooses: a turntable's sun map over the scene, shared by its frames.
+            base.shadows.focus = frames > 1 ? rt::MapFocus::Scene : rt::MapFocus::View;
+            base.shadows.sequenceFrames = frames;
+            // A single frame is short enough to time again: the run whose reference time is the median.
+            std::vector<std::vector<ModeRun>> repeats;
+            for (int k = 0; k < (frames == 1 ? singleFrameRuns : 1); ++k) repeats.push_back(turntables(path, base, frames, all));
+            std::vector<double> totals(all.size(), 0.0);
+            std::vector<ModeRun>& runs = repeats.front();
+            for (size_t m = 0; m < all.size(); ++m) {  // each mode's median over the repeats
+                std::vector<double> t;
+                for (const auto& r : repeats) t.push_back(r[m].shadowMs);
+                totals[m] = bench::median(t);
             }
-            render::FrameSettings f = base;
-            f.shadows.mode = render::parseShadowMode(mode);
-            row(mode, turntable(path, f, frames, &reference));
+            for (size_t m = 0; m < all.size(); ++m) {
+                const ModeRun& q = runs[m];
+                std::string chose;
+                if (q.settings.shadows.mode == rt::ShadowMode::Auto)
+                    chose = "hybrid " + std::to_string(q.autoHybrid) + ", raytraced " + std::to_string(q.autoRayTraced);
+                std::printf("%-10s %6d %-5s %-10s %10.0f %9.1f %7.2f %9.4f%% %8.2f%% %5d %5d %s\n", name.c_str(), frames,
+                            penumbra.c_str(), q.mode.c_str(), totals[m], q.firstFrameMs, totals[m] / totals[0],
+                            100.0 * double(q.differingPixels) / double(std::max<uint64_t>(1, q.pixels)),
+                            100.0 * double(q.markedPixels) / double(std::max<uint64_t>(1, q.receiverPixels)), q.mapsDrawn,
+                            q.mapsKept, chose.c_str());
+            }
+            std::fflush(stdout);
         }
-    }
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{"Shadow modes over turntables, against ray-traced shadows in the same run"};
-    std::string scenes = "vc,dragon,brainstem,helmet", penumbrae = "hard,soft", modes = "raytraced,hybrid";
-    int frames = 36, width = 1280, height = 720;
+    std::string scenes = "vc,dragon,brainstem,helmet", penumbrae = "hard,soft", modes = "hybrid,auto", frames = "36,1";
+    int width = 1280, height = 720, singleFrameRuns = 5;
     app.add_option("--scenes", scenes, "vc, dragon, brainstem, helmet, cesiumman, bunny, horse or a model's path")->capture_default_str();
-    app.add_option("--frames", frames, "Turntable frames")->capture_default_str();
+    app.add_option("--frames", frames, "Turntable lengths (1: a single frame)")->capture_default_str();
+    app.add_option("--single-frame-runs", singleFrameRuns, "Single frames: runs, the median reported")->capture_default_str();
     app.add_option("--width", width)->capture_default_str();
     app.add_option("--height", height)->capture_default_str();
     app.add_option("--shadows", penumbrae, "hard, soft or both")->capture_default_str();
-    app.add_option("--modes", modes, "Shadow modes besides the ray-traced reference: hybrid, map")->capture_default_str();
+    app.add_option("--modes", modes, "Shadow modes besides the ray-traced reference: hybrid, auto, map")->capture_default_str();
     CLI11_PARSE(app, argc, argv);
-    std::printf("# %d threads; %d-frame turntables at %dx%d with --ground; shadow stage ms summed over the frames (and the first "
+    std::printf("# %d threads; turntables at %dx%d with --ground; shadow stage ms summed over the frames (and the first "
                 "frame's), ratio to ray traced, share of pixels differing from the ray-traced frames, share of receivers "
-                "traced, maps drawn and kept\n",
-                raster::hardwareThreads(), frames, width, height);
-    std::printf("%-10s %-5s %-10s %10s %9s %7s %10s %9s %5s %5s\n", "scene", "soft", "mode", "ms", "first", "x ref", "differ",
-                "traced", "drawn", "kept");
+                "traced, maps drawn and kept, auto's choices\n",
+                raster::hardwareThreads(), width, height);
+    std::printf("%-10s %6s %-5s %-10s %10s %9s %7s %10s %9s %5s %5s\n", "scene", "frames", "soft", "mode", "ms", "first", "x ref",
+                "differ", "traced", "drawn", "kept");
+    std::vector<int> frameCounts;
+    for (const std::string& f : bench::splitList(frames)) frameCounts.push_back(std::stoi(f));
     for (const std::string& s : bench::splitList(scenes))
-        benchScene(s, frames, width, height, bench::splitList(penumbrae), bench::splitList(modes));
+        benchScene(s, frameCounts, width, height, bench::splitList(penumbrae), bench::splitList(modes), singleFrameRuns);
     return 0;
 }

@@ -197,7 +197,8 @@ SceneShadows* LoadedScene::State::shadowsFor(const FrameSettings& f) {
     const rt::ShadowOptions& o = f.shadows;
     const bool same = shadows && shadowsMethod == f.bvhUpdate && shadowsOptions.mode == o.mode && shadowsOptions.soft == o.soft &&
                       shadowsOptions.lightRadius == o.lightRadius && shadowsOptions.mapSizeTexels == o.mapSizeTexels &&
-                      shadowsOptions.softSamplesPerSide == o.softSamplesPerSide && shadowsOptions.focus == o.focus;
+                      shadowsOptions.softSamplesPerSide == o.softSamplesPerSide && shadowsOptions.focus == o.focus &&
+                      shadowsOptions.sequenceFrames == o.sequenceFrames;
     if (!same) {
         shadows.emplace(posed, o, f.bvhUpdate);
         shadowsOptions = o;

@@ -486,6 +486,12 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                         {"mapMs", st.mapMs},
                         {"maskMs", st.maskMs},
                         {"totalMs", sh.totalMs}};
+        if (sh.mode == rt::ShadowMode::Auto)
+            j["shadows"]["auto"] = {{"hybridLights", st.autoHybrid},
+                                    {"raytracedLights", st.autoRayTraced},
+                                    {"predictedHybridMs", st.predictedHybridMs},
+                                    {"predictedRaytracedMs", st.predictedRayTracedMs},
+                                    {"tookMs", st.mapMs + st.maskMs}};
     }
     j["stages"] = {
         {"vertex", {{"verticesShaded", c.verticesShaded}, {"ms", t.vertexMs}}},

@@ -21,7 +21,7 @@ SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& optio
     active_ = true;
     visibility_.setCasters({positions_, indices_}, ranges_);
     pending_.castersMs = raster::nowMs() - t0;
-    if (options.mode == rt::ShadowMode::Hybrid || options.mode == rt::ShadowMode::RayTraced) {
+    if (options.mode == rt::ShadowMode::Hybrid || options.mode == rt::ShadowMode::RayTraced || options.mode == rt::ShadowMode::Auto) {
         t0 = raster::nowMs();
         bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, bvhUpdate);
         pending_.bvhBuildMs = raster::nowMs() - t0;
@@ -52,7 +52,10 @@ void SceneShadows::gatherCasters(const scene::Scene& s) {
 
 // The adjacency matches edges by position, so a pose that pulls apart two vertices that shared a
 // place (a skinned seam) changes it: it is found again for every pose, not carried over.
-void SceneShadows::findAdjacency() { adjacency_ = rt::buildMeshAdjacency({positions_, indices_}); }
+void SceneShadows::findAdjacency() {
+    adjacency_ = rt::buildMeshAdjacency({positions_, indices_});
+    adjacencyFound_ = true;
+}
 
 void SceneShadows::update(const scene::Scene& s) {
     if (!active_) return;
@@ -69,6 +72,7 @@ void SceneShadows::update(const scene::Scene& s) {
         pending_.bvhRebuilt = report.rebuilt;
         pending_.degradation = report.degradation;
     }
+    adjacencyFound_ = false;  // the last pose's
     if (options_.mode == rt::ShadowMode::Hybrid) findAdjacency();
     pending_.bvhUpdateMs = raster::nowMs() - t1;
 }
@@ -91,8 +95,14 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     const rt::ShadowCasters shadowCasters{.mesh = casters,
                                           .bvh = bvh_ ? &*bvh_ : nullptr,
                                           .bounds = bounds_,
-                                          .adjacency = adjacency_.empty() ? nullptr : &adjacency_,
-                                          .version = castersVersion_};
+                                          .adjacency = adjacencyFound_ ? &adjacency_ : nullptr,
+                                          .version = castersVersion_,
+                                          .adjacencyOnDemand = [this, &stats]() -> const rt::MeshAdjacency* {
+                                              const double t = raster::nowMs();
+                                              findAdjacency();
+                                              stats.adjacencyMs += raster::nowMs() - t;
+                                              return &adjacency_;
+                                          }};
     rt::computeShadows(surfaces, s.lighting, shadowCasters, options_, gpu_, masks_);
     stats.shadows = masks_.stats;
     for (int l = 0; l < lighting.lightCount; ++l)
@@ -105,7 +115,8 @@ rt::ShadowMode parseShadowMode(const std::string& name) {
     if (name == "map") return rt::ShadowMode::Map;
     if (name == "hybrid") return rt::ShadowMode::Hybrid;
     if (name == "raytraced") return rt::ShadowMode::RayTraced;
-    throw scene::InputError("--shadows: '" + name + "' is not none, map, hybrid or raytraced");
+    if (name == "auto") return rt::ShadowMode::Auto;
+    throw scene::InputError("--shadows: '" + name + "' is not none, map, hybrid, raytraced or auto");
 }
 
 const char* shadowModeName(rt::ShadowMode mode) {
@@ -114,6 +125,7 @@ const char* shadowModeName(rt::ShadowMode mode) {
         case rt::ShadowMode::Map: return "map";
         case rt::ShadowMode::Hybrid: return "hybrid";
         case rt::ShadowMode::RayTraced: return "raytraced";
+        case rt::ShadowMode::Auto: return "auto";
     }
     return "?";
 }

@@ -73,8 +73,11 @@ private:
     std::vector<rt::CasterRange> ranges_;
     rt::Aabb bounds_;
     uint64_t castersVersion_ = 0;  // a fresh rt::nextCastersVersion() per pose: maps are kept while it stays
-    std::optional<rt::DeformingBvh> bvh_;  // hybrid and raytraced only
-    rt::MeshAdjacency adjacency_;  // hybrid only: thin casters are looked for at silhouettes
+    std::optional<rt::DeformingBvh> bvh_;  // hybrid, raytraced and auto
+    /// Hybrid: thin casters are looked for at silhouettes. Built per pose for hybrid; for auto on
+    /// the first light given hybrid (adjacencyFound_ says whether it is this pose's).
+    rt::MeshAdjacency adjacency_;
+    bool adjacencyFound_ = false;
     /// What construction or update() did (builds, refits and their times), for the next run() to
     /// report: each is reported once, with the frame that follows it.
     ShadowFrameStats pending_;

@@ -12,6 +12,7 @@
 #include "raster/parallel.h"
 #include "rt/ray_query.h"
 #include "rt/shadow_map.h"
+#include "rt/shadow_mode_choice.h"
 
 namespace cuberille::rt {
 namespace shadow_detail {
@@ -165,11 +166,8 @@ public:
     /// (false: kept from the last frame, and with it the marks, which depend on nothing else:
     /// the map, the casters and the options).
     bool prepareMap(const ScreenSurfaces& surfaces) {
-        const float margin = options_.soft ? options_.lightRadius * glm::length(casters_.bounds.extent()) : 0.0f;
-        const std::span<const glm::vec3> focus =
-            options_.focus == MapFocus::View ? std::span<const glm::vec3>(surfaces.seenHull) : std::span<const glm::vec3>();
-        const bool drawn =
-            map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, focus, margin, casters_.version);
+        const bool drawn = map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, focus(surfaces),
+                                       focusMargin(), casters_.version);
         if (drawn) marksOptions_.reset();
         if (options_.mode != ShadowMode::Hybrid && !options_.soft) return drawn;
         if (marksOptions_ && sameMarkingOptions(*marksOptions_, options_)) return drawn;
@@ -178,6 +176,11 @@ public:
         marksOptions_ = options_;
         return drawn;
     }
+
+    std::span<const glm::vec3> focus(const ScreenSurfaces& surfaces) const {
+        return options_.focus == MapFocus::View ? std::span<const glm::vec3>(surfaces.seenHull) : std::span<const glm::vec3>();
+    }
+    float focusMargin() const { return options_.soft ? options_.lightRadius * glm::length(casters_.bounds.extent()) : 0.0f; }
 
     static bool sameMarkingOptions(const ShadowOptions& a, const ShadowOptions& b) {
         return a.mode == b.mode && a.soft == b.soft && a.lightRadius == b.lightRadius && a.mapSizeTexels == b.mapSizeTexels &&
@@ -702,6 +705,26 @@ ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lightin
     return out;
 }
 
+namespace {
+
+/// What one light asks of this frame, for Auto's cost model: a map that depends on no camera (a
+/// point or spot light's, or a sun's over the whole scene) serves the command's still frames.
+ShadowWorkload workload(const raster::Light& light, const ShadowOptions& options, const ShadowCasters& casters,
+                        uint64_t coveredPixels) {
+    ShadowWorkload w;
+    w.receivers = coveredPixels;
+    w.soft = options.soft;
+    w.raysPerReceiver = options.soft ? std::max(1, options.softSamplesPerSide) * std::max(1, options.softSamplesPerSide) : 1;
+    w.casterTriangles = casters.mesh.triangleCount();
+    const uint64_t faces = light.type == raster::LightType::Point ? 6 : 1;
+    w.mapTexels = faces * uint64_t(options.mapSizeTexels) * uint64_t(options.mapSizeTexels);
+    const bool cameraFree = light.type != raster::LightType::Directional || options.focus == MapFocus::Scene;
+    w.framesSharingMap = cameraFree ? std::max(1, options.sequenceFrames) : 1;
+    return w;
+}
+
+}  // namespace
+
 void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting, const ShadowCasters& casters,
                     const ShadowOptions& options, raster::Pipeline& gpu, ShadowMasks& out) {
     out.width = surfaces.width;
@@ -714,14 +737,30 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
     const size_t pixels = size_t(surfaces.width) * surfaces.height;
     out.marked.assign(pixels, 0);
     if (out.storage.size() < size_t(lighting.lightCount)) out.storage.resize(size_t(lighting.lightCount));
+    uint64_t covered = 0;  // Auto: pixels with a surface, counted once for every light
+    const MeshAdjacency* adjacency = casters.adjacency;  // Auto: found for the first light given hybrid
     for (int l = 0; l < lighting.lightCount; ++l) {
         const raster::Light& light = lighting.lights[l];
         if (!castsShadows(light)) continue;
         ++out.stats.lightsShadowed;
         if (!out.storage[size_t(l)]) out.storage[size_t(l)].reset(new LightShadowStorage);
-        LightShadows shadows(light, casters, options, gpu, *out.storage[size_t(l)]);
+        LightShadowStorage& storage = *out.storage[size_t(l)];
+        ShadowOptions lightOptions = options;
+        if (options.mode == ShadowMode::Auto) {
+            if (covered == 0) covered = uint64_t(std::count_if(surfaces.triangle.begin(), surfaces.triangle.end(),
+                                                               [](uint32_t t) { return t != ScreenSurfaces::kNone; }));
+            const ShadowModeChoice choice = chooseShadowMode(workload(light, options, casters, covered));
+            lightOptions.mode = choice.mode;
+            ++(choice.mode == ShadowMode::Hybrid ? out.stats.autoHybrid : out.stats.autoRayTraced);
+            out.stats.predictedHybridMs += choice.predictedHybridMs;
+            out.stats.predictedRayTracedMs += choice.predictedRayTracedMs;
+        }
+        if (lightOptions.mode == ShadowMode::Hybrid && !adjacency && casters.adjacencyOnDemand) adjacency = casters.adjacencyOnDemand();
+        ShadowCasters lightCasters = casters;
+        lightCasters.adjacency = adjacency;
+        LightShadows shadows(light, lightCasters, lightOptions, gpu, storage);
         double t0 = raster::nowMs();
-        if (options.mode != ShadowMode::RayTraced) ++(shadows.prepareMap(surfaces) ? out.stats.mapsDrawn : out.stats.mapsKept);
+        if (lightOptions.mode != ShadowMode::RayTraced) ++(shadows.prepareMap(surfaces) ? out.stats.mapsDrawn : out.stats.mapsKept);
         out.stats.mapMs += raster::nowMs() - t0;
         out.stats.thinTriangles += shadows.thinTriangles();
         t0 = raster::nowMs();

@@ -15,11 +15,14 @@
 //              disk reach a depth discontinuity nearer the light (asked of each edge at its own
 //              depth), and trace N x N rays there.
 //   RayTraced  a shadow ray per pixel (N x N for soft): the reference.
+//   Auto       per light and frame, hybrid or ray-traced, whichever a cost model over the
+//              frame's counts predicts cheaper (rt/shadow_mode_choice.h); never Map.
 //
 // Determinism: every pixel's value is a pure function of its surface, the map and the BVH;
 // sample positions on area lights are a fixed stratified pattern.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -33,7 +36,7 @@
 
 namespace cuberille::rt {
 
-enum class ShadowMode : uint8_t { None, Map, Hybrid, RayTraced };
+enum class ShadowMode : uint8_t { None, Map, Hybrid, RayTraced, Auto };
 
 /// What a directional light's map covers across the light (point and spot lights' maps cover
 /// their whole view either way).
@@ -53,6 +56,10 @@ struct ShadowOptions {
     int mapSizeTexels = 2048;
     int softSamplesPerSide = 4;  // N x N rays per pixel that needs them
     MapFocus focus = MapFocus::View;
+    /// Frames of the command through which the lights and casters stay still (a turntable's
+    /// length; 1 for a single frame or an animation): a map that depends on no camera, drawn
+    /// now, serves them all, and Auto spreads its cost over them.
+    int sequenceFrames = 1;
 };
 
 struct ShadowStats {
@@ -64,6 +71,10 @@ struct ShadowStats {
     int mapsDrawn = 0, mapsKept = 0;  // per light with a map: drawn this frame, or kept from the last
     double mapMs = 0.0;   // shadow maps drawn and their hybrid marks (thin casters, discontinuities)
     double maskMs = 0.0;  // every receiver decided: map lookups, marking, rays
+    /// Auto: lights given each mode, and the cost model's predictions for the modes it weighed
+    /// (summed over lights), to set beside what the chosen one took (mapMs + maskMs).
+    int autoHybrid = 0, autoRayTraced = 0;
+    double predictedHybridMs = 0.0, predictedRayTracedMs = 0.0;
 };
 
 /// One light's shadow maps and hybrid marks, with the scratch space its marking uses (defined in
@@ -100,6 +111,9 @@ struct ShadowCasters {
     /// through the same projection, is kept rather than drawn again. A renderer takes a fresh
     /// one (nextCastersVersion) whenever the casters may have moved; 0: never kept.
     uint64_t version = 0;
+    /// Auto: finds the adjacency the first time a light is given hybrid (null `adjacency` until
+    /// then), so a frame that ray-traces every light never builds it.
+    std::function<const MeshAdjacency*()> adjacencyOnDemand;
 };
 
 /// A version no casters have had before in this process.

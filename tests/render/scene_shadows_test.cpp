@@ -170,9 +170,12 @@ TEST_P(AnimatedShadows, EveryUpdateMethodGivesTheMasksOfAFreshStage) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Modes, AnimatedShadows, ::testing::Values(rt::ShadowMode::Hybrid, rt::ShadowMode::RayTraced),
+INSTANTIATE_TEST_SUITE_P(Modes, AnimatedShadows,
+                         ::testing::Values(rt::ShadowMode::Hybrid, rt::ShadowMode::RayTraced, rt::ShadowMode::Auto),
                          [](const ::testing::TestParamInfo<rt::ShadowMode>& p) {
-                             return p.param == rt::ShadowMode::Hybrid ? std::string("Hybrid") : std::string("RayTraced");
+                             return p.param == rt::ShadowMode::Hybrid      ? std::string("Hybrid")
+                                    : p.param == rt::ShadowMode::RayTraced ? std::string("RayTraced")
+                                                                           : std::string("Auto");
                          });
 
 
@@ -238,6 +241,59 @@ INSTANTIATE_TEST_SUITE_P(Modes, KeptMaps, ::testing::Values(rt::ShadowMode::Map,
                          [](const ::testing::TestParamInfo<rt::ShadowMode>& p) {
                              return p.param == rt::ShadowMode::Hybrid ? std::string("Hybrid") : std::string("Map");
                          });
+
+// --shadows auto (issue 27): over hard and soft shadows, every light type, one frame or a
+// turntable's worth, small and large maps, auto gives each light hybrid or ray-traced shadows,
+// never the inexact map, and its masks are then exactly the chosen mode's (a fresh stage of that
+// mode, bit for bit), also after the casters move. The choice reads nothing an earlier frame
+// left: the same frame again, on the same stage, chooses and draws the same. Both choices occur
+// in the sweep.
+TEST(AutoShadows, NeverChoosesAnInexactModeAndGivesTheChosenModesMasks) {
+    int hybrid = 0, rayTraced = 0;
+    for (const raster::LightType type : {raster::LightType::Directional, raster::LightType::Spot, raster::LightType::Point})
+        for (const bool soft : {false, true})
+            for (const int sequence : {1, 36})
+                for (const int size : {256, 4096}) {
+                    SCOPED_TRACE(::testing::Message() << "light " << int(type) << (soft ? ", soft" : ", hard") << ", " << sequence
+                                                      << " frames, " << size << " texels");
+                    scene::Scene s = sheetOverGround(still);
+                    raster::Light& light = s.lighting.lights[0];
+                    light.type = type;
+                    light.position = {0.8f, 4.0f, 0.6f};
+                    light.direction = glm::normalize(glm::vec3(-0.2f, -1.0f, -0.15f));
+                    light.cosOuterCone = std::cos(0.9f), light.cosInnerCone = std::cos(0.7f);
+                    light.range = 0.0f;
+                    rt::ShadowOptions o;
+                    o.mode = rt::ShadowMode::Auto;
+                    o.soft = soft;
+                    o.mapSizeTexels = size;
+                    o.sequenceFrames = sequence;
+                    render::SceneShadows stage(s, o);
+                    render::ShadowFrameStats stats;
+                    const std::vector<float> chosen = mask(stage, s, stats);
+                    ASSERT_EQ(stats.shadows.autoHybrid + stats.shadows.autoRayTraced, 1);
+                    const bool wasHybrid = stats.shadows.autoHybrid == 1;
+                    (wasHybrid ? hybrid : rayTraced)++;
+                    EXPECT_EQ(stats.shadows.mapsDrawn + stats.shadows.mapsKept, wasHybrid ? 1 : 0) << "a map only for hybrid";
+                    rt::ShadowOptions exact = o;
+                    exact.mode = wasHybrid ? rt::ShadowMode::Hybrid : rt::ShadowMode::RayTraced;
+                    render::SceneShadows reference(s, exact);
+                    render::ShadowFrameStats referenceStats;
+                    EXPECT_EQ(chosen, mask(reference, s, referenceStats));
+                    EXPECT_EQ(mask(stage, s, stats), chosen) << "the same frame again";
+                    EXPECT_EQ(stats.shadows.autoHybrid, wasHybrid ? 1 : 0) << "the same choice again";
+                    // A new pose: the edge adjacency hybrid needs is this pose's, found again.
+                    scene::Scene moved = sheetOverGround(slid);
+                    moved.lighting = s.lighting, moved.camera = s.camera;
+                    stage.update(moved);
+                    const std::vector<float> after = mask(stage, moved, stats);
+                    exact.mode = stats.shadows.autoHybrid == 1 ? rt::ShadowMode::Hybrid : rt::ShadowMode::RayTraced;
+                    render::SceneShadows movedReference(moved, exact);
+                    EXPECT_EQ(after, mask(movedReference, moved, referenceStats)) << "after a new pose";
+                }
+    EXPECT_GT(hybrid, 0);
+    EXPECT_GT(rayTraced, 0);
+}
 
 }  // namespace
 }  // namespace cuberille
