@@ -65,8 +65,10 @@ CUB_GL_FUNCTIONS(CUB_DECLARE)
 // chain, uploaded level by level in its texel format), alpha masks and double-sided normals. One
 // program per combination of features, compiled once, as an engine's shader variants are; the
 // bench scenes' one directional light has its own variant without the light loop, as Cuberille
-// has its fused Lambert loop. Not mirrored: KHR_texture_transform's UV transform and blending's
-// back-to-front sort of meshes (docs/performance.md says where this matters).
+// has its fused Lambert loop. Not mirrored: KHR_texture_transform's UV transform, blending's
+// back-to-front sort of meshes (docs/performance.md says where this matters), and the material
+// extensions' inputs (KHR_materials_ior's F0, KHR_materials_pbrSpecularGlossiness), which no
+// bench scene uses.
 const char* kVertexShader = R"(
 attribute vec3 position; attribute vec3 normal; attribute vec3 color; attribute vec2 uv; attribute vec4 tangent;
 uniform mat4 clipFromWorld;

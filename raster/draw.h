@@ -90,7 +90,7 @@ struct TextureBinding {
 /// glTF's material texture slots. All read the draw's one set of texture coordinates.
 struct MaterialTextures {
     TextureBinding baseColor;          // colour, fetched as linear RGBA (an image's sRGB decoded by the texture), x albedo
-    TextureBinding metallicRoughness;  // B: metallic, G: roughness, x the factors
+    TextureBinding metallicRoughness;  // B: metallic, G: roughness, x the factors (specular-glossiness: RGB specular, A glossiness)
     TextureBinding normal;             // tangent space, needs tangents
     TextureBinding occlusion;          // R: ambient occlusion
     TextureBinding emissive;           // linear RGB, x the emissive factor
@@ -129,6 +129,14 @@ struct DrawState {
     /// MetallicRoughness: the reflectance of the dielectric part at normal incidence, F0 =
     /// ((ior - 1) / (ior + 1))² (glTF's 1.5 gives 0.04; KHR_materials_ior sets others).
     float dielectricF0 = 0.04f;
+    /// MetallicRoughness's BRDF fed from the specular-glossiness material model instead
+    /// (KHR_materials_pbrSpecularGlossiness): c_diff = diffuse (1 - max(specular)), F0 =
+    /// specular, alpha = (1 - glossiness)²; the metallicRoughness slot then holds the
+    /// specular-glossiness texture (RGB specular, A glossiness), and metallic, roughness and
+    /// dielectricF0 are not read.
+    bool specularGlossiness = false;
+    glm::vec3 specularFactor{1.0f};
+    float glossiness = 1.0f;
     glm::vec3 emissive{0.0f};                 // linear RGB factor; Lambert and MetallicRoughness
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     glm::vec3 cameraPosition{0.0f};  // world space: the view vector of MetallicRoughness

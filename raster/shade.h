@@ -58,7 +58,8 @@ struct ConstantColorShader {
 /// tested per pixel. StageCounters records how often each effect ran.
 ///
 /// The BRDF (MetallicRoughness, glTF 2.0 appendix B): c_diff = albedo (1 - metallic),
-/// F0 = mix(dielectricF0, albedo, metallic) (0.04 unless KHR_materials_ior), alpha = roughness²; per light, with light intensity E
+/// F0 = mix(dielectricF0, albedo, metallic) (0.04 unless KHR_materials_ior), alpha = roughness² (or from the
+/// specular-glossiness model: DrawState::specularGlossiness); per light, with light intensity E
 /// (pi x irradiance, see Light), E n.l ((1 - F) c_diff + pi F D V) with Schlick's F, the GGX
 /// D and the height-correlated Smith V. Ambient: ambient x occlusion x (c_diff + F0), a
 /// uniform environment without image-based lighting. Emissive is added last.
@@ -385,26 +386,14 @@ private:
         } else {  // factors times 1, exactly the factors: one loop, without a branch in it
             std::fill_n(texels.g, count, 1.0f);
             std::fill_n(texels.b, count, 1.0f);
+            if (s_.specularGlossiness) std::fill_n(texels.r, count, 1.0f), std::fill_n(texels.a, count, 1.0f);
         }
         SurfaceAtPixels m;
-        for (int i = 0; i < count; ++i) {
-            float metallic = s_.metallic * texels.b[i], roughness = s_.roughness * texels.g[i];
-            metallic = std::clamp(metallic, 0.0f, 1.0f);
-            // A floor on roughness: a perfect mirror's highlight is a delta no sample can hit.
-            const float r = std::max(0.03f, std::clamp(roughness, 0.0f, 1.0f));
-            m.alpha2[i] = r * r * r * r;  // (roughness²)²
-            const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
-            const glm::vec3 diffuse = albedo * (1.0f - metallic);
-            const glm::vec3 f0 = glm::mix(glm::vec3(s_.dielectricF0), albedo, metallic);
-            const glm::vec3 n(a.normal[0][i], a.normal[1][i], a.normal[2][i]);
-            const glm::vec3 p(a.position[0][i], a.position[1][i], a.position[2][i]);
-            const glm::vec3 view = safeNormalize(s_.cameraPosition - p);
-            m.nDotV[i] = std::max(glm::dot(n, view), 1e-4f);
-            const glm::vec3 color = lighting.ambient * occlusion[i] * (diffuse + f0);
-            m.diffuse[0][i] = diffuse.x, m.diffuse[1][i] = diffuse.y, m.diffuse[2][i] = diffuse.z;
-            m.f0[0][i] = f0.x, m.f0[1][i] = f0.y, m.f0[2][i] = f0.z;
-            m.view[0][i] = view.x, m.view[1][i] = view.y, m.view[2][i] = view.z;
-            a.radiance[0][i] = color.r, a.radiance[1][i] = color.g, a.radiance[2][i] = color.b;
+        if (s_.specularGlossiness) {
+            specularGlossinessMaterial(count, a, occlusion, texels, m);
+            counters.specularGlossinessPixels += uint64_t(count);
+        } else {
+            metallicRoughnessMaterial(count, a, occlusion, texels, m);
         }
         for (int l = 0; l < lighting.lightCount; ++l) {
             const Light& light = lighting.lights[l];
@@ -422,6 +411,51 @@ private:
         float alpha2[N], nDotV[N];
         float diffuse[3][N], f0[3][N], view[3][N];
     };
+
+    // The BRDF's inputs from metallic and roughness (glTF 2.0 appendix B), with the view and the
+    // ambient term, per pixel.
+    void metallicRoughnessMaterial(int count, PixelAttributes& a, const float* occlusion, const FetchedTexels& texels,
+                                   SurfaceAtPixels& m) const {
+        for (int i = 0; i < count; ++i) {
+            float metallic = s_.metallic * texels.b[i], roughness = s_.roughness * texels.g[i];
+            metallic = std::clamp(metallic, 0.0f, 1.0f);
+            // A floor on roughness: a perfect mirror's highlight is a delta no sample can hit.
+            const float r = std::max(0.03f, std::clamp(roughness, 0.0f, 1.0f));
+            m.alpha2[i] = r * r * r * r;  // (roughness²)²
+            const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
+            storeMaterial(i, albedo * (1.0f - metallic), glm::mix(glm::vec3(s_.dielectricF0), albedo, metallic), a, occlusion, m);
+        }
+    }
+
+    // The same inputs from the specular-glossiness model (KHR_materials_pbrSpecularGlossiness):
+    // c_diff = diffuse (1 - max(specular.rgb)), F0 = specular, alpha = (1 - glossiness)², with the
+    // roughness floor of the metallic-roughness pass on 1 - glossiness. The albedo is the diffuse
+    // colour (the base colour slot holds the diffuse texture).
+    void specularGlossinessMaterial(int count, PixelAttributes& a, const float* occlusion, const FetchedTexels& texels,
+                                    SurfaceAtPixels& m) const {
+        for (int i = 0; i < count; ++i) {
+            const glm::vec3 specular = glm::clamp(s_.specularFactor * glm::vec3(texels.r[i], texels.g[i], texels.b[i]), 0.0f, 1.0f);
+            const float glossiness = std::clamp(s_.glossiness * texels.a[i], 0.0f, 1.0f);
+            const float r = std::max(0.03f, 1.0f - glossiness);
+            m.alpha2[i] = r * r * r * r;  // ((1 - glossiness)²)²
+            const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
+            storeMaterial(i, albedo * (1.0f - std::max({specular.r, specular.g, specular.b})), specular, a, occlusion, m);
+        }
+    }
+
+    // Pixel i's BRDF inputs, its view vector, and the ambient term ambient x occlusion x (c_diff + F0).
+    void storeMaterial(int i, const glm::vec3& diffuse, const glm::vec3& f0, PixelAttributes& a, const float* occlusion,
+                       SurfaceAtPixels& m) const {
+        const glm::vec3 n(a.normal[0][i], a.normal[1][i], a.normal[2][i]);
+        const glm::vec3 p(a.position[0][i], a.position[1][i], a.position[2][i]);
+        const glm::vec3 view = safeNormalize(s_.cameraPosition - p);
+        m.nDotV[i] = std::max(glm::dot(n, view), 1e-4f);
+        const glm::vec3 color = s_.lighting.ambient * occlusion[i] * (diffuse + f0);
+        m.diffuse[0][i] = diffuse.x, m.diffuse[1][i] = diffuse.y, m.diffuse[2][i] = diffuse.z;
+        m.f0[0][i] = f0.x, m.f0[1][i] = f0.y, m.f0[2][i] = f0.z;
+        m.view[0][i] = view.x, m.view[1][i] = view.y, m.view[2][i] = view.z;
+        a.radiance[0][i] = color.r, a.radiance[1][i] = color.g, a.radiance[2][i] = color.b;
+    }
 
     // One light's term at every pixel: E n.l ((1 - F) c_diff + pi F D V), where n.l > 0.
     template <bool kDirectional>

@@ -25,6 +25,7 @@ StageCounters& StageCounters::operator+=(const StageCounters& o) {
     varyingsInterpolated += o.varyingsInterpolated;
     textureSamples += o.textureSamples;
     lightEvaluations += o.lightEvaluations;
+    specularGlossinessPixels += o.specularGlossinessPixels;
     pixelsAlphaTested += o.pixelsAlphaTested;
     pixelsBlended += o.pixelsBlended;
     return *this;

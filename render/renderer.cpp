@@ -518,7 +518,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
          {{"pixelsShaded", c.pixelsShaded},
           {"varyingsInterpolated", c.varyingsInterpolated},
           {"textureSamples", c.textureSamples},
-          {"lightEvaluations", c.lightEvaluations}}},
+          {"lightEvaluations", c.lightEvaluations},
+          {"specularGlossinessPixels", c.specularGlossinessPixels}}},
         {"outputMerge", {{"pixelsAlphaTested", c.pixelsAlphaTested}, {"pixelsBlended", c.pixelsBlended}}},
     };
     j["load"] = {{"verticesSkinned", r.load.verticesSkinned},

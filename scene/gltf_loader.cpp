@@ -79,9 +79,9 @@ private:
 
     // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
     // attribute is read through AccessorView, which takes any component type, normalised or not.
-    static constexpr std::array<std::string_view, 7> kSupportedExtensions = {
+    static constexpr std::array<std::string_view, 8> kSupportedExtensions = {
         "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization",
-        "KHR_materials_emissive_strength", "KHR_materials_ior", "EXT_texture_webp"};
+        "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_pbrSpecularGlossiness", "EXT_texture_webp"};
     static bool supportedExtension(const std::string& name) {
         return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), name) != kSupportedExtensions.end();
     }
@@ -618,6 +618,10 @@ private:
         }
     }
 
+    struct TexCoordSet {
+        int index = -1;  // the TEXCOORD set the mesh's texCoords hold; -1 before the first
+    };
+
     // glTF 2.0 §3.9: factors, alpha, sidedness, unlit, and the five texture slots. All slots of
     // a primitive must read the same TEXCOORD set (a slot on another set warns and is dropped).
     void addMaterial(const tinygltf::Material& mat, const tinygltf::Primitive& prim, size_t vertexCount,
@@ -656,18 +660,80 @@ private:
         m.normalScale = float(mat.normalTexture.scale);
         m.occlusionStrength = float(mat.occlusionTexture.strength);
         TexCoordSet uvs;
-        m.textures.baseColor = bindTexture(pbr.baseColorTexture, "base colour", true, prim, vertexCount, where, uvs, m);
-        if (m.unlit) return;  // KHR_materials_unlit reads nothing else
-        m.textures.metallicRoughness =
-            bindTexture(pbr.metallicRoughnessTexture, "metallic-roughness", false, prim, vertexCount, where, uvs, m);
+        const auto specGloss = mat.extensions.find("KHR_materials_pbrSpecularGlossiness");
+        if (m.unlit || specGloss == mat.extensions.end()) {
+            m.textures.baseColor = bindTexture(pbr.baseColorTexture, "base colour", true, prim, vertexCount, where, uvs, m);
+            if (m.unlit) return;  // KHR_materials_unlit reads nothing else
+            m.textures.metallicRoughness =
+                bindTexture(pbr.metallicRoughnessTexture, "metallic-roughness", false, prim, vertexCount, where, uvs, m);
+        } else {
+            addSpecularGlossiness(specGloss->second, prim, vertexCount, where, uvs, m);
+        }
         m.textures.normal = bindTexture(mat.normalTexture, "normal", false, prim, vertexCount, where, uvs, m);
         m.textures.occlusion = bindTexture(mat.occlusionTexture, "occlusion", false, prim, vertexCount, where, uvs, m);
         m.textures.emissive = bindTexture(mat.emissiveTexture, "emissive", true, prim, vertexCount, where, uvs, m);
     }
 
-    struct TexCoordSet {
-        int index = -1;  // the TEXCOORD set the mesh's texCoords hold; -1 before the first
-    };
+    // KHR_materials_pbrSpecularGlossiness (archived, still exported): where a material has it,
+    // it is drawn instead of pbrMetallicRoughness, as the extension's best practices ask. The
+    // diffuse factor and texture take the base colour's place (linear factor, sRGB texture
+    // whose alpha is coverage), the specular-glossiness texture the metallic-roughness slot
+    // (sRGB specular and linear glossiness, as an sRGB texel format decodes colour and alpha).
+    void addSpecularGlossiness(const tinygltf::Value& ext, const tinygltf::Primitive& prim, size_t vertexCount,
+                               const std::string& where, TexCoordSet& uvs, Mesh& m) {
+        const std::string place = where + ": KHR_materials_pbrSpecularGlossiness";
+        float diffuse[4] = {1.0f, 1.0f, 1.0f, 1.0f}, specular[3] = {1.0f, 1.0f, 1.0f}, glossiness = 1.0f;
+        unitFactors(ext, "diffuseFactor", 4, diffuse, place);
+        unitFactors(ext, "specularFactor", 3, specular, place);
+        unitFactors(ext, "glossinessFactor", 0, &glossiness, place);
+        m.specularGlossiness = true;
+        m.color = glm::vec3(diffuse[0], diffuse[1], diffuse[2]);
+        m.alpha = diffuse[3];
+        m.specularFactor = glm::vec3(specular[0], specular[1], specular[2]);
+        m.glossiness = glossiness;
+        m.textures.baseColor =
+            bindTexture(textureInfoIn(ext, "diffuseTexture", place), "diffuse", true, prim, vertexCount, where, uvs, m);
+        m.textures.metallicRoughness = bindTexture(textureInfoIn(ext, "specularGlossinessTexture", place), "specular-glossiness",
+                                                   true, prim, vertexCount, where, uvs, m);
+    }
+
+    /// An extension's factor in [0, 1] (count 0: a single number) or array of `count` of them, into
+    /// `out`; absent leaves the default there.
+    void unitFactors(const tinygltf::Value& ext, const char* name, int count, float* out, const std::string& place) const {
+        if (!ext.Has(name)) return;
+        const tinygltf::Value& v = ext.Get(name);
+        const std::string what = count == 0 ? std::string(name) + " must be a number in [0, 1]"
+                                            : std::string(name) + " must be " + std::to_string(count) + " numbers in [0, 1]";
+        if (count == 0 ? !v.IsNumber() : !v.IsArray() || int(v.ArrayLen()) != count) fail(place, what);
+        for (int k = 0; k < std::max(count, 1); ++k) {
+            const tinygltf::Value& x = count == 0 ? v : v.Get(k);
+            const double d = x.IsNumber() ? x.GetNumberAsDouble() : -1.0;
+            if (!(d >= 0.0 && d <= 1.0)) fail(place, what);
+            out[k] = float(d);
+        }
+    }
+
+    /// A textureInfo inside an extension's JSON (tinygltf parses only the core ones): index,
+    /// texCoord and its own extensions (KHR_texture_transform); index -1 when absent.
+    tinygltf::TextureInfo textureInfoIn(const tinygltf::Value& ext, const char* name, const std::string& place) const {
+        tinygltf::TextureInfo info;
+        if (!ext.Has(name)) return info;
+        const tinygltf::Value& v = ext.Get(name);
+        const tinygltf::Value& index = v.Get("index");
+        if (!v.IsObject() || !index.IsInt() || index.GetNumberAsInt() < 0 || index.GetNumberAsInt() >= int(model_.textures.size()))
+            fail(place, std::string(name) + " must name a texture of the file by its index");
+        info.index = index.GetNumberAsInt();
+        if (v.Has("texCoord")) {
+            const tinygltf::Value& set = v.Get("texCoord");
+            if (!set.IsInt() || set.GetNumberAsInt() < 0) fail(place, std::string(name) + ".texCoord must be a non-negative integer");
+            info.texCoord = set.GetNumberAsInt();
+        }
+        if (v.Has("extensions") && v.Get("extensions").IsObject()) {
+            const tinygltf::Value& extensions = v.Get("extensions");
+            for (const std::string& key : extensions.Keys()) info.extensions[key] = extensions.Get(key);
+        }
+        return info;
+    }
 
     // One texture slot: its image (decoded once per glTF texture and colour space), its sampler,
     // its KHR_texture_transform, and the TEXCOORD set it reads, loaded into the mesh on first use.

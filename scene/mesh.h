@@ -25,7 +25,7 @@ struct MeshTexture {
 /// glTF's material texture slots; all read the mesh's texCoords.
 struct MeshTextures {
     MeshTexture baseColor;          // multiplies the albedo and alpha
-    MeshTexture metallicRoughness;  // B: metallic, G: roughness
+    MeshTexture metallicRoughness;  // B: metallic, G: roughness (specular-glossiness: RGB specular, A glossiness)
     MeshTexture normal;             // tangent space; needs tangents
     MeshTexture occlusion;          // R
     MeshTexture emissive;           // multiplies the emissive factor
@@ -53,6 +53,12 @@ struct Mesh {
     float alphaCutoff = 0.5f;
     float metallic = 1.0f, roughness = 1.0f;
     float ior = 1.5f;  // KHR_materials_ior: the dielectric part's index of refraction (0: F0 = 1)
+    /// KHR_materials_pbrSpecularGlossiness: the BRDF's inputs from these instead of metallic,
+    /// roughness and ior (color and alpha are the diffuse factor, textures.baseColor the diffuse
+    /// texture, textures.metallicRoughness the specular-glossiness texture).
+    bool specularGlossiness = false;
+    glm::vec3 specularFactor{1.0f};
+    float glossiness = 1.0f;
     glm::vec3 emissive{0.0f};  // linear RGB factor
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     std::vector<float> alphas;         // per position, when vertex colours carry alpha

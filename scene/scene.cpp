@@ -54,6 +54,9 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         d.state.metallic = m.metallic;
         d.state.roughness = m.roughness;
         d.state.dielectricF0 = dielectricReflectance(m.ior);
+        d.state.specularGlossiness = m.specularGlossiness;
+        d.state.specularFactor = m.specularFactor;
+        d.state.glossiness = m.glossiness;
         d.state.emissive = m.emissive;
         d.state.normalScale = m.normalScale;
         d.state.occlusionStrength = m.occlusionStrength;

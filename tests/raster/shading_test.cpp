@@ -3,6 +3,7 @@
 // and filters, double-sided normals, and the per-effect counters that prove a stage a draw
 // does not need never ran.
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -78,12 +79,10 @@ Light directionalLight(const glm::vec3& travelling, const glm::vec3& intensity) 
 // glTF 2.0 appendix B, in double, with our light units (intensity = pi x irradiance). The
 // shader is float and writes the GGX denominator without cancellation, so even a sharp
 // highlight (roughness 0.1) agrees to 2 parts in 10^4.
-glm::dvec3 referenceBrdf(glm::dvec3 albedo, double metallic, double roughness, glm::dvec3 n, glm::dvec3 v,
-                         glm::dvec3 l, glm::dvec3 intensity, double ior = 1.5) {
-    const glm::dvec3 diffuse = albedo * (1.0 - metallic);
-    const double dielectric = std::pow((ior - 1.0) / (ior + 1.0), 2.0);  // KHR_materials_ior; 0.04 at 1.5
-    const glm::dvec3 f0 = glm::mix(glm::dvec3(dielectric), albedo, metallic);
-    const double a = roughness * roughness, a2 = a * a;
+// From the BRDF's inputs: c_diff, F0 and alpha (roughness²).
+glm::dvec3 referenceBrdfOfInputs(glm::dvec3 diffuse, glm::dvec3 f0, double a, glm::dvec3 n, glm::dvec3 v, glm::dvec3 l,
+                                 glm::dvec3 intensity) {
+    const double a2 = a * a;
     const glm::dvec3 h = glm::normalize(l + v);
     const double nl = glm::dot(n, l), nv = glm::dot(n, v), nh = glm::dot(n, h), vh = glm::dot(v, h);
     if (nl <= 0.0) return glm::dvec3(0.0);
@@ -91,6 +90,13 @@ glm::dvec3 referenceBrdf(glm::dvec3 albedo, double metallic, double roughness, g
     const double d = a2 / (M_PI * std::pow(nh * nh * (a2 - 1.0) + 1.0, 2.0));
     const double vis = 0.5 / (nl * std::sqrt(nv * nv * (1 - a2) + a2) + nv * std::sqrt(nl * nl * (1 - a2) + a2));
     return intensity * nl * ((1.0 - f) * diffuse + M_PI * f * d * vis);
+}
+
+glm::dvec3 referenceBrdf(glm::dvec3 albedo, double metallic, double roughness, glm::dvec3 n, glm::dvec3 v,
+                         glm::dvec3 l, glm::dvec3 intensity, double ior = 1.5) {
+    const double dielectric = std::pow((ior - 1.0) / (ior + 1.0), 2.0);  // KHR_materials_ior; 0.04 at 1.5
+    return referenceBrdfOfInputs(albedo * (1.0 - metallic), glm::mix(glm::dvec3(dielectric), albedo, metallic),
+                                 roughness * roughness, n, v, l, intensity);
 }
 
 // A quad of albedo (0.8, 0.5, 0.2) under one sun, shaded with the metallic-roughness BRDF,
@@ -130,6 +136,53 @@ TEST(MetallicRoughness, MatchesTheReferenceBrdfAtEveryPixel) {
 TEST(MetallicRoughness, IndexOfRefractionSetsTheDielectricReflectanceAsTheReferenceDoes) {
     for (const auto& [ior, metallic] : {std::pair{1.33f, 0.0f}, {2.42f, 0.0f}, {0.0f, 0.0f}, {2.42f, 0.5f}})
         expectTheReferenceBrdfAtEveryPixel(metallic, 0.3f, ior);
+}
+
+// KHR_materials_pbrSpecularGlossiness: the same BRDF from the extension's inputs, c_diff =
+// diffuse (1 - max(specular)), F0 = specular, alpha = (1 - glossiness)², plus the ambient term
+// ambient (c_diff + F0), against the double-precision reference at every pixel: a dielectric, a
+// coloured metal (gold: black diffuse) and a rough plastic. The effect counter counts exactly its
+// pixels, and a metallic-roughness draw none.
+TEST(SpecularGlossiness, MatchesTheReferenceBrdfAtEveryPixel) {
+    struct Material {
+        glm::vec3 diffuse, specular;
+        float glossiness;
+    };
+    for (const Material& mat : {Material{{0.8f, 0.5f, 0.2f}, {0.04f, 0.04f, 0.04f}, 0.7f},
+                                Material{{0.0f, 0.0f, 0.0f}, {1.0f, 0.766f, 0.336f}, 0.9f},
+                                Material{{0.2f, 0.6f, 0.9f}, {0.3f, 0.2f, 0.1f}, 0.0f}}) {
+        const Quad quad;
+        const glm::dvec3 camera(8.0, 8.0, -20.0);
+        DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+        d.state.constantColor = glm::vec4(mat.diffuse, 1.0f);
+        d.state.specularGlossiness = true;
+        d.state.specularFactor = mat.specular;
+        d.state.glossiness = mat.glossiness;
+        d.state.metallic = 0.5f, d.state.roughness = 0.2f;  // not read
+        d.state.cameraPosition = glm::vec3(camera);
+        d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
+        d.state.lighting.lightCount = 1;
+        d.state.lighting.ambient = glm::vec3(0.1f);
+        const Rendered r = render(d);
+        EXPECT_EQ(r.counters.specularGlossinessPixels, r.counters.pixelsShaded);
+        EXPECT_GT(r.counters.pixelsShaded, 0u);
+        const glm::dvec3 specular(mat.specular);
+        const glm::dvec3 diffuse = glm::dvec3(mat.diffuse) * (1.0 - std::max({specular.r, specular.g, specular.b}));
+        const double rough = std::max(0.03, 1.0 - double(mat.glossiness));  // the shader's roughness floor
+        for (int y = 0; y < kSize; ++y)
+            for (int x = 0; x < kSize; ++x) {
+                const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
+                const glm::dvec3 expected =
+                    0.1 * (diffuse + specular) +
+                    referenceBrdfOfInputs(diffuse, specular, rough * rough, glm::dvec3(0, 0, -1), glm::normalize(camera - p),
+                                          -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0));
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_NEAR(at(r.image, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
+                        << "glossiness " << mat.glossiness << " at " << x << "," << y;
+            }
+    }
+    const Quad quad;
+    EXPECT_EQ(render(quad.call(ShadingModel::MetallicRoughness)).counters.specularGlossinessPixels, 0u);
 }
 
 TEST(MetallicRoughness, AmbientAndEmissiveAddWithoutLights) {

@@ -239,6 +239,48 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     EXPECT_FALSE(scene.meshes[0].textures.baseColor) << "untextured primitives stay untextured";
 }
 
+// KHR_materials_pbrSpecularGlossiness: where a material has it, its factors and textures are read
+// in place of the metallic-roughness ones — the diffuse texture in the base colour slot, the
+// specular-glossiness texture (sRGB colour, linear alpha) in the metallic-roughness slot, both
+// decoded from sRGB — and a factor outside [0, 1] or a texture the file lacks is refused.
+TEST(GltfLoader, SpecularGlossinessReplacesMetallicRoughnessAndBadValuesAreRefused) {
+    const fs::path dir = cuberille::testing::uniqueTempPath("gltf-specgloss");
+    // The fixture's material, unlit there, given the extension instead (its metallic-roughness
+    // factors and texture stay, to be ignored).
+    auto write = [&](const std::string& ext, const fs::path& path) {
+        std::string text = texturedGltf(dir, R"("baseColorFactor": [0.9, 0.9, 0.9, 1], "metallicRoughnessTexture": {"index": 0}})");
+        replaceOnce(text, R"("extensions": {"KHR_materials_unlit": {}})",
+                    R"("extensions": {"KHR_materials_pbrSpecularGlossiness": {)" + ext + "}}");
+        std::ofstream(path) << text;
+    };
+    write(R"("diffuseFactor": [0.5, 0.25, 1, 0.8], "specularFactor": [0.2, 0.3, 0.4], "glossinessFactor": 0.6,
+             "diffuseTexture": {"index": 0}, "specularGlossinessTexture": {"index": 0})",
+          dir / "t.gltf");
+    const GltfScene scene = loadGltf(dir / "t.gltf", [](const std::string&) {});
+    const Mesh& fan = scene.meshes[1];
+    EXPECT_TRUE(fan.specularGlossiness);
+    EXPECT_EQ(fan.color, glm::vec3(0.5f, 0.25f, 1.0f));
+    EXPECT_EQ(fan.alpha, 0.8f);
+    EXPECT_EQ(fan.specularFactor, glm::vec3(0.2f, 0.3f, 0.4f));
+    EXPECT_EQ(fan.glossiness, 0.6f);
+    ASSERT_TRUE(fan.textures.baseColor);
+    ASSERT_TRUE(fan.textures.metallicRoughness);
+    EXPECT_NEAR(fan.textures.metallicRoughness.texture->texel(0, 1, 0).r, 0.2158f, 1e-3f) << "specular decoded from sRGB";
+    EXPECT_EQ(fan.textures.metallicRoughness.texture->texel(0, 1, 0).a, 1.0f) << "glossiness linear";
+    EXPECT_FALSE(scene.meshes[0].specularGlossiness);
+    for (const std::string bad : {R"("specularFactor": [2, 0, 0])", R"("glossinessFactor": "shiny")", R"("diffuseFactor": [1, 1, 1])",
+                                  R"("diffuseTexture": {"index": 7})"}) {
+        write(bad, dir / "bad.gltf");
+        try {
+            loadGltf(dir / "bad.gltf", [](const std::string&) {});
+            ADD_FAILURE() << bad << " was read";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("KHR_materials_pbrSpecularGlossiness"), std::string::npos) << e.what();
+        }
+    }
+    fs::remove_all(dir);
+}
+
 // EXT_texture_webp: a texture naming a WebP source reads it (lossless here: the texels exactly)
 // in place of its core source, which stays the fallback for readers without WebP; a WebP-only
 // texture (the extension required) reads too.
