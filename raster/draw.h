@@ -94,7 +94,9 @@ struct MaterialTextures {
     TextureBinding normal;             // tangent space, needs tangents
     TextureBinding occlusion;          // R: ambient occlusion
     TextureBinding emissive;           // linear RGB, x the emissive factor
-    bool any() const { return baseColor || metallicRoughness || normal || occlusion || emissive; }
+    TextureBinding specular;           // A: the dielectric specular strength, x DrawState::specularStrength
+    TextureBinding specularColor;      // linear RGB (sRGB decoded): the dielectric F0 colour, x specularColor
+    bool any() const { return baseColor || metallicRoughness || normal || occlusion || emissive || specular || specularColor; }
 };
 
 /// Per-channel colour write mask; a visibility-only draw (occlusion test) writes none.
@@ -137,6 +139,12 @@ struct DrawState {
     bool specularGlossiness = false;
     glm::vec3 specularFactor{1.0f};
     float glossiness = 1.0f;
+    /// MetallicRoughness with KHR_materials_specular: the dielectric part's F0 becomes
+    /// min(dielectricF0 x specularColor, 1) x specularStrength and its F90 specularStrength
+    /// (times the specular and specularColor textures where bound); F90 = mix(that, 1, metallic).
+    bool dielectricSpecular = false;
+    float specularStrength = 1.0f;
+    glm::vec3 specularColor{1.0f};
     glm::vec3 emissive{0.0f};                 // linear RGB factor; Lambert and MetallicRoughness
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     glm::vec3 cameraPosition{0.0f};  // world space: the view vector of MetallicRoughness

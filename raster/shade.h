@@ -59,7 +59,8 @@ struct ConstantColorShader {
 ///
 /// The BRDF (MetallicRoughness, glTF 2.0 appendix B): c_diff = albedo (1 - metallic),
 /// F0 = mix(dielectricF0, albedo, metallic) (0.04 unless KHR_materials_ior), alpha = roughness² (or from the
-/// specular-glossiness model: DrawState::specularGlossiness); per light, with light intensity E
+/// specular-glossiness model: DrawState::specularGlossiness; KHR_materials_specular tints and scales the
+/// dielectric F0 and F90: DrawState::dielectricSpecular); per light, with light intensity E
 /// (pi x irradiance, see Light), E n.l ((1 - F) c_diff + pi F D V) with Schlick's F, the GGX
 /// D and the height-correlated Smith V. Ambient: ambient x occlusion x (c_diff + F0), a
 /// uniform environment without image-based lighting. Emissive is added last.
@@ -389,18 +390,23 @@ private:
             if (s_.specularGlossiness) std::fill_n(texels.r, count, 1.0f), std::fill_n(texels.a, count, 1.0f);
         }
         SurfaceAtPixels m;
+        const bool withF90 = s_.dielectricSpecular && !s_.specularGlossiness;
         if (s_.specularGlossiness) {
             specularGlossinessMaterial(count, a, occlusion, texels, m);
             counters.specularGlossinessPixels += uint64_t(count);
+        } else if (withF90) {
+            dielectricSpecularMaterial(count, a, occlusion, texels, m, counters);
+            counters.dielectricSpecularPixels += uint64_t(count);
         } else {
             metallicRoughnessMaterial(count, a, occlusion, texels, m);
         }
         for (int l = 0; l < lighting.lightCount; ++l) {
             const Light& light = lighting.lights[l];
-            if (light.type == LightType::Directional)
-                addLight<true>(light, q, a, m);
+            const bool directional = light.type == LightType::Directional;
+            if (withF90)
+                directional ? addLight<true, true>(light, q, a, m) : addLight<false, true>(light, q, a, m);
             else
-                addLight<false>(light, q, a, m);
+                directional ? addLight<true, false>(light, q, a, m) : addLight<false, false>(light, q, a, m);
         }
         counters.lightEvaluations += uint64_t(count) * lighting.lightCount;
         if (textured) counters.textureSamples += uint64_t(count);
@@ -410,6 +416,7 @@ private:
     struct SurfaceAtPixels {
         float alpha2[N], nDotV[N];
         float diffuse[3][N], f0[3][N], view[3][N];
+        float f90[N];  // with KHR_materials_specular only; 1 otherwise, and not stored
     };
 
     // The BRDF's inputs from metallic and roughness (glTF 2.0 appendix B), with the view and the
@@ -425,6 +432,37 @@ private:
             const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
             storeMaterial(i, albedo * (1.0f - metallic), glm::mix(glm::vec3(s_.dielectricF0), albedo, metallic), a, occlusion, m);
         }
+    }
+
+    // KHR_materials_specular: the dielectric part's F0 coloured and scaled, its F90 scaled,
+    // min(dielectricF0 x specularColor, 1) x strength and strength, each mixed towards the metal's
+    // (albedo and 1) by metallic. The metallic-roughness pass otherwise.
+    void dielectricSpecularMaterial(int count, PixelAttributes& a, const float* occlusion, const FetchedTexels& texels,
+                                    SurfaceAtPixels& m, StageCounters& counters) const {
+        FetchedTexels strength, color;
+        fetchOrOnes(s_.textures.specular, count, a, strength, counters);
+        fetchOrOnes(s_.textures.specularColor, count, a, color, counters);
+        for (int i = 0; i < count; ++i) {
+            const float metallic = std::clamp(s_.metallic * texels.b[i], 0.0f, 1.0f);
+            const float r = std::max(0.03f, std::clamp(s_.roughness * texels.g[i], 0.0f, 1.0f));
+            m.alpha2[i] = r * r * r * r;
+            const float specular = std::clamp(s_.specularStrength * strength.a[i], 0.0f, 1.0f);
+            const glm::vec3 tint = s_.specularColor * glm::vec3(color.r[i], color.g[i], color.b[i]);
+            const glm::vec3 dielectricF0 = glm::min(s_.dielectricF0 * tint, glm::vec3(1.0f)) * specular;
+            const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
+            storeMaterial(i, albedo * (1.0f - metallic), glm::mix(dielectricF0, albedo, metallic), a, occlusion, m);
+            m.f90[i] = specular + (1.0f - specular) * metallic;
+        }
+    }
+
+    // A slot's texels where it is bound (counted), else ones: the factors alone.
+    void fetchOrOnes(const TextureBinding& slot, int count, PixelAttributes& a, FetchedTexels& out, StageCounters& counters) const {
+        if (layout_.texCoord >= 0 && slot) {
+            fetchAll(slot, a, count, out);
+            counters.textureSamples += uint64_t(count);
+            return;
+        }
+        for (float* channel : {out.r, out.g, out.b, out.a}) std::fill_n(channel, count, 1.0f);
     }
 
     // The same inputs from the specular-glossiness model (KHR_materials_pbrSpecularGlossiness):
@@ -457,8 +495,9 @@ private:
         a.radiance[0][i] = color.r, a.radiance[1][i] = color.g, a.radiance[2][i] = color.b;
     }
 
-    // One light's term at every pixel: E n.l ((1 - F) c_diff + pi F D V), where n.l > 0.
-    template <bool kDirectional>
+    // One light's term at every pixel: E n.l ((1 - F) c_diff + pi F D V), where n.l > 0, with
+    // Schlick's F = F0 + (F90 - F0)(1 - v.h)^5, F90 = 1 unless kF90 (KHR_materials_specular).
+    template <bool kDirectional, bool kF90>
     void addLight(const Light& light, const ShadeQueue& q, PixelAttributes& a, const SurfaceAtPixels& m) const {
         float shadowed[N];
         shadowMask(light, q, shadowed);
@@ -478,7 +517,8 @@ private:
             const glm::vec3 h = safeNormalize(in.toLight + view);
             const float nDotH = std::max(glm::dot(n, h), 0.0f), vDotH = std::max(glm::dot(view, h), 0.0f);
             const float schlick = pow5(1.0f - vDotH);
-            const glm::vec3 fresnel = f0 + (glm::vec3(1.0f) - f0) * schlick;
+            const glm::vec3 f90(kF90 ? m.f90[i] : 1.0f);
+            const glm::vec3 fresnel = f0 + (f90 - f0) * schlick;
             // n.h² (a² - 1) + 1 written as a² n.h² + |n x h|²: near the highlight's peak,
             // 1 - n.h² cancels in float, the cross product does not (Filament's form).
             const glm::vec3 nCrossH = glm::cross(n, h);

@@ -26,6 +26,7 @@ StageCounters& StageCounters::operator+=(const StageCounters& o) {
     textureSamples += o.textureSamples;
     lightEvaluations += o.lightEvaluations;
     specularGlossinessPixels += o.specularGlossinessPixels;
+    dielectricSpecularPixels += o.dielectricSpecularPixels;
     pixelsAlphaTested += o.pixelsAlphaTested;
     pixelsBlended += o.pixelsBlended;
     return *this;

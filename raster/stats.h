@@ -38,6 +38,7 @@ struct StageCounters {
     uint64_t textureSamples = 0;        // filtered texture fetches
     uint64_t lightEvaluations = 0;      // (pixel, light) pairs lit
     uint64_t specularGlossinessPixels = 0;  // pixels whose material is specular-glossiness (KHR_materials_pbrSpecularGlossiness)
+    uint64_t dielectricSpecularPixels = 0;  // pixels whose material has KHR_materials_specular
     uint64_t pixelsAlphaTested = 0;     // alpha-mask pixels tested against the cutoff
     uint64_t pixelsBlended = 0;         // pixels over-blended onto the target
 

@@ -216,7 +216,8 @@ void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
     };
     for (scene::Mesh& m : s.meshes) {
         scene::MeshTextures& t = m.textures;
-        for (scene::MeshTexture* slot : {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive})
+        for (scene::MeshTexture* slot :
+             {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive, &t.specular, &t.specularColor})
             retarget(*slot);
     }
 }
@@ -519,7 +520,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
           {"varyingsInterpolated", c.varyingsInterpolated},
           {"textureSamples", c.textureSamples},
           {"lightEvaluations", c.lightEvaluations},
-          {"specularGlossinessPixels", c.specularGlossinessPixels}}},
+          {"specularGlossinessPixels", c.specularGlossinessPixels},
+          {"dielectricSpecularPixels", c.dielectricSpecularPixels}}},
         {"outputMerge", {{"pixelsAlphaTested", c.pixelsAlphaTested}, {"pixelsBlended", c.pixelsBlended}}},
     };
     j["load"] = {{"verticesSkinned", r.load.verticesSkinned},

@@ -79,9 +79,10 @@ private:
 
     // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
     // attribute is read through AccessorView, which takes any component type, normalised or not.
-    static constexpr std::array<std::string_view, 8> kSupportedExtensions = {
+    static constexpr std::array<std::string_view, 9> kSupportedExtensions = {
         "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization",
-        "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_pbrSpecularGlossiness", "EXT_texture_webp"};
+        "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_pbrSpecularGlossiness", "KHR_materials_specular",
+        "EXT_texture_webp"};
     static bool supportedExtension(const std::string& name) {
         return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), name) != kSupportedExtensions.end();
     }
@@ -666,6 +667,8 @@ private:
             if (m.unlit) return;  // KHR_materials_unlit reads nothing else
             m.textures.metallicRoughness =
                 bindTexture(pbr.metallicRoughnessTexture, "metallic-roughness", false, prim, vertexCount, where, uvs, m);
+            if (const auto it = mat.extensions.find("KHR_materials_specular"); it != mat.extensions.end())
+                addDielectricSpecular(it->second, prim, vertexCount, where, uvs, m);
         } else {
             addSpecularGlossiness(specGloss->second, prim, vertexCount, where, uvs, m);
         }
@@ -697,18 +700,38 @@ private:
                                                    true, prim, vertexCount, where, uvs, m);
     }
 
-    /// An extension's factor in [0, 1] (count 0: a single number) or array of `count` of them, into
-    /// `out`; absent leaves the default there.
-    void unitFactors(const tinygltf::Value& ext, const char* name, int count, float* out, const std::string& place) const {
+    // KHR_materials_specular: the strength (a factor times the specular texture's alpha) and F0
+    // colour (a factor, which may exceed 1, times the sRGB specular colour texture) of the
+    // metallic-roughness BRDF's dielectric reflection.
+    void addDielectricSpecular(const tinygltf::Value& ext, const tinygltf::Primitive& prim, size_t vertexCount,
+                               const std::string& where, TexCoordSet& uvs, Mesh& m) {
+        const std::string place = where + ": KHR_materials_specular";
+        float strength = 1.0f, color[3] = {1.0f, 1.0f, 1.0f};
+        unitFactors(ext, "specularFactor", 0, &strength, place);
+        unitFactors(ext, "specularColorFactor", 3, color, place, double(std::numeric_limits<float>::max()));
+        m.dielectricSpecular = true;
+        m.specularStrength = strength;
+        m.specularColor = glm::vec3(color[0], color[1], color[2]);
+        m.textures.specular =
+            bindTexture(textureInfoIn(ext, "specularTexture", place), "specular", false, prim, vertexCount, where, uvs, m);
+        m.textures.specularColor = bindTexture(textureInfoIn(ext, "specularColorTexture", place), "specular colour", true, prim,
+                                               vertexCount, where, uvs, m);
+    }
+
+    /// An extension's factor in [0, upper] (count 0: a single number) or array of `count` of them,
+    /// into `out`; absent leaves the default there.
+    void unitFactors(const tinygltf::Value& ext, const char* name, int count, float* out, const std::string& place,
+                     double upper = 1.0) const {
         if (!ext.Has(name)) return;
         const tinygltf::Value& v = ext.Get(name);
-        const std::string what = count == 0 ? std::string(name) + " must be a number in [0, 1]"
-                                            : std::string(name) + " must be " + std::to_string(count) + " numbers in [0, 1]";
+        const std::string range = upper == 1.0 ? "in [0, 1]" : "finite and 0 or more";
+        const std::string what = count == 0 ? std::string(name) + " must be a number " + range
+                                            : std::string(name) + " must be " + std::to_string(count) + " numbers " + range;
         if (count == 0 ? !v.IsNumber() : !v.IsArray() || int(v.ArrayLen()) != count) fail(place, what);
         for (int k = 0; k < std::max(count, 1); ++k) {
             const tinygltf::Value& x = count == 0 ? v : v.Get(k);
             const double d = x.IsNumber() ? x.GetNumberAsDouble() : -1.0;
-            if (!(d >= 0.0 && d <= 1.0)) fail(place, what);
+            if (!(d >= 0.0 && d <= upper)) fail(place, what);
             out[k] = float(d);
         }
     }

@@ -29,6 +29,8 @@ struct MeshTextures {
     MeshTexture normal;             // tangent space; needs tangents
     MeshTexture occlusion;          // R
     MeshTexture emissive;           // multiplies the emissive factor
+    MeshTexture specular;           // A: KHR_materials_specular's strength
+    MeshTexture specularColor;      // RGB: KHR_materials_specular's F0 colour
 };
 
 /// The reflectance of a dielectric at normal incidence against air, F0 = ((ior - 1) / (ior + 1))²
@@ -59,6 +61,10 @@ struct Mesh {
     bool specularGlossiness = false;
     glm::vec3 specularFactor{1.0f};
     float glossiness = 1.0f;
+    /// KHR_materials_specular: the dielectric reflection's strength and F0 colour.
+    bool dielectricSpecular = false;
+    float specularStrength = 1.0f;
+    glm::vec3 specularColor{1.0f};
     glm::vec3 emissive{0.0f};  // linear RGB factor
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     std::vector<float> alphas;         // per position, when vertex colours carry alpha

@@ -44,7 +44,8 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         d.tangents = m.tangents;
         auto bind = [](const MeshTexture& t) { return raster::TextureBinding{t.texture.get(), t.transform}; };
         d.state.textures = {bind(m.textures.baseColor), bind(m.textures.metallicRoughness), bind(m.textures.normal),
-                            bind(m.textures.occlusion), bind(m.textures.emissive)};
+                            bind(m.textures.occlusion), bind(m.textures.emissive), bind(m.textures.specular),
+                            bind(m.textures.specularColor)};
         d.state.cull = m.doubleSided ? raster::CullMode::None : cull;
         d.state.constantColor = glm::vec4(m.color, m.alpha);
         d.state.alphaMode = m.alphaMode;
@@ -57,6 +58,9 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         d.state.specularGlossiness = m.specularGlossiness;
         d.state.specularFactor = m.specularFactor;
         d.state.glossiness = m.glossiness;
+        d.state.dielectricSpecular = m.dielectricSpecular;
+        d.state.specularStrength = m.specularStrength;
+        d.state.specularColor = m.specularColor;
         d.state.emissive = m.emissive;
         d.state.normalScale = m.normalScale;
         d.state.occlusionStrength = m.occlusionStrength;

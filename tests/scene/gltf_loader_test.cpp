@@ -239,6 +239,16 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     EXPECT_FALSE(scene.meshes[0].textures.baseColor) << "untextured primitives stay untextured";
 }
 
+// The file is refused with an InputError whose message names `extension`.
+void expectRefusedNaming(const fs::path& path, const std::string& extension, const std::string& what) {
+    try {
+        loadGltf(path, [](const std::string&) {});
+        ADD_FAILURE() << what << " was read";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(extension), std::string::npos) << e.what();
+    }
+}
+
 // KHR_materials_pbrSpecularGlossiness: where a material has it, its factors and textures are read
 // in place of the metallic-roughness ones — the diffuse texture in the base colour slot, the
 // specular-glossiness texture (sRGB colour, linear alpha) in the metallic-roughness slot, both
@@ -271,12 +281,38 @@ TEST(GltfLoader, SpecularGlossinessReplacesMetallicRoughnessAndBadValuesAreRefus
     for (const std::string bad : {R"("specularFactor": [2, 0, 0])", R"("glossinessFactor": "shiny")", R"("diffuseFactor": [1, 1, 1])",
                                   R"("diffuseTexture": {"index": 7})"}) {
         write(bad, dir / "bad.gltf");
-        try {
-            loadGltf(dir / "bad.gltf", [](const std::string&) {});
-            ADD_FAILURE() << bad << " was read";
-        } catch (const InputError& e) {
-            EXPECT_NE(std::string(e.what()).find("KHR_materials_pbrSpecularGlossiness"), std::string::npos) << e.what();
-        }
+        expectRefusedNaming(dir / "bad.gltf", "KHR_materials_pbrSpecularGlossiness", bad);
+    }
+    fs::remove_all(dir);
+}
+
+// KHR_materials_specular: the strength and F0 colour factors (a colour past 1 allowed), the
+// specular texture read linear (its alpha is the strength) and the specular colour texture
+// decoded from sRGB; a strength outside [0, 1] or a negative colour is refused.
+TEST(GltfLoader, DielectricSpecularIsReadAndBadValuesAreRefused) {
+    const fs::path dir = cuberille::testing::uniqueTempPath("gltf-specular");
+    auto write = [&](const std::string& ext, const fs::path& path) {
+        std::string text = texturedGltf(dir, R"("baseColorFactor": [0.9, 0.9, 0.9, 1]})");
+        replaceOnce(text, R"("extensions": {"KHR_materials_unlit": {}})", R"("extensions": {"KHR_materials_specular": {)" + ext + "}}");
+        std::ofstream(path) << text;
+    };
+    write(R"("specularFactor": 0.25, "specularColorFactor": [2, 1, 0.5], "specularTexture": {"index": 0},
+             "specularColorTexture": {"index": 0})",
+          dir / "t.gltf");
+    const GltfScene scene = loadGltf(dir / "t.gltf", [](const std::string&) {});
+    const Mesh& fan = scene.meshes[1];
+    EXPECT_TRUE(fan.dielectricSpecular);
+    EXPECT_EQ(fan.specularStrength, 0.25f);
+    EXPECT_EQ(fan.specularColor, glm::vec3(2.0f, 1.0f, 0.5f));
+    ASSERT_TRUE(fan.textures.specular);
+    ASSERT_TRUE(fan.textures.specularColor);
+    EXPECT_NEAR(fan.textures.specular.texture->texel(0, 1, 0).r, 128.0f / 255.0f, 1e-6f) << "read linear";
+    EXPECT_NEAR(fan.textures.specularColor.texture->texel(0, 1, 0).r, 0.2158f, 1e-3f) << "decoded from sRGB";
+    EXPECT_FALSE(scene.meshes[0].dielectricSpecular);
+    for (const std::string bad : {R"("specularFactor": 1.5)", R"("specularColorFactor": [1, -1, 1])", R"("specularColorFactor": [1, 1])",
+                                  R"("specularTexture": {"index": 3})"}) {
+        write(bad, dir / "bad.gltf");
+        expectRefusedNaming(dir / "bad.gltf", "KHR_materials_specular", bad);
     }
     fs::remove_all(dir);
 }
