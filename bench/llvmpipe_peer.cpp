@@ -67,7 +67,7 @@ CUB_GL_FUNCTIONS(CUB_DECLARE)
 // bench scenes' one directional light has its own variant without the light loop, as Cuberille
 // has its fused Lambert loop. Not mirrored: KHR_texture_transform's UV transform, blending's
 // back-to-front sort of meshes (docs/performance.md says where this matters), and the material
-// extensions' inputs (KHR_materials_ior's F0, KHR_materials_pbrSpecularGlossiness, KHR_materials_specular), which no
+// extensions' inputs (KHR_materials_ior's F0, KHR_materials_pbrSpecularGlossiness, KHR_materials_specular, KHR_materials_clearcoat), which no
 // bench scene uses.
 const char* kVertexShader = R"(
 attribute vec3 position; attribute vec3 normal; attribute vec3 color; attribute vec2 uv; attribute vec4 tangent;

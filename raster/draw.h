@@ -96,7 +96,12 @@ struct MaterialTextures {
     TextureBinding emissive;           // linear RGB, x the emissive factor
     TextureBinding specular;           // A: the dielectric specular strength, x DrawState::specularStrength
     TextureBinding specularColor;      // linear RGB (sRGB decoded): the dielectric F0 colour, x specularColor
-    bool any() const { return baseColor || metallicRoughness || normal || occlusion || emissive || specular || specularColor; }
+    TextureBinding clearcoat;          // R: the clear coat's weight, x DrawState::clearcoat
+    TextureBinding clearcoatRoughness; // G: the clear coat's roughness, x DrawState::clearcoatRoughness
+    bool any() const {
+        return baseColor || metallicRoughness || normal || occlusion || emissive || specular || specularColor || clearcoat ||
+               clearcoatRoughness;
+    }
 };
 
 /// Per-channel colour write mask; a visibility-only draw (occlusion test) writes none.
@@ -145,6 +150,10 @@ struct DrawState {
     bool dielectricSpecular = false;
     float specularStrength = 1.0f;
     glm::vec3 specularColor{1.0f};
+    /// MetallicRoughness with KHR_materials_clearcoat (> 0): a GGX layer of this weight and
+    /// roughness over the whole material, emission included, following the surface's normal
+    /// before normal mapping (raster/shade.h).
+    float clearcoat = 0.0f, clearcoatRoughness = 0.0f;
     glm::vec3 emissive{0.0f};                 // linear RGB factor; Lambert and MetallicRoughness
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     glm::vec3 cameraPosition{0.0f};  // world space: the view vector of MetallicRoughness

@@ -60,7 +60,8 @@ struct ConstantColorShader {
 /// The BRDF (MetallicRoughness, glTF 2.0 appendix B): c_diff = albedo (1 - metallic),
 /// F0 = mix(dielectricF0, albedo, metallic) (0.04 unless KHR_materials_ior), alpha = roughness² (or from the
 /// specular-glossiness model: DrawState::specularGlossiness; KHR_materials_specular tints and scales the
-/// dielectric F0 and F90: DrawState::dielectricSpecular); per light, with light intensity E
+/// dielectric F0 and F90: DrawState::dielectricSpecular; KHR_materials_clearcoat lays a second GGX lobe
+/// over the result: DrawState::clearcoat); per light, with light intensity E
 /// (pi x irradiance, see Light), E n.l ((1 - F) c_diff + pi F D V) with Schlick's F, the GGX
 /// D and the height-correlated Smith V. Ambient: ambient x occlusion x (c_diff + F0), a
 /// uniform environment without image-based lighting. Emissive is added last.
@@ -72,6 +73,7 @@ public:
 
     SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
+        coated_ = kModel == ShadingModel::MetallicRoughness && state.clearcoat > 0.0f;
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 &&
                         state.lighting.lights[0].type == LightType::Directional &&
                         state.lighting.lights[0].visibility == nullptr && layout.texCoord < 0 &&
@@ -111,6 +113,7 @@ public:
             else
                 metallicRoughness(q, a, occlusion, counters);
             if (hasEmissive_) addEmissive(q.count, a, counters);
+            if (coated_) underTheCoat(q.count, a, counters);
             writeOut(q, a.radiance, a.alpha);
         }
     }
@@ -127,6 +130,11 @@ private:
         float normal[3][N];      // world space, unit length
         float position[3][N];    // world space
         float radiance[3][N];    // the result
+        // KHR_materials_clearcoat only: the coat's normal (the surface's before normal mapping,
+        // when there is a normal map), its weight clearcoat x Fresnel(n_c.v), and its radiance.
+        float coatNormal[3][N];
+        float coatWeight[N];
+        float coatRadiance[3][N];
         // The last texture coordinates fetched (fetchAll): glTF's slots mostly share one
         // size and one transform, and then share the transformed UVs and the level of detail.
         struct FetchCoordinates {
@@ -240,6 +248,9 @@ private:
     void shadingNormals(const TriangleSetup& t, const float* v, int count, PixelAttributes& a,
                         StageCounters& counters) const {
         interpolate<3>(v, layout_.normal, count, a.w, a.normal);
+        const bool coatNormal = coated_ && layout_.tangent >= 0;  // else the coat follows a.normal
+        if (coatNormal)
+            for (int k = 0; k < 3; ++k) std::copy_n(a.normal[k], count, a.coatNormal[k]);
         if (layout_.tangent >= 0) {
             float tangent[4][N];
             interpolate<4>(v, layout_.tangent, count, a.w, tangent);
@@ -259,11 +270,16 @@ private:
             counters.textureSamples += uint64_t(count);
         }
         const float facing = t.backFacing ? -1.0f : 1.0f;
+        unitFacing(count, facing, a.normal);
+        if (coatNormal) unitFacing(count, facing, a.coatNormal);
+    }
+
+    static void unitFacing(int count, float facing, float (&normal)[3][N]) {
         for (int i = 0; i < count; ++i) {
-            const float x = a.normal[0][i], y = a.normal[1][i], z = a.normal[2][i];
+            const float x = normal[0][i], y = normal[1][i], z = normal[2][i];
             const float len2 = x * x + y * y + z * z;
             const float inv = len2 > 0.0f ? facing / std::sqrt(len2) : 0.0f;
-            a.normal[0][i] = x * inv, a.normal[1][i] = y * inv, a.normal[2][i] = z * inv;
+            normal[0][i] = x * inv, normal[1][i] = y * inv, normal[2][i] = z * inv;
         }
     }
 
@@ -373,6 +389,13 @@ private:
             for (int i = 0; i < count; ++i) a.radiance[k][i] = a.albedo[k][i] * irradiance[k][i];
     }
 
+    /// What the BRDF needs at each pixel besides the normal and the lights.
+    struct SurfaceAtPixels {
+        float alpha2[N], nDotV[N];
+        float diffuse[3][N], f0[3][N], view[3][N];
+        float f90[N];  // with KHR_materials_specular only; 1 otherwise, and not stored
+    };
+
     // Two passes, each a loop across the queue the compiler vectorises (a light's type, range
     // and shadow mask are uniform across it): the material and view at each pixel, then each
     // light's term added in light order, as one pixel at a time would add them.
@@ -410,14 +433,54 @@ private:
         }
         counters.lightEvaluations += uint64_t(count) * lighting.lightCount;
         if (textured) counters.textureSamples += uint64_t(count);
+        if (coated_) clearcoat(q, a, occlusion, m, counters);
     }
 
-    /// What the BRDF needs at each pixel besides the normal and the lights.
-    struct SurfaceAtPixels {
-        float alpha2[N], nDotV[N];
-        float diffuse[3][N], f0[3][N], view[3][N];
-        float f90[N];  // with KHR_materials_specular only; 1 otherwise, and not stored
-    };
+    // KHR_materials_clearcoat: the coat's weight w = clearcoat x (0.04 + 0.96 (1 - n_c.v)^5)
+    // and its radiance — ambient x occlusion x w (the layer's own albedo taken as 1, as the base's
+    // ambient takes c_diff + F0), and per light E n_c.l pi D V w with the coat's roughness — for
+    // underTheCoat to lay over the material once its emission is in.
+    void clearcoat(const ShadeQueue& q, PixelAttributes& a, const float* occlusion, const SurfaceAtPixels& m,
+                   StageCounters& counters) const {
+        const int count = q.count;
+        FetchedTexels weight, roughness;
+        fetchOrOnes(s_.textures.clearcoat, count, a, weight, counters);
+        fetchOrOnes(s_.textures.clearcoatRoughness, count, a, roughness, counters);
+        const float(&nc)[3][N] = layout_.tangent >= 0 ? a.coatNormal : a.normal;
+        float alpha2[N], ncDotV[N];
+        for (int i = 0; i < count; ++i) {
+            const float r = std::max(0.03f, std::clamp(s_.clearcoatRoughness * roughness.g[i], 0.0f, 1.0f));
+            alpha2[i] = r * r * r * r;
+            const glm::vec3 n(nc[0][i], nc[1][i], nc[2][i]), view(m.view[0][i], m.view[1][i], m.view[2][i]);
+            ncDotV[i] = std::max(glm::dot(n, view), 1e-4f);
+            const float coat = std::clamp(s_.clearcoat * weight.r[i], 0.0f, 1.0f);
+            a.coatWeight[i] = coat * (0.04f + 0.96f * pow5(1.0f - ncDotV[i]));
+            for (int k = 0; k < 3; ++k) a.coatRadiance[k][i] = s_.lighting.ambient[k] * occlusion[i] * a.coatWeight[i];
+        }
+        for (int l = 0; l < s_.lighting.lightCount; ++l) {
+            const Light& light = s_.lighting.lights[l];
+            float shadowed[N];
+            shadowMask(light, q, shadowed);
+            for (int i = 0; i < count; ++i) {
+                Incident in = light.type == LightType::Directional ? Incident{-light.direction, light.intensity} : incident(light, a, i);
+                in.intensity *= shadowed[i];
+                const glm::vec3 n(nc[0][i], nc[1][i], nc[2][i]), view(m.view[0][i], m.view[1][i], m.view[2][i]);
+                const float nDotL = glm::dot(n, in.toLight);
+                const glm::vec3 h = safeNormalize(in.toLight + view);
+                const float nDotH = std::max(glm::dot(n, h), 0.0f);
+                const glm::vec3 term = in.intensity * (nDotL * specularLobe(alpha2[i], n, h, nDotH, nDotL, ncDotV[i]) * a.coatWeight[i]);
+                const bool lit = nDotL > 0.0f;  // a select, as in addLight
+                for (int k = 0; k < 3; ++k) a.coatRadiance[k][i] += lit ? term[k] : 0.0f;
+            }
+        }
+        counters.clearcoatPixels += uint64_t(count);
+    }
+
+    // The coated material: the material, emission included, times 1 - w, plus the coat.
+    static void underTheCoat(int count, PixelAttributes& a, StageCounters&) {
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < count; ++i) a.radiance[k][i] = a.radiance[k][i] * (1.0f - a.coatWeight[i]) + a.coatRadiance[k][i];
+    }
 
     // The BRDF's inputs from metallic and roughness (glTF 2.0 appendix B), with the view and the
     // ambient term, per pixel.
@@ -519,15 +582,7 @@ private:
             const float schlick = pow5(1.0f - vDotH);
             const glm::vec3 f90(kF90 ? m.f90[i] : 1.0f);
             const glm::vec3 fresnel = f0 + (f90 - f0) * schlick;
-            // n.h² (a² - 1) + 1 written as a² n.h² + |n x h|²: near the highlight's peak,
-            // 1 - n.h² cancels in float, the cross product does not (Filament's form).
-            const glm::vec3 nCrossH = glm::cross(n, h);
-            const float dDenominator = alpha2 * nDotH * nDotH + glm::dot(nCrossH, nCrossH);
-            const float distribution = alpha2 / (float(M_PI) * dDenominator * dDenominator);
-            const float visibility =
-                0.5f / (nDotL * std::sqrt(nDotV * nDotV * (1.0f - alpha2) + alpha2) +
-                        nDotV * std::sqrt(nDotL * nDotL * (1.0f - alpha2) + alpha2));
-            const glm::vec3 brdf = (glm::vec3(1.0f) - fresnel) * diffuse + float(M_PI) * distribution * visibility * fresnel;
+            const glm::vec3 brdf = (glm::vec3(1.0f) - fresnel) * diffuse + specularLobe(alpha2, n, h, nDotH, nDotL, nDotV) * fresnel;
             const glm::vec3 term = in.intensity * nDotL * brdf;
             // A select, not a branch: an unlit pixel's term may be Inf or NaN, and is not added.
             const bool lit = nDotL > 0.0f;
@@ -561,6 +616,18 @@ private:
 
     /// x^5 by three multiplications, the same bits in every lane and on every instruction set
     /// (std::pow is a library call per pixel, a tenth of a textured frame).
+    /// pi D V: the GGX distribution and the height-correlated Smith visibility, without Fresnel.
+    static float specularLobe(float alpha2, const glm::vec3& n, const glm::vec3& h, float nDotH, float nDotL, float nDotV) {
+        // n.h² (a² - 1) + 1 written as a² n.h² + |n x h|²: near the highlight's peak,
+        // 1 - n.h² cancels in float, the cross product does not (Filament's form).
+        const glm::vec3 nCrossH = glm::cross(n, h);
+        const float dDenominator = alpha2 * nDotH * nDotH + glm::dot(nCrossH, nCrossH);
+        const float distribution = alpha2 / (float(M_PI) * dDenominator * dDenominator);
+        const float visibility = 0.5f / (nDotL * std::sqrt(nDotV * nDotV * (1.0f - alpha2) + alpha2) +
+                                         nDotV * std::sqrt(nDotL * nDotL * (1.0f - alpha2) + alpha2));
+        return float(M_PI) * distribution * visibility;
+    }
+
     static float pow5(float x) {
         const float x2 = x * x;
         return x2 * x2 * x;
@@ -575,6 +642,7 @@ private:
     const DrawState& s_;
     VaryingLayout layout_;
     bool hasEmissive_ = false;
+    bool coated_ = false;  // KHR_materials_clearcoat
     bool fusedLambert_ = false;
 };
 

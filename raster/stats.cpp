@@ -27,6 +27,7 @@ StageCounters& StageCounters::operator+=(const StageCounters& o) {
     lightEvaluations += o.lightEvaluations;
     specularGlossinessPixels += o.specularGlossinessPixels;
     dielectricSpecularPixels += o.dielectricSpecularPixels;
+    clearcoatPixels += o.clearcoatPixels;
     pixelsAlphaTested += o.pixelsAlphaTested;
     pixelsBlended += o.pixelsBlended;
     return *this;

@@ -217,7 +217,8 @@ void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
     for (scene::Mesh& m : s.meshes) {
         scene::MeshTextures& t = m.textures;
         for (scene::MeshTexture* slot :
-             {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive, &t.specular, &t.specularColor})
+             {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive, &t.specular, &t.specularColor, &t.clearcoat,
+              &t.clearcoatRoughness})
             retarget(*slot);
     }
 }
@@ -521,7 +522,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
           {"textureSamples", c.textureSamples},
           {"lightEvaluations", c.lightEvaluations},
           {"specularGlossinessPixels", c.specularGlossinessPixels},
-          {"dielectricSpecularPixels", c.dielectricSpecularPixels}}},
+          {"dielectricSpecularPixels", c.dielectricSpecularPixels},
+          {"clearcoatPixels", c.clearcoatPixels}}},
         {"outputMerge", {{"pixelsAlphaTested", c.pixelsAlphaTested}, {"pixelsBlended", c.pixelsBlended}}},
     };
     j["load"] = {{"verticesSkinned", r.load.verticesSkinned},

@@ -79,10 +79,10 @@ private:
 
     // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
     // attribute is read through AccessorView, which takes any component type, normalised or not.
-    static constexpr std::array<std::string_view, 9> kSupportedExtensions = {
+    static constexpr std::array<std::string_view, 10> kSupportedExtensions = {
         "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization",
         "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_pbrSpecularGlossiness", "KHR_materials_specular",
-        "EXT_texture_webp"};
+        "KHR_materials_clearcoat", "EXT_texture_webp"};
     static bool supportedExtension(const std::string& name) {
         return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), name) != kSupportedExtensions.end();
     }
@@ -675,6 +675,25 @@ private:
         m.textures.normal = bindTexture(mat.normalTexture, "normal", false, prim, vertexCount, where, uvs, m);
         m.textures.occlusion = bindTexture(mat.occlusionTexture, "occlusion", false, prim, vertexCount, where, uvs, m);
         m.textures.emissive = bindTexture(mat.emissiveTexture, "emissive", true, prim, vertexCount, where, uvs, m);
+        if (const auto it = mat.extensions.find("KHR_materials_clearcoat"); it != mat.extensions.end())
+            addClearcoat(it->second, prim, vertexCount, where, uvs, m);
+    }
+
+    // KHR_materials_clearcoat: the coat's weight and roughness (factors times the R and G of
+    // their linear textures). The coat follows the surface's normal before normal mapping; a
+    // clearcoatNormalTexture is not read (one warning): the coat is drawn unperturbed.
+    void addClearcoat(const tinygltf::Value& ext, const tinygltf::Primitive& prim, size_t vertexCount, const std::string& where,
+                      TexCoordSet& uvs, Mesh& m) {
+        const std::string place = where + ": KHR_materials_clearcoat";
+        unitFactors(ext, "clearcoatFactor", 0, &m.clearcoat, place);
+        unitFactors(ext, "clearcoatRoughnessFactor", 0, &m.clearcoatRoughness, place);
+        if (m.clearcoat == 0.0f) return;  // the extension: a zero factor disables the whole layer
+        m.textures.clearcoat =
+            bindTexture(textureInfoIn(ext, "clearcoatTexture", place), "clearcoat", false, prim, vertexCount, where, uvs, m);
+        m.textures.clearcoatRoughness = bindTexture(textureInfoIn(ext, "clearcoatRoughnessTexture", place), "clearcoat roughness",
+                                                    false, prim, vertexCount, where, uvs, m);
+        if (ext.Has("clearcoatNormalTexture"))
+            warnOnce(place + ": clearcoatNormalTexture is not read; the coat follows the surface's unmapped normal");
     }
 
     // KHR_materials_pbrSpecularGlossiness (archived, still exported): where a material has it,

@@ -31,6 +31,8 @@ struct MeshTextures {
     MeshTexture emissive;           // multiplies the emissive factor
     MeshTexture specular;           // A: KHR_materials_specular's strength
     MeshTexture specularColor;      // RGB: KHR_materials_specular's F0 colour
+    MeshTexture clearcoat;          // R: KHR_materials_clearcoat's weight
+    MeshTexture clearcoatRoughness; // G: KHR_materials_clearcoat's roughness
 };
 
 /// The reflectance of a dielectric at normal incidence against air, F0 = ((ior - 1) / (ior + 1))²
@@ -65,6 +67,7 @@ struct Mesh {
     bool dielectricSpecular = false;
     float specularStrength = 1.0f;
     glm::vec3 specularColor{1.0f};
+    float clearcoat = 0.0f, clearcoatRoughness = 0.0f;  // KHR_materials_clearcoat (0: no coat)
     glm::vec3 emissive{0.0f};  // linear RGB factor
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     std::vector<float> alphas;         // per position, when vertex colours carry alpha

@@ -99,26 +99,35 @@ glm::dvec3 referenceBrdf(glm::dvec3 albedo, double metallic, double roughness, g
                                  roughness * roughness, n, v, l, intensity);
 }
 
+// The quad as the reference tests draw it: the metallic-roughness model seen from `camera`
+// under one sun of intensity 2 from (-0.3, 0.2, -1) (kSunTowards), with `ambient`.
+const glm::dvec3 kSunTowards = -glm::normalize(glm::dvec3(0.3, -0.2, 1.0));
+DrawCall sunlitQuad(const Quad& quad, const glm::dvec3& camera, float ambient = 0.0f) {
+    DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+    d.state.cameraPosition = glm::vec3(camera);
+    d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
+    d.state.lighting.lightCount = 1;
+    d.state.lighting.ambient = glm::vec3(ambient);
+    return d;
+}
+
 // A quad of albedo (0.8, 0.5, 0.2) under one sun, shaded with the metallic-roughness BRDF,
 // against referenceBrdf at every pixel.
 void expectTheReferenceBrdfAtEveryPixel(float metallic, float roughness, float ior) {
     const Quad quad;
     const glm::dvec3 camera(8.0, 8.0, -20.0);
-    DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+    DrawCall d = sunlitQuad(quad, camera);
     d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
     d.state.metallic = metallic;
     d.state.roughness = roughness;
     d.state.dielectricF0 = scene::dielectricReflectance(ior);
-    d.state.cameraPosition = glm::vec3(camera);
-    d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
-    d.state.lighting.lightCount = 1;
     const raster::Image img = render(d).image;
     for (int y = 0; y < kSize; ++y)
         for (int x = 0; x < kSize; ++x) {
             const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
             const glm::dvec3 expected = referenceBrdf(glm::dvec3(0.8, 0.5, 0.2), metallic, roughness, glm::dvec3(0, 0, -1),
                                                       glm::normalize(camera - p),
-                                                      -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0), ior);
+                                                      kSunTowards, glm::dvec3(2.0), ior);
             for (int c = 0; c < 3; ++c)
                 ASSERT_NEAR(at(img, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
                     << "metallic " << metallic << " roughness " << roughness << " ior " << ior << " at " << x << "," << y;
@@ -153,16 +162,12 @@ TEST(SpecularGlossiness, MatchesTheReferenceBrdfAtEveryPixel) {
                                 Material{{0.2f, 0.6f, 0.9f}, {0.3f, 0.2f, 0.1f}, 0.0f}}) {
         const Quad quad;
         const glm::dvec3 camera(8.0, 8.0, -20.0);
-        DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+        DrawCall d = sunlitQuad(quad, camera, 0.1f);
         d.state.constantColor = glm::vec4(mat.diffuse, 1.0f);
         d.state.specularGlossiness = true;
         d.state.specularFactor = mat.specular;
         d.state.glossiness = mat.glossiness;
         d.state.metallic = 0.5f, d.state.roughness = 0.2f;  // not read
-        d.state.cameraPosition = glm::vec3(camera);
-        d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
-        d.state.lighting.lightCount = 1;
-        d.state.lighting.ambient = glm::vec3(0.1f);
         const Rendered r = render(d);
         EXPECT_EQ(r.counters.specularGlossinessPixels, r.counters.pixelsShaded);
         EXPECT_GT(r.counters.pixelsShaded, 0u);
@@ -175,7 +180,7 @@ TEST(SpecularGlossiness, MatchesTheReferenceBrdfAtEveryPixel) {
                 const glm::dvec3 expected =
                     0.1 * (diffuse + specular) +
                     referenceBrdfOfInputs(diffuse, specular, rough * rough, glm::dvec3(0, 0, -1), glm::normalize(camera - p),
-                                          -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0));
+                                          kSunTowards, glm::dvec3(2.0));
                 for (int c = 0; c < 3; ++c)
                     ASSERT_NEAR(at(r.image, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
                         << "glossiness " << mat.glossiness << " at " << x << "," << y;
@@ -200,16 +205,13 @@ TEST(DielectricSpecular, MatchesTheReferenceBrdfAtEveryPixel) {
                                 Material{0.7f, {30.0f, 10.0f, 1.0f}, 0.0f}, Material{0.5f, {0.2f, 1.0f, 0.6f}, 0.5f}}) {
         const Quad quad;
         const glm::dvec3 camera(8.0, 8.0, -20.0);
-        DrawCall d = quad.call(ShadingModel::MetallicRoughness);
+        DrawCall d = sunlitQuad(quad, camera);
         d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
         d.state.metallic = mat.metallic;
         d.state.roughness = 0.3f;
         d.state.dielectricSpecular = true;
         d.state.specularStrength = mat.strength;
         d.state.specularColor = mat.color;
-        d.state.cameraPosition = glm::vec3(camera);
-        d.state.lighting.lights[0] = directionalLight({0.3f, -0.2f, 1.0f}, glm::vec3(2.0f));
-        d.state.lighting.lightCount = 1;
         const Rendered r = render(d);
         EXPECT_EQ(r.counters.dielectricSpecularPixels, r.counters.pixelsShaded);
         const glm::dvec3 albedo(0.8, 0.5, 0.2);
@@ -222,7 +224,7 @@ TEST(DielectricSpecular, MatchesTheReferenceBrdfAtEveryPixel) {
                 const glm::dvec3 p(x + 0.5, y + 0.5, 0.5);
                 const glm::dvec3 expected =
                     referenceBrdfOfInputs(albedo * (1.0 - metallic), f0, 0.09, glm::dvec3(0, 0, -1), glm::normalize(camera - p),
-                                          -glm::normalize(glm::dvec3(0.3, -0.2, 1.0)), glm::dvec3(2.0), f90);
+                                          kSunTowards, glm::dvec3(2.0), f90);
                 for (int c = 0; c < 3; ++c)
                     ASSERT_NEAR(at(r.image, x, y)[c], expected[c], 2e-4 * std::max(1.0, expected[c]))
                         << "strength " << mat.strength << " at " << x << "," << y;
@@ -230,6 +232,52 @@ TEST(DielectricSpecular, MatchesTheReferenceBrdfAtEveryPixel) {
     }
     const Quad quad;
     EXPECT_EQ(render(quad.call(ShadingModel::MetallicRoughness)).counters.dielectricSpecularPixels, 0u);
+}
+
+// KHR_materials_clearcoat: the coated material is the material — ambient, light and emission —
+// times 1 - w, plus the coat, with w = clearcoat x (0.04 + 0.96 (1 - n_c.v)^5) and the coat
+// ambient x w plus, per light, E n_c.l pi D V w at the coat's roughness: against the
+// double-precision reference at every pixel, a full and a half coat, and under a normal map that
+// tilts the base's normal but not the coat's (which follows the surface). The counter counts
+// exactly the coated pixels, and an uncoated draw none.
+TEST(Clearcoat, LaysTheReferenceCoatOverTheMaterialAtEveryPixel) {
+    const float s = std::sin(float(M_PI) / 3), c = std::cos(float(M_PI) / 3);
+    struct Case {
+        float clearcoat;
+        bool normalMapped;  // tangent-space (sin 60°, 0, cos 60°): world (sin 60°, 0, -cos 60°)
+    };
+    for (const Case k : {Case{1.0f, false}, Case{0.5f, false}, Case{1.0f, true}}) {
+        const Quad quad;
+        const glm::dvec3 camera(8.0, 8.0, -20.0);
+        const Texture map(1, 1, {glm::vec4(0.5f * s + 0.5f, 0.5f, 0.5f * c + 0.5f, 1.0f)});
+        DrawCall d = sunlitQuad(quad, camera, 0.1f);
+        if (k.normalMapped) d.state.textures.normal.texture = &map;
+        d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
+        d.state.metallic = 0.0f;
+        d.state.roughness = 0.6f;
+        d.state.clearcoat = k.clearcoat;
+        d.state.clearcoatRoughness = 0.1f;
+        d.state.emissive = glm::vec3(0.05f, 0.1f, 0.0f);
+        const Rendered r = render(d);
+        EXPECT_EQ(r.counters.clearcoatPixels, r.counters.pixelsShaded);
+        const glm::dvec3 albedo(0.8, 0.5, 0.2), toLight = kSunTowards, surface(0, 0, -1);
+        const glm::dvec3 base = k.normalMapped ? glm::normalize(glm::dvec3(s, 0.0, -c)) : surface;
+        for (int y = 0; y < kSize; ++y)
+            for (int x = 0; x < kSize; ++x) {
+                const glm::dvec3 p(x + 0.5, y + 0.5, 0.5), v = glm::normalize(camera - p);
+                const glm::dvec3 material = 0.1 * (albedo + 0.04) + glm::dvec3(0.05, 0.1, 0.0) +
+                                            referenceBrdf(albedo, 0.0, 0.6, base, v, toLight, glm::dvec3(2.0));
+                const double w = k.clearcoat * (0.04 + 0.96 * std::pow(1.0 - glm::dot(surface, v), 5.0));
+                const glm::dvec3 coat =
+                    0.1 * w + w * referenceBrdfOfInputs(glm::dvec3(0.0), glm::dvec3(1.0), 0.01, surface, v, toLight, glm::dvec3(2.0));
+                const glm::dvec3 expected = material * (1.0 - w) + coat;
+                for (int ch = 0; ch < 3; ++ch)
+                    ASSERT_NEAR(at(r.image, x, y)[ch], expected[ch], 2e-4 * std::max(1.0, expected[ch]))
+                        << "clearcoat " << k.clearcoat << (k.normalMapped ? " normal-mapped" : "") << " at " << x << "," << y;
+            }
+    }
+    const Quad quad;
+    EXPECT_EQ(render(quad.call(ShadingModel::MetallicRoughness)).counters.clearcoatPixels, 0u);
 }
 
 TEST(MetallicRoughness, AmbientAndEmissiveAddWithoutLights) {

@@ -239,6 +239,15 @@ TEST(GltfLoader, BaseColorTextureIsDecodedToLinearWithItsSampler) {
     EXPECT_FALSE(scene.meshes[0].textures.baseColor) << "untextured primitives stay untextured";
 }
 
+// texturedGltf's fixture with its material's unlit extension replaced by `extension` holding
+// `json`, written to `path`; `pbr` replaces the material's metallic-roughness entries.
+void writeWithMaterialExtension(const fs::path& dir, const std::string& extension, const std::string& json, const fs::path& path,
+                                const std::string& pbr = R"("baseColorFactor": [0.9, 0.9, 0.9, 1]})") {
+    std::string text = texturedGltf(dir, pbr);
+    replaceOnce(text, R"("extensions": {"KHR_materials_unlit": {}})", R"("extensions": {")" + extension + R"(": {)" + json + "}}");
+    std::ofstream(path) << text;
+}
+
 // The file is refused with an InputError whose message names `extension`.
 void expectRefusedNaming(const fs::path& path, const std::string& extension, const std::string& what) {
     try {
@@ -255,13 +264,11 @@ void expectRefusedNaming(const fs::path& path, const std::string& extension, con
 // decoded from sRGB — and a factor outside [0, 1] or a texture the file lacks is refused.
 TEST(GltfLoader, SpecularGlossinessReplacesMetallicRoughnessAndBadValuesAreRefused) {
     const fs::path dir = cuberille::testing::uniqueTempPath("gltf-specgloss");
-    // The fixture's material, unlit there, given the extension instead (its metallic-roughness
-    // factors and texture stay, to be ignored).
+    // The fixture's material given the extension (its metallic-roughness factors and texture
+    // stay, to be ignored).
     auto write = [&](const std::string& ext, const fs::path& path) {
-        std::string text = texturedGltf(dir, R"("baseColorFactor": [0.9, 0.9, 0.9, 1], "metallicRoughnessTexture": {"index": 0}})");
-        replaceOnce(text, R"("extensions": {"KHR_materials_unlit": {}})",
-                    R"("extensions": {"KHR_materials_pbrSpecularGlossiness": {)" + ext + "}}");
-        std::ofstream(path) << text;
+        writeWithMaterialExtension(dir, "KHR_materials_pbrSpecularGlossiness", ext, path,
+                                   R"("baseColorFactor": [0.9, 0.9, 0.9, 1], "metallicRoughnessTexture": {"index": 0}})");
     };
     write(R"("diffuseFactor": [0.5, 0.25, 1, 0.8], "specularFactor": [0.2, 0.3, 0.4], "glossinessFactor": 0.6,
              "diffuseTexture": {"index": 0}, "specularGlossinessTexture": {"index": 0})",
@@ -291,11 +298,7 @@ TEST(GltfLoader, SpecularGlossinessReplacesMetallicRoughnessAndBadValuesAreRefus
 // decoded from sRGB; a strength outside [0, 1] or a negative colour is refused.
 TEST(GltfLoader, DielectricSpecularIsReadAndBadValuesAreRefused) {
     const fs::path dir = cuberille::testing::uniqueTempPath("gltf-specular");
-    auto write = [&](const std::string& ext, const fs::path& path) {
-        std::string text = texturedGltf(dir, R"("baseColorFactor": [0.9, 0.9, 0.9, 1]})");
-        replaceOnce(text, R"("extensions": {"KHR_materials_unlit": {}})", R"("extensions": {"KHR_materials_specular": {)" + ext + "}}");
-        std::ofstream(path) << text;
-    };
+    auto write = [&](const std::string& ext, const fs::path& path) { writeWithMaterialExtension(dir, "KHR_materials_specular", ext, path); };
     write(R"("specularFactor": 0.25, "specularColorFactor": [2, 1, 0.5], "specularTexture": {"index": 0},
              "specularColorTexture": {"index": 0})",
           dir / "t.gltf");
@@ -313,6 +316,38 @@ TEST(GltfLoader, DielectricSpecularIsReadAndBadValuesAreRefused) {
                                   R"("specularTexture": {"index": 3})"}) {
         write(bad, dir / "bad.gltf");
         expectRefusedNaming(dir / "bad.gltf", "KHR_materials_specular", bad);
+    }
+    fs::remove_all(dir);
+}
+
+// KHR_materials_clearcoat: weight and roughness factors and their linear textures; a zero weight
+// disables the layer (its textures unbound); a clear coat normal map is not read, with one
+// warning; a factor outside [0, 1] is refused.
+TEST(GltfLoader, ClearcoatIsReadAndBadValuesAreRefused) {
+    const fs::path dir = cuberille::testing::uniqueTempPath("gltf-clearcoat");
+    auto write = [&](const std::string& ext, const fs::path& path) { writeWithMaterialExtension(dir, "KHR_materials_clearcoat", ext, path); };
+    write(R"("clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.2, "clearcoatTexture": {"index": 0},
+             "clearcoatRoughnessTexture": {"index": 0}, "clearcoatNormalTexture": {"index": 0})",
+          dir / "t.gltf");
+    std::vector<std::string> warnings;
+    const GltfScene scene = loadGltf(dir / "t.gltf", [&](const std::string& w) { warnings.push_back(w); });
+    const Mesh& fan = scene.meshes[1];
+    EXPECT_EQ(fan.clearcoat, 0.75f);
+    EXPECT_EQ(fan.clearcoatRoughness, 0.2f);
+    ASSERT_TRUE(fan.textures.clearcoat);
+    ASSERT_TRUE(fan.textures.clearcoatRoughness);
+    EXPECT_NEAR(fan.textures.clearcoat.texture->texel(0, 1, 0).r, 128.0f / 255.0f, 1e-6f) << "read linear";
+    EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
+                            [](const std::string& w) { return w.find("clearcoatNormalTexture") != std::string::npos; }),
+              1);
+    EXPECT_EQ(scene.meshes[0].clearcoat, 0.0f);
+    write(R"("clearcoatFactor": 0, "clearcoatTexture": {"index": 0})", dir / "off.gltf");
+    const GltfScene off = loadGltf(dir / "off.gltf", [](const std::string&) {});
+    EXPECT_EQ(off.meshes[1].clearcoat, 0.0f);
+    EXPECT_FALSE(off.meshes[1].textures.clearcoat) << "a zero weight disables the layer";
+    for (const std::string bad : {R"("clearcoatFactor": 1.5)", R"("clearcoatRoughnessFactor": -0.1)", R"("clearcoatFactor": [1])"}) {
+        write(bad, dir / "bad.gltf");
+        expectRefusedNaming(dir / "bad.gltf", "KHR_materials_clearcoat", bad);
     }
     fs::remove_all(dir);
 }
