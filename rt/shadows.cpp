@@ -723,6 +723,21 @@ ShadowWorkload workload(const raster::Light& light, const ShadowOptions& options
     return w;
 }
 
+/// The mode a light's shadows are drawn in: Auto's choice (recorded in `stats`), else the one
+/// asked for. `covered` counts the pixels with a surface once, for every light of the frame.
+ShadowMode modeForLight(const raster::Light& light, const ShadowOptions& options, const ShadowCasters& casters,
+                        const ScreenSurfaces& surfaces, uint64_t& covered, ShadowStats& stats) {
+    if (options.mode != ShadowMode::Auto) return options.mode;
+    if (covered == 0)
+        covered = uint64_t(std::count_if(surfaces.triangle.begin(), surfaces.triangle.end(),
+                                         [](uint32_t t) { return t != ScreenSurfaces::kNone; }));
+    const ShadowModeChoice choice = chooseShadowMode(workload(light, options, casters, covered));
+    ++(choice.mode == ShadowMode::Hybrid ? stats.autoHybrid : stats.autoRayTraced);
+    stats.predictedHybridMs += choice.predictedHybridMs;
+    stats.predictedRayTracedMs += choice.predictedRayTracedMs;
+    return choice.mode;
+}
+
 }  // namespace
 
 void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting, const ShadowCasters& casters,
@@ -746,15 +761,7 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
         if (!out.storage[size_t(l)]) out.storage[size_t(l)].reset(new LightShadowStorage);
         LightShadowStorage& storage = *out.storage[size_t(l)];
         ShadowOptions lightOptions = options;
-        if (options.mode == ShadowMode::Auto) {
-            if (covered == 0) covered = uint64_t(std::count_if(surfaces.triangle.begin(), surfaces.triangle.end(),
-                                                               [](uint32_t t) { return t != ScreenSurfaces::kNone; }));
-            const ShadowModeChoice choice = chooseShadowMode(workload(light, options, casters, covered));
-            lightOptions.mode = choice.mode;
-            ++(choice.mode == ShadowMode::Hybrid ? out.stats.autoHybrid : out.stats.autoRayTraced);
-            out.stats.predictedHybridMs += choice.predictedHybridMs;
-            out.stats.predictedRayTracedMs += choice.predictedRayTracedMs;
-        }
+        lightOptions.mode = modeForLight(light, options, casters, surfaces, covered, out.stats);
         if (lightOptions.mode == ShadowMode::Hybrid && !adjacency && casters.adjacencyOnDemand) adjacency = casters.adjacencyOnDemand();
         ShadowCasters lightCasters = casters;
         lightCasters.adjacency = adjacency;
