@@ -15,7 +15,7 @@ from cuberille import testing
 
 # Each case: a scene (a file of the examples, or a built-in scene) and the options of both calls,
 # chosen to cover every kind of scene and the outputs that change the bytes (alpha, depth view,
-# an animation time, shadows, a camera placed by hand).
+# an animation time, shadows — auto, over the scene, on a floor — a camera placed by hand).
 CASES = [
     ("triangles.tri", dict(width=128, height=128, msaa=4), ["--width", "128", "--height", "128", "--msaa", "4"]),
     ("torus.ply", dict(width=160, height=120, msaa=4, azimuth=60.0), ["--width", "160", "--height", "120", "--msaa", "4", "--azimuth", "60"]),
@@ -26,6 +26,8 @@ CASES = [
     ("spinning-box.gltf", dict(width=160, height=120, view="depth", eye=(3.0, 2.0, 4.0), target=(0.0, 0.0, 0.0)),
      ["--width", "160", "--height", "120", "--view", "depth", "--eye", "3,2,4", "--target", "0,0,0"]),
     ("demo", dict(width=160, height=90, msaa=4, detail=0.5), ["--width", "160", "--height", "90", "--msaa", "4", "--detail", "0.5"]),
+    ("torus.ply", dict(width=160, height=120, ground=True, shadows="auto", soft=True, shadow_focus="scene"),
+     ["--width", "160", "--height", "120", "--ground", "--shadows", "auto", "--soft", "--shadow-focus", "scene"]),
 ]
 
 
