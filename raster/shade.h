@@ -113,7 +113,7 @@ public:
             else
                 metallicRoughness(q, a, occlusion, counters);
             if (hasEmissive_) addEmissive(q.count, a, counters);
-            if (coated_) underTheCoat(q.count, a, counters);
+            if (coated_) underTheCoat(q.count, a);
             writeOut(q, a.radiance, a.alpha);
         }
     }
@@ -477,7 +477,7 @@ private:
     }
 
     // The coated material: the material, emission included, times 1 - w, plus the coat.
-    static void underTheCoat(int count, PixelAttributes& a, StageCounters&) {
+    static void underTheCoat(int count, PixelAttributes& a) {
         for (int k = 0; k < 3; ++k)
             for (int i = 0; i < count; ++i) a.radiance[k][i] = a.radiance[k][i] * (1.0f - a.coatWeight[i]) + a.coatRadiance[k][i];
     }
