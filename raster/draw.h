@@ -98,9 +98,10 @@ struct MaterialTextures {
     TextureBinding specularColor;      // linear RGB (sRGB decoded): the dielectric F0 colour, x specularColor
     TextureBinding clearcoat;          // R: the clear coat's weight, x DrawState::clearcoat
     TextureBinding clearcoatRoughness; // G: the clear coat's roughness, x DrawState::clearcoatRoughness
+    TextureBinding clearcoatNormal;    // the clear coat's own normal map (tangent space, needs tangents)
     bool any() const {
         return baseColor || metallicRoughness || normal || occlusion || emissive || specular || specularColor || clearcoat ||
-               clearcoatRoughness;
+               clearcoatRoughness || clearcoatNormal;
     }
 };
 
@@ -151,9 +152,10 @@ struct DrawState {
     float specularStrength = 1.0f;
     glm::vec3 specularColor{1.0f};
     /// MetallicRoughness with KHR_materials_clearcoat (> 0): a GGX layer of this weight and
-    /// roughness over the whole material, emission included, following the surface's normal
-    /// before normal mapping (raster/shade.h).
+    /// roughness over the whole material, emission included, following its own normal map, or
+    /// the surface's normal before normal mapping (raster/shade.h).
     float clearcoat = 0.0f, clearcoatRoughness = 0.0f;
+    float clearcoatNormalScale = 1.0f;
     glm::vec3 emissive{0.0f};                 // linear RGB factor; Lambert and MetallicRoughness
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     glm::vec3 cameraPosition{0.0f};  // world space: the view vector of MetallicRoughness

@@ -130,8 +130,8 @@ private:
         float normal[3][N];      // world space, unit length
         float position[3][N];    // world space
         float radiance[3][N];    // the result
-        // KHR_materials_clearcoat only: the coat's normal (the surface's before normal mapping,
-        // when there is a normal map), its weight clearcoat x Fresnel(n_c.v), and its radiance.
+        // KHR_materials_clearcoat only: the coat's normal (its own normal map's, or the surface's
+        // before normal mapping), its weight clearcoat x Fresnel(n_c.v), and its radiance.
         float coatNormal[3][N];
         float coatWeight[N];
         float coatRadiance[3][N];
@@ -254,24 +254,31 @@ private:
         if (layout_.tangent >= 0) {
             float tangent[4][N];
             interpolate<4>(v, layout_.tangent, count, a.w, tangent);
-            const float scale = s_.normalScale;
-            FetchedTexels texels;
-            fetchAll(s_.textures.normal, a, count, texels);
-            for (int i = 0; i < count; ++i) {
-                const glm::vec3 nrm = safeNormalize({a.normal[0][i], a.normal[1][i], a.normal[2][i]});
-                glm::vec3 tan(tangent[0][i], tangent[1][i], tangent[2][i]);
-                tan = safeNormalize(tan - nrm * glm::dot(nrm, tan));  // Gram-Schmidt
-                const glm::vec3 bitangent = glm::cross(nrm, tan) * (tangent[3][i] < 0.0f ? -1.0f : 1.0f);
-                const glm::vec3 m(scale * (2.0f * texels.r[i] - 1.0f), scale * (2.0f * texels.g[i] - 1.0f),
-                                  2.0f * texels.b[i] - 1.0f);
-                const glm::vec3 n = tan * m.x + bitangent * m.y + nrm * m.z;
-                a.normal[0][i] = n.x, a.normal[1][i] = n.y, a.normal[2][i] = n.z;
-            }
-            counters.textureSamples += uint64_t(count);
+            if (s_.textures.normal) normalMapped(s_.textures.normal, s_.normalScale, tangent, count, a, a.normal, counters);
+            if (coatNormal && s_.textures.clearcoatNormal)
+                normalMapped(s_.textures.clearcoatNormal, s_.clearcoatNormalScale, tangent, count, a, a.coatNormal, counters);
         }
         const float facing = t.backFacing ? -1.0f : 1.0f;
         unitFacing(count, facing, a.normal);
         if (coatNormal) unitFacing(count, facing, a.coatNormal);
+    }
+
+    // `normal` perturbed by a tangent-space normal map, in the frame of the interpolated tangent
+    // (made orthogonal to the normal) and its bitangent.
+    void normalMapped(const TextureBinding& map, float scale, const float (&tangent)[4][N], int count, PixelAttributes& a,
+                      float (&normal)[3][N], StageCounters& counters) const {
+        FetchedTexels texels;
+        fetchAll(map, a, count, texels);
+        for (int i = 0; i < count; ++i) {
+            const glm::vec3 nrm = safeNormalize({normal[0][i], normal[1][i], normal[2][i]});
+            glm::vec3 tan(tangent[0][i], tangent[1][i], tangent[2][i]);
+            tan = safeNormalize(tan - nrm * glm::dot(nrm, tan));  // Gram-Schmidt
+            const glm::vec3 bitangent = glm::cross(nrm, tan) * (tangent[3][i] < 0.0f ? -1.0f : 1.0f);
+            const glm::vec3 m(scale * (2.0f * texels.r[i] - 1.0f), scale * (2.0f * texels.g[i] - 1.0f), 2.0f * texels.b[i] - 1.0f);
+            const glm::vec3 n = tan * m.x + bitangent * m.y + nrm * m.z;
+            normal[0][i] = n.x, normal[1][i] = n.y, normal[2][i] = n.z;
+        }
+        counters.textureSamples += uint64_t(count);
     }
 
     static void unitFacing(int count, float facing, float (&normal)[3][N]) {

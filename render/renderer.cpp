@@ -218,7 +218,7 @@ void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
         scene::MeshTextures& t = m.textures;
         for (scene::MeshTexture* slot :
              {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive, &t.specular, &t.specularColor, &t.clearcoat,
-              &t.clearcoatRoughness})
+              &t.clearcoatRoughness, &t.clearcoatNormal})
             retarget(*slot);
     }
 }

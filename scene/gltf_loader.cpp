@@ -600,7 +600,7 @@ private:
             m.color = glm::vec3(1.0f);
             if (prim.material >= 0 && prim.material < int(model_.materials.size()))
                 addMaterial(model_.materials[prim.material], prim, pos.count, where, m);
-            if (m.textures.normal && m.tangents.empty()) {
+            if ((m.textures.normal || m.textures.clearcoatNormal) && m.tangents.empty()) {
                 if (const auto it = prim.attributes.find("TANGENT"); it != prim.attributes.end()) {
                     const AccessorView tv = view(it->second, where);
                     if (tv.components != 4 || tv.count != pos.count) fail(where, "TANGENT does not match POSITION");
@@ -680,8 +680,8 @@ private:
     }
 
     // KHR_materials_clearcoat: the coat's weight and roughness (factors times the R and G of
-    // their linear textures). The coat follows the surface's normal before normal mapping; a
-    // clearcoatNormalTexture is not read (one warning): the coat is drawn unperturbed.
+    // their linear textures) and its own normal map (with its scale); without one the coat
+    // follows the surface's normal before normal mapping.
     void addClearcoat(const tinygltf::Value& ext, const tinygltf::Primitive& prim, size_t vertexCount, const std::string& where,
                       TexCoordSet& uvs, Mesh& m) {
         const std::string place = where + ": KHR_materials_clearcoat";
@@ -692,8 +692,14 @@ private:
             bindTexture(textureInfoIn(ext, "clearcoatTexture", place), "clearcoat", false, prim, vertexCount, where, uvs, m);
         m.textures.clearcoatRoughness = bindTexture(textureInfoIn(ext, "clearcoatRoughnessTexture", place), "clearcoat roughness",
                                                     false, prim, vertexCount, where, uvs, m);
-        if (ext.Has("clearcoatNormalTexture"))
-            warnOnce(place + ": clearcoatNormalTexture is not read; the coat follows the surface's unmapped normal");
+        m.textures.clearcoatNormal = bindTexture(textureInfoIn(ext, "clearcoatNormalTexture", place), "clearcoat normal", false,
+                                                 prim, vertexCount, where, uvs, m);
+        if (m.textures.clearcoatNormal && ext.Get("clearcoatNormalTexture").Has("scale")) {
+            const tinygltf::Value& scale = ext.Get("clearcoatNormalTexture").Get("scale");
+            if (!scale.IsNumber() || !std::isfinite(scale.GetNumberAsDouble()))
+                fail(place, "clearcoatNormalTexture.scale must be a finite number");
+            m.clearcoatNormalScale = float(scale.GetNumberAsDouble());
+        }
     }
 
     // KHR_materials_pbrSpecularGlossiness (archived, still exported): where a material has it,

@@ -33,6 +33,7 @@ struct MeshTextures {
     MeshTexture specularColor;      // RGB: KHR_materials_specular's F0 colour
     MeshTexture clearcoat;          // R: KHR_materials_clearcoat's weight
     MeshTexture clearcoatRoughness; // G: KHR_materials_clearcoat's roughness
+    MeshTexture clearcoatNormal;    // KHR_materials_clearcoat's own normal map; needs tangents
 };
 
 /// The reflectance of a dielectric at normal incidence against air, F0 = ((ior - 1) / (ior + 1))²
@@ -68,6 +69,7 @@ struct Mesh {
     float specularStrength = 1.0f;
     glm::vec3 specularColor{1.0f};
     float clearcoat = 0.0f, clearcoatRoughness = 0.0f;  // KHR_materials_clearcoat (0: no coat)
+    float clearcoatNormalScale = 1.0f;
     glm::vec3 emissive{0.0f};  // linear RGB factor
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     std::vector<float> alphas;         // per position, when vertex colours carry alpha

@@ -45,7 +45,8 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         auto bind = [](const MeshTexture& t) { return raster::TextureBinding{t.texture.get(), t.transform}; };
         d.state.textures = {bind(m.textures.baseColor), bind(m.textures.metallicRoughness), bind(m.textures.normal),
                             bind(m.textures.occlusion), bind(m.textures.emissive), bind(m.textures.specular),
-                            bind(m.textures.specularColor), bind(m.textures.clearcoat), bind(m.textures.clearcoatRoughness)};
+                            bind(m.textures.specularColor), bind(m.textures.clearcoat), bind(m.textures.clearcoatRoughness),
+                            bind(m.textures.clearcoatNormal)};
         d.state.cull = m.doubleSided ? raster::CullMode::None : cull;
         d.state.constantColor = glm::vec4(m.color, m.alpha);
         d.state.alphaMode = m.alphaMode;
@@ -63,6 +64,7 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         d.state.specularColor = m.specularColor;
         d.state.clearcoat = m.clearcoat;
         d.state.clearcoatRoughness = m.clearcoatRoughness;
+        d.state.clearcoatNormalScale = m.clearcoatNormalScale;
         d.state.emissive = m.emissive;
         d.state.normalScale = m.normalScale;
         d.state.occlusionStrength = m.occlusionStrength;

@@ -237,21 +237,24 @@ TEST(DielectricSpecular, MatchesTheReferenceBrdfAtEveryPixel) {
 // KHR_materials_clearcoat: the coated material is the material — ambient, light and emission —
 // times 1 - w, plus the coat, with w = clearcoat x (0.04 + 0.96 (1 - n_c.v)^5) and the coat
 // ambient x w plus, per light, E n_c.l pi D V w at the coat's roughness: against the
-// double-precision reference at every pixel, a full and a half coat, and under a normal map that
-// tilts the base's normal but not the coat's (which follows the surface). The counter counts
-// exactly the coated pixels, and an uncoated draw none.
+// double-precision reference at every pixel, a full and a half coat, under a normal map that
+// tilts the base's normal but not the coat's (which follows the surface), and under a coat normal
+// map that tilts the coat's but not the base's. The counter counts exactly the coated pixels, and
+// an uncoated draw none.
 TEST(Clearcoat, LaysTheReferenceCoatOverTheMaterialAtEveryPixel) {
     const float s = std::sin(float(M_PI) / 3), c = std::cos(float(M_PI) / 3);
     struct Case {
         float clearcoat;
         bool normalMapped;  // tangent-space (sin 60°, 0, cos 60°): world (sin 60°, 0, -cos 60°)
+        bool coatMapped;    // the same map as the coat's own
     };
-    for (const Case k : {Case{1.0f, false}, Case{0.5f, false}, Case{1.0f, true}}) {
+    for (const Case k : {Case{1.0f, false, false}, Case{0.5f, false, false}, Case{1.0f, true, false}, Case{1.0f, false, true}}) {
         const Quad quad;
         const glm::dvec3 camera(8.0, 8.0, -20.0);
         const Texture map(1, 1, {glm::vec4(0.5f * s + 0.5f, 0.5f, 0.5f * c + 0.5f, 1.0f)});
         DrawCall d = sunlitQuad(quad, camera, 0.1f);
         if (k.normalMapped) d.state.textures.normal.texture = &map;
+        if (k.coatMapped) d.state.textures.clearcoatNormal.texture = &map;
         d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
         d.state.metallic = 0.0f;
         d.state.roughness = 0.6f;
@@ -260,20 +263,21 @@ TEST(Clearcoat, LaysTheReferenceCoatOverTheMaterialAtEveryPixel) {
         d.state.emissive = glm::vec3(0.05f, 0.1f, 0.0f);
         const Rendered r = render(d);
         EXPECT_EQ(r.counters.clearcoatPixels, r.counters.pixelsShaded);
-        const glm::dvec3 albedo(0.8, 0.5, 0.2), toLight = kSunTowards, surface(0, 0, -1);
-        const glm::dvec3 base = k.normalMapped ? glm::normalize(glm::dvec3(s, 0.0, -c)) : surface;
+        const glm::dvec3 albedo(0.8, 0.5, 0.2), toLight = kSunTowards, surface(0, 0, -1), tilted = glm::normalize(glm::dvec3(s, 0.0, -c));
+        const glm::dvec3 base = k.normalMapped ? tilted : surface, coatNormal = k.coatMapped ? tilted : surface;
         for (int y = 0; y < kSize; ++y)
             for (int x = 0; x < kSize; ++x) {
                 const glm::dvec3 p(x + 0.5, y + 0.5, 0.5), v = glm::normalize(camera - p);
                 const glm::dvec3 material = 0.1 * (albedo + 0.04) + glm::dvec3(0.05, 0.1, 0.0) +
                                             referenceBrdf(albedo, 0.0, 0.6, base, v, toLight, glm::dvec3(2.0));
-                const double w = k.clearcoat * (0.04 + 0.96 * std::pow(1.0 - glm::dot(surface, v), 5.0));
+                const double w = k.clearcoat * (0.04 + 0.96 * std::pow(1.0 - glm::dot(coatNormal, v), 5.0));
                 const glm::dvec3 coat =
-                    0.1 * w + w * referenceBrdfOfInputs(glm::dvec3(0.0), glm::dvec3(1.0), 0.01, surface, v, toLight, glm::dvec3(2.0));
+                    0.1 * w + w * referenceBrdfOfInputs(glm::dvec3(0.0), glm::dvec3(1.0), 0.01, coatNormal, v, toLight, glm::dvec3(2.0));
                 const glm::dvec3 expected = material * (1.0 - w) + coat;
                 for (int ch = 0; ch < 3; ++ch)
                     ASSERT_NEAR(at(r.image, x, y)[ch], expected[ch], 2e-4 * std::max(1.0, expected[ch]))
-                        << "clearcoat " << k.clearcoat << (k.normalMapped ? " normal-mapped" : "") << " at " << x << "," << y;
+                        << "clearcoat " << k.clearcoat << (k.normalMapped ? " normal-mapped" : "") << (k.coatMapped ? " coat-mapped" : "")
+                        << " at " << x << "," << y;
             }
     }
     const Quad quad;

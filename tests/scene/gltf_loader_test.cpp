@@ -320,14 +320,14 @@ TEST(GltfLoader, DielectricSpecularIsReadAndBadValuesAreRefused) {
     fs::remove_all(dir);
 }
 
-// KHR_materials_clearcoat: weight and roughness factors and their linear textures; a zero weight
-// disables the layer (its textures unbound); a clear coat normal map is not read, with one
-// warning; a factor outside [0, 1] is refused.
+// KHR_materials_clearcoat: weight and roughness factors and their linear textures, its own normal
+// map with its scale (and tangents for it); a zero weight disables the layer (its textures
+// unbound); a factor outside [0, 1] is refused.
 TEST(GltfLoader, ClearcoatIsReadAndBadValuesAreRefused) {
     const fs::path dir = cuberille::testing::uniqueTempPath("gltf-clearcoat");
     auto write = [&](const std::string& ext, const fs::path& path) { writeWithMaterialExtension(dir, "KHR_materials_clearcoat", ext, path); };
     write(R"("clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.2, "clearcoatTexture": {"index": 0},
-             "clearcoatRoughnessTexture": {"index": 0}, "clearcoatNormalTexture": {"index": 0})",
+             "clearcoatRoughnessTexture": {"index": 0}, "clearcoatNormalTexture": {"index": 0, "scale": 0.5})",
           dir / "t.gltf");
     std::vector<std::string> warnings;
     const GltfScene scene = loadGltf(dir / "t.gltf", [&](const std::string& w) { warnings.push_back(w); });
@@ -337,15 +337,17 @@ TEST(GltfLoader, ClearcoatIsReadAndBadValuesAreRefused) {
     ASSERT_TRUE(fan.textures.clearcoat);
     ASSERT_TRUE(fan.textures.clearcoatRoughness);
     EXPECT_NEAR(fan.textures.clearcoat.texture->texel(0, 1, 0).r, 128.0f / 255.0f, 1e-6f) << "read linear";
-    EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
-                            [](const std::string& w) { return w.find("clearcoatNormalTexture") != std::string::npos; }),
-              1);
+    ASSERT_TRUE(fan.textures.clearcoatNormal);
+    EXPECT_EQ(fan.clearcoatNormalScale, 0.5f);
+    EXPECT_EQ(fan.tangents.size(), fan.positions.size()) << "tangents for the coat's normal map";
+    for (const std::string& w : warnings) EXPECT_EQ(w.find("KHR_materials_clearcoat"), std::string::npos) << w;
     EXPECT_EQ(scene.meshes[0].clearcoat, 0.0f);
     write(R"("clearcoatFactor": 0, "clearcoatTexture": {"index": 0})", dir / "off.gltf");
     const GltfScene off = loadGltf(dir / "off.gltf", [](const std::string&) {});
     EXPECT_EQ(off.meshes[1].clearcoat, 0.0f);
     EXPECT_FALSE(off.meshes[1].textures.clearcoat) << "a zero weight disables the layer";
-    for (const std::string bad : {R"("clearcoatFactor": 1.5)", R"("clearcoatRoughnessFactor": -0.1)", R"("clearcoatFactor": [1])"}) {
+    for (const std::string bad : {R"("clearcoatFactor": 1.5)", R"("clearcoatRoughnessFactor": -0.1)", R"("clearcoatFactor": [1])",
+                                  R"("clearcoatFactor": 1, "clearcoatNormalTexture": {"index": 0, "scale": "big"})"}) {
         write(bad, dir / "bad.gltf");
         expectRefusedNaming(dir / "bad.gltf", "KHR_materials_clearcoat", bad);
     }
