@@ -94,10 +94,10 @@ struct MaterialTextures {
     TextureBinding normal;             // tangent space, needs tangents
     TextureBinding occlusion;          // R: ambient occlusion
     TextureBinding emissive;           // linear RGB, x the emissive factor
-    TextureBinding specular;           // A: the dielectric specular strength, x DrawState::specularStrength
+    TextureBinding specular;           // A: the dielectric specular strength, x BrdfExtensions::specularStrength
     TextureBinding specularColor;      // linear RGB (sRGB decoded): the dielectric F0 colour, x specularColor
-    TextureBinding clearcoat;          // R: the clear coat's weight, x DrawState::clearcoat
-    TextureBinding clearcoatRoughness; // G: the clear coat's roughness, x DrawState::clearcoatRoughness
+    TextureBinding clearcoat;          // R: the clear coat's weight, x BrdfExtensions::clearcoat
+    TextureBinding clearcoatRoughness; // G: the clear coat's roughness, x BrdfExtensions::clearcoatRoughness
     TextureBinding clearcoatNormal;    // the clear coat's own normal map (tangent space, needs tangents)
     bool any() const {
         return baseColor || metallicRoughness || normal || occlusion || emissive || specular || specularColor || clearcoat ||
@@ -121,6 +121,30 @@ enum class AlphaMode : uint8_t {
     Blend,   // over-blended onto the target: src * a + dst * (1 - a)
 };
 
+/// How glTF's material extensions change the MetallicRoughness BRDF (raster/shade.h). A scene
+/// mesh holds one (scene::Mesh::brdf) and a draw copies it; the defaults change nothing.
+struct BrdfExtensions {
+    /// The BRDF fed from the specular-glossiness material model instead
+    /// (KHR_materials_pbrSpecularGlossiness): c_diff = diffuse (1 - max(specular)), F0 =
+    /// specular, alpha = (1 - glossiness)²; the metallicRoughness slot then holds the
+    /// specular-glossiness texture (RGB specular, A glossiness), and metallic, roughness and
+    /// dielectricF0 are not read.
+    bool specularGlossiness = false;
+    glm::vec3 specularFactor{1.0f};
+    float glossiness = 1.0f;
+    /// KHR_materials_specular: the dielectric part's F0 becomes min(dielectricF0 x specularColor,
+    /// 1) x specularStrength and its F90 specularStrength (times the specular and specularColor
+    /// textures where bound); F90 = mix(that, 1, metallic).
+    bool dielectricSpecular = false;
+    float specularStrength = 1.0f;
+    glm::vec3 specularColor{1.0f};
+    /// KHR_materials_clearcoat (> 0): a GGX layer of this weight and roughness over the whole
+    /// material, emission included, following its own normal map, or the surface's normal
+    /// before normal mapping.
+    float clearcoat = 0.0f, clearcoatRoughness = 0.0f;
+    float clearcoatNormalScale = 1.0f;
+};
+
 struct DrawState {
     ShadingModel shading = ShadingModel::ConstantColor;
     CullMode cull = CullMode::None;
@@ -137,25 +161,7 @@ struct DrawState {
     /// MetallicRoughness: the reflectance of the dielectric part at normal incidence, F0 =
     /// ((ior - 1) / (ior + 1))² (glTF's 1.5 gives 0.04; KHR_materials_ior sets others).
     float dielectricF0 = 0.04f;
-    /// MetallicRoughness's BRDF fed from the specular-glossiness material model instead
-    /// (KHR_materials_pbrSpecularGlossiness): c_diff = diffuse (1 - max(specular)), F0 =
-    /// specular, alpha = (1 - glossiness)²; the metallicRoughness slot then holds the
-    /// specular-glossiness texture (RGB specular, A glossiness), and metallic, roughness and
-    /// dielectricF0 are not read.
-    bool specularGlossiness = false;
-    glm::vec3 specularFactor{1.0f};
-    float glossiness = 1.0f;
-    /// MetallicRoughness with KHR_materials_specular: the dielectric part's F0 becomes
-    /// min(dielectricF0 x specularColor, 1) x specularStrength and its F90 specularStrength
-    /// (times the specular and specularColor textures where bound); F90 = mix(that, 1, metallic).
-    bool dielectricSpecular = false;
-    float specularStrength = 1.0f;
-    glm::vec3 specularColor{1.0f};
-    /// MetallicRoughness with KHR_materials_clearcoat (> 0): a GGX layer of this weight and
-    /// roughness over the whole material, emission included, following its own normal map, or
-    /// the surface's normal before normal mapping (raster/shade.h).
-    float clearcoat = 0.0f, clearcoatRoughness = 0.0f;
-    float clearcoatNormalScale = 1.0f;
+    BrdfExtensions brdf;  // MetallicRoughness: inputs from other material models, and a clear coat
     glm::vec3 emissive{0.0f};                 // linear RGB factor; Lambert and MetallicRoughness
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     glm::vec3 cameraPosition{0.0f};  // world space: the view vector of MetallicRoughness

@@ -59,9 +59,9 @@ struct ConstantColorShader {
 ///
 /// The BRDF (MetallicRoughness, glTF 2.0 appendix B): c_diff = albedo (1 - metallic),
 /// F0 = mix(dielectricF0, albedo, metallic) (0.04 unless KHR_materials_ior), alpha = roughness² (or from the
-/// specular-glossiness model: DrawState::specularGlossiness; KHR_materials_specular tints and scales the
-/// dielectric F0 and F90: DrawState::dielectricSpecular; KHR_materials_clearcoat lays a second GGX lobe
-/// over the result: DrawState::clearcoat); per light, with light intensity E
+/// specular-glossiness model: BrdfExtensions::specularGlossiness; KHR_materials_specular tints and scales the
+/// dielectric F0 and F90: BrdfExtensions::dielectricSpecular; KHR_materials_clearcoat lays a second GGX lobe
+/// over the result: BrdfExtensions::clearcoat); per light, with light intensity E
 /// (pi x irradiance, see Light), E n.l ((1 - F) c_diff + pi F D V) with Schlick's F, the GGX
 /// D and the height-correlated Smith V. Ambient: ambient x occlusion x (c_diff + F0), a
 /// uniform environment without image-based lighting. Emissive is added last.
@@ -73,7 +73,7 @@ public:
 
     SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
-        coated_ = kModel == ShadingModel::MetallicRoughness && state.clearcoat > 0.0f;
+        coated_ = kModel == ShadingModel::MetallicRoughness && state.brdf.clearcoat > 0.0f;
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 &&
                         state.lighting.lights[0].type == LightType::Directional &&
                         state.lighting.lights[0].visibility == nullptr && layout.texCoord < 0 &&
@@ -256,7 +256,7 @@ private:
             interpolate<4>(v, layout_.tangent, count, a.w, tangent);
             if (s_.textures.normal) normalMapped(s_.textures.normal, s_.normalScale, tangent, count, a, a.normal, counters);
             if (coatNormal && s_.textures.clearcoatNormal)
-                normalMapped(s_.textures.clearcoatNormal, s_.clearcoatNormalScale, tangent, count, a, a.coatNormal, counters);
+                normalMapped(s_.textures.clearcoatNormal, s_.brdf.clearcoatNormalScale, tangent, count, a, a.coatNormal, counters);
         }
         const float facing = t.backFacing ? -1.0f : 1.0f;
         unitFacing(count, facing, a.normal);
@@ -417,11 +417,11 @@ private:
         } else {  // factors times 1, exactly the factors: one loop, without a branch in it
             std::fill_n(texels.g, count, 1.0f);
             std::fill_n(texels.b, count, 1.0f);
-            if (s_.specularGlossiness) std::fill_n(texels.r, count, 1.0f), std::fill_n(texels.a, count, 1.0f);
+            if (s_.brdf.specularGlossiness) std::fill_n(texels.r, count, 1.0f), std::fill_n(texels.a, count, 1.0f);
         }
         SurfaceAtPixels m;
-        const bool withF90 = s_.dielectricSpecular && !s_.specularGlossiness;
-        if (s_.specularGlossiness) {
+        const bool withF90 = s_.brdf.dielectricSpecular && !s_.brdf.specularGlossiness;
+        if (s_.brdf.specularGlossiness) {
             specularGlossinessMaterial(count, a, occlusion, texels, m);
             counters.specularGlossinessPixels += uint64_t(count);
         } else if (withF90) {
@@ -456,11 +456,11 @@ private:
         const float(&nc)[3][N] = layout_.tangent >= 0 ? a.coatNormal : a.normal;
         float alpha2[N], ncDotV[N];
         for (int i = 0; i < count; ++i) {
-            const float r = std::max(0.03f, std::clamp(s_.clearcoatRoughness * roughness.g[i], 0.0f, 1.0f));
+            const float r = std::max(0.03f, std::clamp(s_.brdf.clearcoatRoughness * roughness.g[i], 0.0f, 1.0f));
             alpha2[i] = r * r * r * r;
             const glm::vec3 n(nc[0][i], nc[1][i], nc[2][i]), view(m.view[0][i], m.view[1][i], m.view[2][i]);
             ncDotV[i] = std::max(glm::dot(n, view), 1e-4f);
-            const float coat = std::clamp(s_.clearcoat * weight.r[i], 0.0f, 1.0f);
+            const float coat = std::clamp(s_.brdf.clearcoat * weight.r[i], 0.0f, 1.0f);
             a.coatWeight[i] = coat * (0.04f + 0.96f * pow5(1.0f - ncDotV[i]));
             for (int k = 0; k < 3; ++k) a.coatRadiance[k][i] = s_.lighting.ambient[k] * occlusion[i] * a.coatWeight[i];
         }
@@ -516,8 +516,8 @@ private:
             const float metallic = std::clamp(s_.metallic * texels.b[i], 0.0f, 1.0f);
             const float r = std::max(0.03f, std::clamp(s_.roughness * texels.g[i], 0.0f, 1.0f));
             m.alpha2[i] = r * r * r * r;
-            const float specular = std::clamp(s_.specularStrength * strength.a[i], 0.0f, 1.0f);
-            const glm::vec3 tint = s_.specularColor * glm::vec3(color.r[i], color.g[i], color.b[i]);
+            const float specular = std::clamp(s_.brdf.specularStrength * strength.a[i], 0.0f, 1.0f);
+            const glm::vec3 tint = s_.brdf.specularColor * glm::vec3(color.r[i], color.g[i], color.b[i]);
             const glm::vec3 dielectricF0 = glm::min(s_.dielectricF0 * tint, glm::vec3(1.0f)) * specular;
             const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
             storeMaterial(i, albedo * (1.0f - metallic), glm::mix(dielectricF0, albedo, metallic), a, occlusion, m);
@@ -542,8 +542,8 @@ private:
     void specularGlossinessMaterial(int count, PixelAttributes& a, const float* occlusion, const FetchedTexels& texels,
                                     SurfaceAtPixels& m) const {
         for (int i = 0; i < count; ++i) {
-            const glm::vec3 specular = glm::clamp(s_.specularFactor * glm::vec3(texels.r[i], texels.g[i], texels.b[i]), 0.0f, 1.0f);
-            const float glossiness = std::clamp(s_.glossiness * texels.a[i], 0.0f, 1.0f);
+            const glm::vec3 specular = glm::clamp(s_.brdf.specularFactor * glm::vec3(texels.r[i], texels.g[i], texels.b[i]), 0.0f, 1.0f);
+            const float glossiness = std::clamp(s_.brdf.glossiness * texels.a[i], 0.0f, 1.0f);
             const float r = std::max(0.03f, 1.0f - glossiness);
             m.alpha2[i] = r * r * r * r;  // ((1 - glossiness)²)²
             const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);

@@ -89,7 +89,7 @@ VaryingLayout varyingLayoutFor(const DrawCall& draw) {
     if (draw.vertexAlphas.size() == vertices && vertices > 0) l.alpha = take(1);
     if (textured) l.texCoord = take(2);
     if (state.shading == ShadingModel::MetallicRoughness || (lit && pointOrSpot)) l.position = take(3);
-    const bool normalMapped = state.textures.normal || (state.clearcoat > 0.0f && state.textures.clearcoatNormal);
+    const bool normalMapped = state.textures.normal || (state.brdf.clearcoat > 0.0f && state.textures.clearcoatNormal);
     if (lit && textured && normalMapped && draw.tangents.size() == vertices) l.tangent = take(4);
     return l;
 }

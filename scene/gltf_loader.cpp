@@ -685,9 +685,9 @@ private:
     void addClearcoat(const tinygltf::Value& ext, const tinygltf::Primitive& prim, size_t vertexCount, const std::string& where,
                       TexCoordSet& uvs, Mesh& m) {
         const std::string place = where + ": KHR_materials_clearcoat";
-        unitFactors(ext, "clearcoatFactor", 0, &m.clearcoat, place);
-        unitFactors(ext, "clearcoatRoughnessFactor", 0, &m.clearcoatRoughness, place);
-        if (m.clearcoat == 0.0f) return;  // the extension: a zero factor disables the whole layer
+        unitFactors(ext, "clearcoatFactor", 0, &m.brdf.clearcoat, place);
+        unitFactors(ext, "clearcoatRoughnessFactor", 0, &m.brdf.clearcoatRoughness, place);
+        if (m.brdf.clearcoat == 0.0f) return;  // the extension: a zero factor disables the whole layer
         m.textures.clearcoat =
             bindTexture(textureInfoIn(ext, "clearcoatTexture", place), "clearcoat", false, prim, vertexCount, where, uvs, m);
         m.textures.clearcoatRoughness = bindTexture(textureInfoIn(ext, "clearcoatRoughnessTexture", place), "clearcoat roughness",
@@ -698,7 +698,7 @@ private:
             const tinygltf::Value& scale = ext.Get("clearcoatNormalTexture").Get("scale");
             if (!scale.IsNumber() || !std::isfinite(scale.GetNumberAsDouble()))
                 fail(place, "clearcoatNormalTexture.scale must be a finite number");
-            m.clearcoatNormalScale = float(scale.GetNumberAsDouble());
+            m.brdf.clearcoatNormalScale = float(scale.GetNumberAsDouble());
         }
     }
 
@@ -714,11 +714,11 @@ private:
         unitFactors(ext, "diffuseFactor", 4, diffuse, place);
         unitFactors(ext, "specularFactor", 3, specular, place);
         unitFactors(ext, "glossinessFactor", 0, &glossiness, place);
-        m.specularGlossiness = true;
+        m.brdf.specularGlossiness = true;
         m.color = glm::vec3(diffuse[0], diffuse[1], diffuse[2]);
         m.alpha = diffuse[3];
-        m.specularFactor = glm::vec3(specular[0], specular[1], specular[2]);
-        m.glossiness = glossiness;
+        m.brdf.specularFactor = glm::vec3(specular[0], specular[1], specular[2]);
+        m.brdf.glossiness = glossiness;
         m.textures.baseColor =
             bindTexture(textureInfoIn(ext, "diffuseTexture", place), "diffuse", true, prim, vertexCount, where, uvs, m);
         m.textures.metallicRoughness = bindTexture(textureInfoIn(ext, "specularGlossinessTexture", place), "specular-glossiness",
@@ -734,9 +734,9 @@ private:
         float strength = 1.0f, color[3] = {1.0f, 1.0f, 1.0f};
         unitFactors(ext, "specularFactor", 0, &strength, place);
         unitFactors(ext, "specularColorFactor", 3, color, place, double(std::numeric_limits<float>::max()));
-        m.dielectricSpecular = true;
-        m.specularStrength = strength;
-        m.specularColor = glm::vec3(color[0], color[1], color[2]);
+        m.brdf.dielectricSpecular = true;
+        m.brdf.specularStrength = strength;
+        m.brdf.specularColor = glm::vec3(color[0], color[1], color[2]);
         m.textures.specular =
             bindTexture(textureInfoIn(ext, "specularTexture", place), "specular", false, prim, vertexCount, where, uvs, m);
         m.textures.specularColor = bindTexture(textureInfoIn(ext, "specularColorTexture", place), "specular colour", true, prim,

@@ -58,18 +58,10 @@ struct Mesh {
     float alphaCutoff = 0.5f;
     float metallic = 1.0f, roughness = 1.0f;
     float ior = 1.5f;  // KHR_materials_ior: the dielectric part's index of refraction (0: F0 = 1)
-    /// KHR_materials_pbrSpecularGlossiness: the BRDF's inputs from these instead of metallic,
-    /// roughness and ior (color and alpha are the diffuse factor, textures.baseColor the diffuse
-    /// texture, textures.metallicRoughness the specular-glossiness texture).
-    bool specularGlossiness = false;
-    glm::vec3 specularFactor{1.0f};
-    float glossiness = 1.0f;
-    /// KHR_materials_specular: the dielectric reflection's strength and F0 colour.
-    bool dielectricSpecular = false;
-    float specularStrength = 1.0f;
-    glm::vec3 specularColor{1.0f};
-    float clearcoat = 0.0f, clearcoatRoughness = 0.0f;  // KHR_materials_clearcoat (0: no coat)
-    float clearcoatNormalScale = 1.0f;
+    /// KHR_materials_pbrSpecularGlossiness (color and alpha are then the diffuse factor,
+    /// textures.baseColor the diffuse texture, textures.metallicRoughness the specular-glossiness
+    /// texture), KHR_materials_specular and KHR_materials_clearcoat.
+    raster::BrdfExtensions brdf;
     glm::vec3 emissive{0.0f};  // linear RGB factor
     float normalScale = 1.0f, occlusionStrength = 1.0f;
     std::vector<float> alphas;         // per position, when vertex colours carry alpha

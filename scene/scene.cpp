@@ -56,15 +56,7 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         d.state.metallic = m.metallic;
         d.state.roughness = m.roughness;
         d.state.dielectricF0 = dielectricReflectance(m.ior);
-        d.state.specularGlossiness = m.specularGlossiness;
-        d.state.specularFactor = m.specularFactor;
-        d.state.glossiness = m.glossiness;
-        d.state.dielectricSpecular = m.dielectricSpecular;
-        d.state.specularStrength = m.specularStrength;
-        d.state.specularColor = m.specularColor;
-        d.state.clearcoat = m.clearcoat;
-        d.state.clearcoatRoughness = m.clearcoatRoughness;
-        d.state.clearcoatNormalScale = m.clearcoatNormalScale;
+        d.state.brdf = m.brdf;
         d.state.emissive = m.emissive;
         d.state.normalScale = m.normalScale;
         d.state.occlusionStrength = m.occlusionStrength;

@@ -164,9 +164,9 @@ TEST(SpecularGlossiness, MatchesTheReferenceBrdfAtEveryPixel) {
         const glm::dvec3 camera(8.0, 8.0, -20.0);
         DrawCall d = sunlitQuad(quad, camera, 0.1f);
         d.state.constantColor = glm::vec4(mat.diffuse, 1.0f);
-        d.state.specularGlossiness = true;
-        d.state.specularFactor = mat.specular;
-        d.state.glossiness = mat.glossiness;
+        d.state.brdf.specularGlossiness = true;
+        d.state.brdf.specularFactor = mat.specular;
+        d.state.brdf.glossiness = mat.glossiness;
         d.state.metallic = 0.5f, d.state.roughness = 0.2f;  // not read
         const Rendered r = render(d);
         EXPECT_EQ(r.counters.specularGlossinessPixels, r.counters.pixelsShaded);
@@ -209,9 +209,9 @@ TEST(DielectricSpecular, MatchesTheReferenceBrdfAtEveryPixel) {
         d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
         d.state.metallic = mat.metallic;
         d.state.roughness = 0.3f;
-        d.state.dielectricSpecular = true;
-        d.state.specularStrength = mat.strength;
-        d.state.specularColor = mat.color;
+        d.state.brdf.dielectricSpecular = true;
+        d.state.brdf.specularStrength = mat.strength;
+        d.state.brdf.specularColor = mat.color;
         const Rendered r = render(d);
         EXPECT_EQ(r.counters.dielectricSpecularPixels, r.counters.pixelsShaded);
         const glm::dvec3 albedo(0.8, 0.5, 0.2);
@@ -258,8 +258,8 @@ TEST(Clearcoat, LaysTheReferenceCoatOverTheMaterialAtEveryPixel) {
         d.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, 1.0f);
         d.state.metallic = 0.0f;
         d.state.roughness = 0.6f;
-        d.state.clearcoat = k.clearcoat;
-        d.state.clearcoatRoughness = 0.1f;
+        d.state.brdf.clearcoat = k.clearcoat;
+        d.state.brdf.clearcoatRoughness = 0.1f;
         d.state.emissive = glm::vec3(0.05f, 0.1f, 0.0f);
         const Rendered r = render(d);
         EXPECT_EQ(r.counters.clearcoatPixels, r.counters.pixelsShaded);

@@ -275,16 +275,16 @@ TEST(GltfLoader, SpecularGlossinessReplacesMetallicRoughnessAndBadValuesAreRefus
           dir / "t.gltf");
     const GltfScene scene = loadGltf(dir / "t.gltf", [](const std::string&) {});
     const Mesh& fan = scene.meshes[1];
-    EXPECT_TRUE(fan.specularGlossiness);
+    EXPECT_TRUE(fan.brdf.specularGlossiness);
     EXPECT_EQ(fan.color, glm::vec3(0.5f, 0.25f, 1.0f));
     EXPECT_EQ(fan.alpha, 0.8f);
-    EXPECT_EQ(fan.specularFactor, glm::vec3(0.2f, 0.3f, 0.4f));
-    EXPECT_EQ(fan.glossiness, 0.6f);
+    EXPECT_EQ(fan.brdf.specularFactor, glm::vec3(0.2f, 0.3f, 0.4f));
+    EXPECT_EQ(fan.brdf.glossiness, 0.6f);
     ASSERT_TRUE(fan.textures.baseColor);
     ASSERT_TRUE(fan.textures.metallicRoughness);
     EXPECT_NEAR(fan.textures.metallicRoughness.texture->texel(0, 1, 0).r, 0.2158f, 1e-3f) << "specular decoded from sRGB";
     EXPECT_EQ(fan.textures.metallicRoughness.texture->texel(0, 1, 0).a, 1.0f) << "glossiness linear";
-    EXPECT_FALSE(scene.meshes[0].specularGlossiness);
+    EXPECT_FALSE(scene.meshes[0].brdf.specularGlossiness);
     for (const std::string bad : {R"("specularFactor": [2, 0, 0])", R"("glossinessFactor": "shiny")", R"("diffuseFactor": [1, 1, 1])",
                                   R"("diffuseTexture": {"index": 7})"}) {
         write(bad, dir / "bad.gltf");
@@ -304,14 +304,14 @@ TEST(GltfLoader, DielectricSpecularIsReadAndBadValuesAreRefused) {
           dir / "t.gltf");
     const GltfScene scene = loadGltf(dir / "t.gltf", [](const std::string&) {});
     const Mesh& fan = scene.meshes[1];
-    EXPECT_TRUE(fan.dielectricSpecular);
-    EXPECT_EQ(fan.specularStrength, 0.25f);
-    EXPECT_EQ(fan.specularColor, glm::vec3(2.0f, 1.0f, 0.5f));
+    EXPECT_TRUE(fan.brdf.dielectricSpecular);
+    EXPECT_EQ(fan.brdf.specularStrength, 0.25f);
+    EXPECT_EQ(fan.brdf.specularColor, glm::vec3(2.0f, 1.0f, 0.5f));
     ASSERT_TRUE(fan.textures.specular);
     ASSERT_TRUE(fan.textures.specularColor);
     EXPECT_NEAR(fan.textures.specular.texture->texel(0, 1, 0).r, 128.0f / 255.0f, 1e-6f) << "read linear";
     EXPECT_NEAR(fan.textures.specularColor.texture->texel(0, 1, 0).r, 0.2158f, 1e-3f) << "decoded from sRGB";
-    EXPECT_FALSE(scene.meshes[0].dielectricSpecular);
+    EXPECT_FALSE(scene.meshes[0].brdf.dielectricSpecular);
     for (const std::string bad : {R"("specularFactor": 1.5)", R"("specularColorFactor": [1, -1, 1])", R"("specularColorFactor": [1, 1])",
                                   R"("specularTexture": {"index": 3})"}) {
         write(bad, dir / "bad.gltf");
@@ -332,19 +332,19 @@ TEST(GltfLoader, ClearcoatIsReadAndBadValuesAreRefused) {
     std::vector<std::string> warnings;
     const GltfScene scene = loadGltf(dir / "t.gltf", [&](const std::string& w) { warnings.push_back(w); });
     const Mesh& fan = scene.meshes[1];
-    EXPECT_EQ(fan.clearcoat, 0.75f);
-    EXPECT_EQ(fan.clearcoatRoughness, 0.2f);
+    EXPECT_EQ(fan.brdf.clearcoat, 0.75f);
+    EXPECT_EQ(fan.brdf.clearcoatRoughness, 0.2f);
     ASSERT_TRUE(fan.textures.clearcoat);
     ASSERT_TRUE(fan.textures.clearcoatRoughness);
     EXPECT_NEAR(fan.textures.clearcoat.texture->texel(0, 1, 0).r, 128.0f / 255.0f, 1e-6f) << "read linear";
     ASSERT_TRUE(fan.textures.clearcoatNormal);
-    EXPECT_EQ(fan.clearcoatNormalScale, 0.5f);
+    EXPECT_EQ(fan.brdf.clearcoatNormalScale, 0.5f);
     EXPECT_EQ(fan.tangents.size(), fan.positions.size()) << "tangents for the coat's normal map";
     for (const std::string& w : warnings) EXPECT_EQ(w.find("KHR_materials_clearcoat"), std::string::npos) << w;
-    EXPECT_EQ(scene.meshes[0].clearcoat, 0.0f);
+    EXPECT_EQ(scene.meshes[0].brdf.clearcoat, 0.0f);
     write(R"("clearcoatFactor": 0, "clearcoatTexture": {"index": 0})", dir / "off.gltf");
     const GltfScene off = loadGltf(dir / "off.gltf", [](const std::string&) {});
-    EXPECT_EQ(off.meshes[1].clearcoat, 0.0f);
+    EXPECT_EQ(off.meshes[1].brdf.clearcoat, 0.0f);
     EXPECT_FALSE(off.meshes[1].textures.clearcoat) << "a zero weight disables the layer";
     for (const std::string bad : {R"("clearcoatFactor": 1.5)", R"("clearcoatRoughnessFactor": -0.1)", R"("clearcoatFactor": [1])",
                                   R"("clearcoatFactor": 1, "clearcoatNormalTexture": {"index": 0, "scale": "big"})"}) {
