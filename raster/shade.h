@@ -447,7 +447,10 @@ private:
     // and its radiance — ambient x occlusion x w (the layer's own albedo taken as 1, as the base's
     // ambient takes c_diff + F0), and per light E n_c.l pi D V w with the coat's roughness — for
     // underTheCoat to lay over the material once its emission is in.
-    void clearcoat(const ShadeQueue& q, PixelAttributes& a, const float* occlusion, const SurfaceAtPixels& m,
+    // Out of line, as underTheCoat: inlined into the shade queue, the coat's code kept GCC 12 from
+    // if-converting the material and light loops of every metallic-roughness draw, coated or not
+    // (-fopt-info-vec: "control flow in loop"), so they ran a pixel at a time.
+    [[gnu::noinline]] void clearcoat(const ShadeQueue& q, PixelAttributes& a, const float* occlusion, const SurfaceAtPixels& m,
                    StageCounters& counters) const {
         const int count = q.count;
         FetchedTexels weight, roughness;
@@ -466,25 +469,39 @@ private:
         }
         for (int l = 0; l < s_.lighting.lightCount; ++l) {
             const Light& light = s_.lighting.lights[l];
-            float shadowed[N];
-            shadowMask(light, q, shadowed);
-            for (int i = 0; i < count; ++i) {
-                Incident in = light.type == LightType::Directional ? Incident{-light.direction, light.intensity} : incident(light, a, i);
-                in.intensity *= shadowed[i];
-                const glm::vec3 n(nc[0][i], nc[1][i], nc[2][i]), view(m.view[0][i], m.view[1][i], m.view[2][i]);
-                const float nDotL = glm::dot(n, in.toLight);
-                const glm::vec3 h = safeNormalize(in.toLight + view);
-                const float nDotH = std::max(glm::dot(n, h), 0.0f);
-                const glm::vec3 term = in.intensity * (nDotL * specularLobe(alpha2[i], n, h, nDotH, nDotL, ncDotV[i]) * a.coatWeight[i]);
-                const bool lit = nDotL > 0.0f;  // a select, as in addLight
-                for (int k = 0; k < 3; ++k) a.coatRadiance[k][i] += lit ? term[k] : 0.0f;
-            }
+            light.type == LightType::Directional ? addCoatLight<true>(light, q, a, m, nc, alpha2, ncDotV)
+                                                 : addCoatLight<false>(light, q, a, m, nc, alpha2, ncDotV);
         }
         counters.clearcoatPixels += uint64_t(count);
     }
 
+    // One light's coat term E n_c.l pi D V w at every pixel, where n_c.l > 0 (as addLight).
+    template <bool kDirectional>
+    void addCoatLight(const Light& light, const ShadeQueue& q, PixelAttributes& a, const SurfaceAtPixels& m,
+                      const float (&nc)[3][N], const float* alpha2, const float* ncDotV) const {
+        float shadowed[N];
+        shadowMask(light, q, shadowed);
+        for (int i = 0; i < q.count; ++i) {
+            Incident in;
+            if constexpr (kDirectional)
+                in = {-light.direction, light.intensity};
+            else
+                in = incident(light, a, i);
+            in.intensity *= shadowed[i];
+            const glm::vec3 n(nc[0][i], nc[1][i], nc[2][i]), view(m.view[0][i], m.view[1][i], m.view[2][i]);
+            const float nDotL = glm::dot(n, in.toLight);
+            const glm::vec3 h = safeNormalize(in.toLight + view);
+            const float nDotH = std::max(glm::dot(n, h), 0.0f);
+            const glm::vec3 term = in.intensity * (nDotL * specularLobe(alpha2[i], n, h, nDotH, nDotL, ncDotV[i]) * a.coatWeight[i]);
+            const bool lit = nDotL > 0.0f;  // a select, as in addLight
+            a.coatRadiance[0][i] += lit ? term.r : 0.0f;
+            a.coatRadiance[1][i] += lit ? term.g : 0.0f;
+            a.coatRadiance[2][i] += lit ? term.b : 0.0f;
+        }
+    }
+
     // The coated material: the material, emission included, times 1 - w, plus the coat.
-    static void underTheCoat(int count, PixelAttributes& a) {
+    [[gnu::noinline]] static void underTheCoat(int count, PixelAttributes& a) {
         for (int k = 0; k < 3; ++k)
             for (int i = 0; i < count; ++i) a.radiance[k][i] = a.radiance[k][i] * (1.0f - a.coatWeight[i]) + a.coatRadiance[k][i];
     }
@@ -621,8 +638,6 @@ private:
         }
     }
 
-    /// x^5 by three multiplications, the same bits in every lane and on every instruction set
-    /// (std::pow is a library call per pixel, a tenth of a textured frame).
     /// pi D V: the GGX distribution and the height-correlated Smith visibility, without Fresnel.
     static float specularLobe(float alpha2, const glm::vec3& n, const glm::vec3& h, float nDotH, float nDotL, float nDotV) {
         // n.h² (a² - 1) + 1 written as a² n.h² + |n x h|²: near the highlight's peak,
@@ -635,6 +650,8 @@ private:
         return float(M_PI) * distribution * visibility;
     }
 
+    /// x^5 by three multiplications, the same bits in every lane and on every instruction set
+    /// (std::pow is a library call per pixel, a tenth of a textured frame).
     static float pow5(float x) {
         const float x2 = x * x;
         return x2 * x2 * x;
