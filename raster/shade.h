@@ -475,7 +475,9 @@ private:
         counters.clearcoatPixels += uint64_t(count);
     }
 
-    // One light's coat term E n_c.l pi D V w at every pixel, where n_c.l > 0 (as addLight).
+    // One light's coat term E n_c.l pi D V w at every pixel, where n_c.l > 0 (as addLight, whose
+    // first lines it repeats: through a shared helper returning the Incident, GCC kept the struct
+    // in memory and addLight's loop stopped vectorising).
     template <bool kDirectional>
     void addCoatLight(const Light& light, const ShadeQueue& q, PixelAttributes& a, const SurfaceAtPixels& m,
                       const float (&nc)[3][N], const float* alpha2, const float* ncDotV) const {
