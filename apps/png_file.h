@@ -1,6 +1,7 @@
 #pragma once
-// PNG files through libspng, in the process itself: the format nearly every run writes, so a
-// render never loads OpenImageIO and the hundreds of libraries it pulls in (apps/oiio_module.h).
+// PNG files in the process itself (read by libspng; written here, deflated in parallel bands):
+// the format nearly every run writes, so a render never loads OpenImageIO and the hundreds of
+// libraries it pulls in (apps/oiio_module.h).
 
 #include <cstdint>
 #include <filesystem>

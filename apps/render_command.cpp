@@ -128,16 +128,15 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
 
 namespace {
 
-// The depth view of a 3D scene holds distances: EXR keeps them, 8-bit files get them legible.
-raster::Image imageToWrite(const RenderOptions& o, const std::filesystem::path& file, const raster::Image& image) {
-    if (imageFormatFor(file) == ImageFormat::Exr) return image;
-    return render::displayImage(image, o.view, scene::fileKindOf(o.scene) != scene::FileKind::TriangleList);
-}
-
 // Frame `index` of the command's image, in its file; returns the file.
 std::filesystem::path writeFrameImage(const RenderOptions& o, int index, const RenderResult& r) {
     const std::filesystem::path file = frameFile(o, index);
-    writeImageAtomically(file, imageToWrite(o, file, r.image), imageWriteOptions(o));
+    // The depth view of a 3D scene holds distances: EXR keeps them, 8-bit files get them legible.
+    const bool depthIsDistance = scene::fileKindOf(o.scene) != scene::FileKind::TriangleList;
+    if (render::displayChangesImage(o.view, depthIsDistance) && imageFormatFor(file) != ImageFormat::Exr)
+        writeImageAtomically(file, render::displayImage(r.image, o.view, depthIsDistance), imageWriteOptions(o));
+    else
+        writeImageAtomically(file, r.image, imageWriteOptions(o));
     return file;
 }
 

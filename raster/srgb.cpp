@@ -67,19 +67,25 @@ const ThresholdIndex& thresholdIndex() {
     return index;
 }
 
-}  // namespace
-
 // The number of thresholds at or below `linear` (what a binary search over them returns), found
 // through the bucket index and then at most a step or two: exact by construction, since both
 // count the same thresholds (Srgb.EncodingCountsTheThresholdsBelowEachValue).
-uint8_t encodeSrgb8(float linear) {
-    const auto& t = thresholds();
+inline uint8_t encodeThroughIndex(const std::array<float, 255>& t, const ThresholdIndex& ix, float linear) {
     if (!(linear >= t[0])) return 0;  // below the first threshold, and NaN
     if (linear >= 1.0f) return 255;   // t[254] < 1
-    const ThresholdIndex& ix = thresholdIndex();
     unsigned count = ix.countAtBucketStart[(bitsOf(linear) - ix.firstBits) >> ThresholdIndex::kBucketShift];
     while (count < 255 && t[count] <= linear) ++count;
     return uint8_t(count);
+}
+
+}  // namespace
+
+uint8_t encodeSrgb8(float linear) { return encodeThroughIndex(thresholds(), thresholdIndex(), linear); }
+
+void encodeSrgb8(const float* linear, size_t count, uint8_t* out) {
+    const auto& t = thresholds();  // once for the span, not once a value
+    const ThresholdIndex& ix = thresholdIndex();
+    for (size_t i = 0; i < count; ++i) out[i] = encodeThroughIndex(t, ix, linear[i]);
 }
 
 uint16_t encodeSrgb16(float linear) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <vector>
 
 #include "raster/parallel.h"
 #include "raster/srgb.h"
@@ -23,17 +24,33 @@ float straightChannel(const raster::Image& image, size_t i, int c, bool alpha) {
 std::vector<uint8_t> encodeDisplayPixels(const raster::Image& image, bool alpha, int bits) {
     const int channels = alpha ? 4 : 3, bytesPerSample = bits / 8;
     std::vector<uint8_t> out(size_t(image.width) * image.height * channels * bytesPerSample);
+    if (bits == 8) {
+        // A row's colour channels, straight, then encoded in one span (raster::encodeSrgb8).
+        raster::parallelFor(size_t(image.height), [&](size_t y) {
+            const size_t width = size_t(image.width), first = y * width;
+            std::vector<float> colour(width * 3);
+            std::vector<uint8_t> encoded(width * 3);
+            for (size_t x = 0; x < width; ++x)
+                for (int c = 0; c < 3; ++c) colour[x * 3 + c] = straightChannel(image, first + x, c, alpha);
+            raster::encodeSrgb8(colour.data(), colour.size(), encoded.data());
+            uint8_t* row = out.data() + first * channels;
+            if (!alpha) {
+                std::memcpy(row, encoded.data(), encoded.size());
+                return;
+            }
+            for (size_t x = 0; x < width; ++x) {
+                std::memcpy(row + x * 4, &encoded[x * 3], 3);
+                row[x * 4 + 3] = uint8_t(std::lround(std::clamp(image.rgba[(first + x) * 4 + 3], 0.0f, 1.0f) * 255.0f));
+            }
+        });
+        return out;
+    }
     raster::parallelFor(size_t(image.height), [&](size_t y) {
         for (size_t i = y * size_t(image.width); i < (y + 1) * size_t(image.width); ++i)
             for (int c = 0; c < channels; ++c) {
                 const float v = c == 3 ? std::clamp(image.rgba[i * 4 + 3], 0.0f, 1.0f) : straightChannel(image, i, c, alpha);
-                const size_t at = (i * channels + c) * bytesPerSample;
-                if (bits == 8) {
-                    out[at] = c == 3 ? uint8_t(std::lround(v * 255.0f)) : raster::encodeSrgb8(v);
-                } else {
-                    const uint16_t sample = c == 3 ? uint16_t(std::lround(v * 65535.0f)) : raster::encodeSrgb16(v);
-                    std::memcpy(&out[at], &sample, 2);
-                }
+                const uint16_t sample = c == 3 ? uint16_t(std::lround(v * 65535.0f)) : raster::encodeSrgb16(v);
+                std::memcpy(&out[(i * channels + c) * bytesPerSample], &sample, 2);
             }
     });
     return out;
@@ -62,7 +79,7 @@ raster::Image legibleDepth(const raster::Image& distances) {
 }
 
 raster::Image displayImage(const raster::Image& image, View view, bool depthIsDistance) {
-    if (view == View::Depth && depthIsDistance) return legibleDepth(image);
+    if (displayChangesImage(view, depthIsDistance)) return legibleDepth(image);
     return image;
 }
 

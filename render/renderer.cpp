@@ -65,7 +65,8 @@ raster::Image displayImage(const LoadedScene& scene, const FrameSettings& f, con
 }
 
 std::vector<uint8_t> displayPixels(const LoadedScene& scene, const FrameSettings& f, const RenderResult& r) {
-    return displayRgba8(displayImage(scene, f, r), hasAlpha(f));
+    if (displayChangesImage(f.view, !scene.isTriangleList())) return displayRgba8(displayImage(scene, f, r), hasAlpha(f));
+    return displayRgba8(r.image, hasAlpha(f));
 }
 
 namespace {

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <vector>
 
+#include <tbb/global_control.h>
+
 #include "apps/image_io.h"
 #include "apps/png_file.h"
 #include "raster/srgb.h"
@@ -135,6 +137,73 @@ TEST_F(ImageFiles, PngRoundTripsWhatTheRendererWrites) {
         const float expected = i % 4 == 3 ? 1.0f : raster::encodeSrgb8(image.rgba[i]) / 255.0f;
         EXPECT_EQ(png.rgba[i], expected) << i;
     }
+}
+
+/// A PNG's samples in the file's own layout (16-bit in host order), decoded by libspng with its
+/// CRC and Adler-32 checks on: an independent decoder for what apps::writePng encodes.
+std::vector<uint8_t> decodeWithSpng(const fs::path& path, int& width, int& height, int& colorType, int& bits) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    EXPECT_TRUE(f);
+    if (!f) return {};
+    spng_ctx* ctx = spng_ctx_new(0);
+    spng_set_png_file(ctx, f);
+    spng_ihdr ihdr{};
+    EXPECT_EQ(spng_get_ihdr(ctx, &ihdr), 0);
+    size_t size = 0;
+    EXPECT_EQ(spng_decoded_image_size(ctx, SPNG_FMT_PNG, &size), 0);
+    std::vector<uint8_t> out(size);
+    EXPECT_EQ(spng_decode_image(ctx, out.data(), size, SPNG_FMT_PNG, 0), 0);
+    uint8_t intent = 255;
+    EXPECT_EQ(spng_get_srgb(ctx, &intent), 0);  // marked sRGB, perceptual
+    EXPECT_EQ(intent, 0);
+    spng_ctx_free(ctx);
+    std::fclose(f);
+    width = int(ihdr.width), height = int(ihdr.height), colorType = ihdr.color_type, bits = ihdr.bit_depth;
+    return out;
+}
+
+TEST_F(ImageFiles, PngWriterGivesItsSamplesBackForEveryLayoutAndBandCount) {
+    // Sizes from one pixel to images of several deflate bands (apps/png_file.cpp cuts the
+    // scanlines into bands of 256 KiB, each deflated on its own): one row, one column, a band
+    // edge inside the image, a last band of one row.
+    const std::pair<int, int> sizes[] = {{1, 1}, {7, 3}, {1, 3000}, {2000, 1}, {1000, 200}, {997, 263}};
+    uint32_t state = 12345;
+    auto next = [&] { return state = state * 1664525u + 1013904223u; };
+    for (const int channels : {3, 4})
+        for (const int bits : {8, 16})
+            for (const auto& [width, height] : sizes) {
+                std::vector<uint8_t> pixels(size_t(width) * height * channels * (bits / 8));
+                // Noise in some rows (incompressible), runs in the others (long matches).
+                for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = (i / 4096) % 2 ? uint8_t(next() >> 24) : uint8_t(i / 512);
+                const fs::path path = dir_ / ("w" + std::to_string(width) + "x" + std::to_string(height) + ".png");
+                apps::writePng(path, width, height, channels, bits, pixels);
+                int w = 0, h = 0, colorType = 0, depth = 0;
+                const std::vector<uint8_t> decoded = decodeWithSpng(path, w, h, colorType, depth);
+                const std::string what = std::to_string(width) + "x" + std::to_string(height) + ", " +
+                                         std::to_string(channels) + " channels of " + std::to_string(bits) + " bits";
+                EXPECT_EQ(w, width) << what;
+                EXPECT_EQ(h, height) << what;
+                EXPECT_EQ(colorType, channels == 4 ? SPNG_COLOR_TYPE_TRUECOLOR_ALPHA : SPNG_COLOR_TYPE_TRUECOLOR) << what;
+                EXPECT_EQ(depth, bits) << what;
+                EXPECT_TRUE(decoded == pixels) << what;
+            }
+}
+
+TEST_F(ImageFiles, PngBytesDoNotDependOnTheThreadCount) {
+    const int width = 1200, height = 700;  // several bands
+    std::vector<uint8_t> pixels(size_t(width) * height * 3);
+    for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = uint8_t((i * 2654435761u) >> 13);
+    auto bytesWith = [&](int threads) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        const fs::path path = dir_ / ("t" + std::to_string(threads) + ".png");
+        apps::writePng(path, width, height, 3, 8, pixels);
+        std::ifstream in(path, std::ios::binary);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    const std::string one = bytesWith(1);
+    EXPECT_GT(one.size(), 1000u);
+    EXPECT_TRUE(one == bytesWith(2));
+    EXPECT_TRUE(one == bytesWith(7));
 }
 
 TEST_F(ImageFiles, ATruncatedPngIsBadInputNamingTheFile) {
