@@ -9,6 +9,8 @@
 #include <sstream>
 #include <string>
 
+#include <meshoptimizer.h>
+
 #include "lod/lod_pyramid.h"
 #include "voxel/cvox_file.h"
 #include "voxel/geometry_stream.h"
@@ -36,6 +38,35 @@ std::string triangleGlb() {
                        R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
                        R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
                        R"("bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36}]})";
+    while (json.size() % 4) json += ' ';
+    return "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size() + 8 + bin.size())) + u32(uint32_t(json.size())) + "JSON" +
+           json + u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+}
+
+// The same triangle with its positions and indices in EXT_meshopt_compression streams, read
+// through a fallback buffer without data, as gltfpack writes them: the fuzzer reaches the decoders.
+std::string meshoptTriangleGlb() {
+    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const unsigned int indices[3] = {0, 1, 2};
+    std::string positions(meshopt_encodeVertexBufferBound(3, 12), '\0'), triangles(meshopt_encodeIndexBufferBound(3, 3), '\0');
+    positions.resize(meshopt_encodeVertexBuffer(reinterpret_cast<unsigned char*>(positions.data()), positions.size(), p, 3, 12));
+    triangles.resize(meshopt_encodeIndexBuffer(reinterpret_cast<unsigned char*>(triangles.data()), triangles.size(), indices, 3));
+    while (positions.size() % 4) positions += '\0';
+    std::string bin = positions + triangles;
+    while (bin.size() % 4) bin += '\0';
+    auto stream = [](size_t offset, size_t length, int stride, const char* mode) {
+        return R"({"EXT_meshopt_compression":{"buffer":0,"byteOffset":)" + std::to_string(offset) + R"(,"byteLength":)" +
+               std::to_string(length) + R"(,"byteStride":)" + std::to_string(stride) + R"(,"count":3,"mode":")" + mode + "\"}}";
+    };
+    std::string json = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)"
+                       R"("extensionsUsed":["EXT_meshopt_compression"],"extensionsRequired":["EXT_meshopt_compression"],)"
+                       R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],)"
+                       R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},)"
+                       R"({"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}],)"
+                       R"("bufferViews":[{"buffer":1,"byteLength":36,"byteStride":12,"extensions":)" +
+                       stream(0, positions.size(), 12, "ATTRIBUTES") + R"(},{"buffer":1,"byteOffset":36,"byteLength":6,"extensions":)" +
+                       stream(positions.size(), triangles.size(), 2, "TRIANGLES") + R"(}],)" + R"("buffers":[{"byteLength":)" +
+                       std::to_string(bin.size()) + R"(},{"byteLength":44,"extensions":{"EXT_meshopt_compression":{"fallback":true}}}]})";
     while (json.size() % 4) json += ' ';
     return "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size() + 8 + bin.size())) + u32(uint32_t(json.size())) + "JSON" +
            json + u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
@@ -78,6 +109,7 @@ int main(int argc, char** argv) {
         "mtllib fuzz.mtl\nnewmtl red\nKd 1 0 0\nd 0.5\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
         "usemtl red\nf 1/1/1 2/2/1 3/3/1\ng other\no obj\nf -3 -2 -1\n");
     put(dir, "fuzz_gltf", "two-nodes.glb", triangleGlb());
+    put(dir, "fuzz_gltf", "meshopt.glb", meshoptTriangleGlb());
     put(dir, "fuzz_camera_path", "keys.path", "# px py pz tx ty tz\n0 0 3 0 0 0\n1 1 2 0 0 0\n0 2 1 0 0.5 0\n");
     // A 12^3 u8 sphere, after the 8-byte header the fuzz target reads: dims, type, iso.
     {

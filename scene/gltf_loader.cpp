@@ -18,6 +18,7 @@
 #include <tiny_gltf.h>
 #include <webp/decode.h>
 
+#include "scene/gltf_compression.h"
 #include "scene/input_error.h"
 #include "scene/ply_loader.h"  // readFileBytes
 #include "scene/file_names.h"
@@ -79,8 +80,9 @@ private:
 
     // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
     // attribute is read through AccessorView, which takes any component type, normalised or not.
-    static constexpr std::array<std::string_view, 10> kSupportedExtensions = {
-        "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization",
+    // EXT_meshopt_compression's views are decoded before the reader runs (scene/gltf_compression.h).
+    static constexpr std::array<std::string_view, 11> kSupportedExtensions = {
+        "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization", "EXT_meshopt_compression",
         "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_pbrSpecularGlossiness", "KHR_materials_specular",
         "KHR_materials_clearcoat", "EXT_texture_webp"};
     static bool supportedExtension(const std::string& name) {
@@ -1072,13 +1074,18 @@ GltfDocument::GltfDocument(const std::filesystem::path& path, const WarningSink&
         if (bytes.size() > std::numeric_limits<uint32_t>::max())
             throw InputError(file + ": " + std::to_string(bytes.size()) + " bytes, more than a GLB can hold (its length is 32 bits)");
         if (const std::string problem = glbContainerProblem(bytes); !problem.empty()) throw InputError(file + ": " + problem);
-        ok = loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(bytes.data()), unsigned(bytes.size()),
+        std::string glb = bytes;
+        if (bytes.size() >= 20 && mentionsMeshoptCompression(bytes)) glb = glbWithJson(bytes, withLoadableFallbackBuffers(glbJson(bytes)));
+        ok = loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(glb.data()), unsigned(glb.size()),
                                          path.parent_path().string());
     } else {
-        ok = loader.LoadASCIIFromFile(&model, &error, &warning, file);
+        std::string json = readFileBytes(path);
+        if (mentionsMeshoptCompression(json)) json = withLoadableFallbackBuffers(json);
+        ok = loader.LoadASCIIFromString(&model, &error, &warning, json.data(), unsigned(json.size()), path.parent_path().string());
     }
     if (!warning.empty()) warn(file + ": " + warning);
     if (!ok) throw InputError(file + ": " + placeOfLoadError(binary, error));
+    decodeMeshoptBufferViews(model, file);
 }
 
 GltfDocument::GltfDocument(GltfDocument&&) noexcept = default;

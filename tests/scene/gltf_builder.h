@@ -94,6 +94,9 @@ public:
         std::ofstream(path) << json_.dump(1);
     }
 
+    /// The buffer's bytes so far (what write() embeds), for files packed otherwise (GLB).
+    const std::string& bytes() const { return bytes_; }
+
     /// Raw bytes as a buffer view (4-byte aligned), for accessors the helpers above do not make.
     int view(const void* data, size_t size) {
         while (bytes_.size() % 4) bytes_.push_back('\0');

@@ -1,0 +1,39 @@
+#pragma once
+// glTF's compressed geometry, undone before the reader sees it: EXT_meshopt_compression's buffer
+// views decoded into buffers of their own, so every accessor reads them as plain data.
+//
+// The extension's files carry a "fallback" buffer with no data (glTF 2.0 allows a buffer without
+// a uri only as a GLB's BIN chunk; tinygltf refuses one anywhere else), so the JSON is adjusted
+// first: each such buffer gets a data URI of four zero bytes (tinygltf refuses an empty one). A view still reading it
+// afterwards (one the decoder did not replace) fails the reader's range check, naming the view.
+
+#include <string>
+
+namespace tinygltf {
+class Model;
+}
+
+namespace cuberille::scene {
+
+/// Whether a glTF's JSON may hold a meshopt fallback buffer (a byte search, no parse: most files do
+/// not name the extension at all).
+bool mentionsMeshoptCompression(const std::string& json);
+
+/// The JSON with every EXT_meshopt_compression fallback buffer made loadable (see above); any
+/// other JSON (one that does not parse too: tinygltf names its error) returned as it is.
+std::string withLoadableFallbackBuffers(const std::string& json);
+
+/// A GLB's bytes with its JSON chunk replaced by `json` (padded with spaces to 4 bytes, lengths
+/// rewritten); the chunks after it kept. The container must already be checked.
+std::string glbWithJson(const std::string& glb, const std::string& json);
+
+/// The JSON chunk of a checked GLB.
+std::string glbJson(const std::string& glb);
+
+/// Decodes every buffer view with EXT_meshopt_compression (modes ATTRIBUTES, TRIANGLES and
+/// INDICES; filters NONE, OCTAHEDRAL, QUATERNION and EXPONENTIAL) into a buffer appended to the
+/// model, and points the view at it. Throws InputError naming `file` and the view when the
+/// compressed data is out of range or does not decode.
+void decodeMeshoptBufferViews(tinygltf::Model& model, const std::string& file);
+
+}  // namespace cuberille::scene
