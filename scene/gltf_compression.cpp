@@ -110,6 +110,14 @@ std::string withLoadableFallbackBuffers(const std::string& json) {
     return changed ? doc.dump() : json;
 }
 
+bool hasJsonChunk(const std::string& glb) {
+    if (glb.size() < 20 || glb.compare(16, 4, "JSON") != 0) return false;
+    uint32_t total = 0, length = 0;
+    std::memcpy(&total, glb.data() + 8, 4);
+    std::memcpy(&length, glb.data() + 12, 4);
+    return total <= glb.size() && total >= 20 && length <= total - 20;
+}
+
 std::string glbJson(const std::string& glb) {
     uint32_t length = 0;
     std::memcpy(&length, glb.data() + 12, 4);
@@ -117,14 +125,15 @@ std::string glbJson(const std::string& glb) {
 }
 
 std::string glbWithJson(const std::string& glb, const std::string& json) {
-    uint32_t oldLength = 0;
+    uint32_t oldLength = 0, total = 0;
     std::memcpy(&oldLength, glb.data() + 12, 4);
+    std::memcpy(&total, glb.data() + 8, 4);
     std::string padded = json;
     padded.resize((padded.size() + 3) / 4 * 4, ' ');  // chunks are 4-byte aligned, JSON padded with spaces
-    const std::string rest = glb.substr(20 + size_t(oldLength));
+    const std::string rest = glb.substr(20 + size_t(oldLength), total - 20 - size_t(oldLength));
     std::string out = glb.substr(0, 12);
-    const uint32_t jsonLength = uint32_t(padded.size()), total = uint32_t(12 + 8 + padded.size() + rest.size());
-    std::memcpy(out.data() + 8, &total, 4);
+    const uint32_t jsonLength = uint32_t(padded.size()), newTotal = uint32_t(12 + 8 + padded.size() + rest.size());
+    std::memcpy(out.data() + 8, &newTotal, 4);
     out.append(reinterpret_cast<const char*>(&jsonLength), 4);
     out.append(glb, 16, 4);  // the chunk type, "JSON"
     return out + padded + rest;

@@ -23,11 +23,16 @@ bool mentionsMeshoptCompression(const std::string& json);
 /// other JSON (one that does not parse too: tinygltf names its error) returned as it is.
 std::string withLoadableFallbackBuffers(const std::string& json);
 
+/// Whether a GLB's header and first chunk hold together: a JSON chunk inside the length the header
+/// gives, the header's length inside the file. Only then do the two functions below apply
+/// (otherwise tinygltf refuses the container, naming the problem).
+bool hasJsonChunk(const std::string& glb);
+
 /// A GLB's bytes with its JSON chunk replaced by `json` (padded with spaces to 4 bytes, lengths
-/// rewritten); the chunks after it kept. The container must already be checked.
+/// rewritten); the chunks after it, up to the header's length, kept.
 std::string glbWithJson(const std::string& glb, const std::string& json);
 
-/// The JSON chunk of a checked GLB.
+/// The JSON chunk of a GLB.
 std::string glbJson(const std::string& glb);
 
 /// Decodes every buffer view with EXT_meshopt_compression (modes ATTRIBUTES, TRIANGLES and

@@ -1075,7 +1075,7 @@ GltfDocument::GltfDocument(const std::filesystem::path& path, const WarningSink&
             throw InputError(file + ": " + std::to_string(bytes.size()) + " bytes, more than a GLB can hold (its length is 32 bits)");
         if (const std::string problem = glbContainerProblem(bytes); !problem.empty()) throw InputError(file + ": " + problem);
         std::string glb = bytes;
-        if (bytes.size() >= 20 && mentionsMeshoptCompression(bytes)) glb = glbWithJson(bytes, withLoadableFallbackBuffers(glbJson(bytes)));
+        if (hasJsonChunk(bytes) && mentionsMeshoptCompression(bytes)) glb = glbWithJson(bytes, withLoadableFallbackBuffers(glbJson(bytes)));
         ok = loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(glb.data()), unsigned(glb.size()),
                                          path.parent_path().string());
     } else {

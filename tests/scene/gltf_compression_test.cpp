@@ -262,6 +262,29 @@ TEST(MeshoptCompression, DamagedStreamsAreInputErrorsNamingTheView) {
     }
 }
 
+// The JSON is adjusted before tinygltf checks the container, so a GLB whose header or first chunk
+// does not hold together must reach tinygltf's refusal untouched (the fuzzer's first finds).
+TEST(MeshoptCompression, GlbsWhoseChunksDoNotFitAreRefusedBeforeAnyAdjustment) {
+    auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+    const std::string json = R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_meshopt_compression"]})";
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"a header length of 12", "glTF" + u32(2) + u32(12) + u32(1024) + "JSON" + json},
+        {"a JSON chunk past the header's length", "glTF" + u32(2) + u32(uint32_t(20 + json.size())) + u32(1024) + "JSON" + json},
+        {"a first chunk that is not JSON", "glTF" + u32(2) + u32(uint32_t(20 + json.size())) + u32(uint32_t(json.size())) + "BIN" +
+                                               std::string(1, '\0') + json},
+    };
+    for (const auto& [what, bytes] : cases) {
+        const fs::path path = testing::uniqueTempPath("bad-container.glb");
+        std::ofstream(path, std::ios::binary) << bytes;
+        try {
+            loadGltf(path, kQuiet);
+            ADD_FAILURE() << what << ": loaded";
+        } catch (const InputError& e) {
+            EXPECT_EQ(std::string(e.what()).rfind(path.string() + ": ", 0), 0u) << what << ": " << e.what();
+        }
+    }
+}
+
 // gltfpack (Debian's, installed by .ci/install-deps) compresses sample models as exporters do:
 // quantized attributes (KHR_mesh_quantization), meshopt streams with filters, reordered
 // vertices and triangles. The compressed model renders like the original: 40 dB or more (the
