@@ -9,6 +9,8 @@
 #include <sstream>
 #include <string>
 
+#include <draco/compression/encode.h>
+#include <draco/mesh/triangle_soup_mesh_builder.h>
 #include <meshoptimizer.h>
 
 #include "lod/lod_pyramid.h"
@@ -72,6 +74,34 @@ std::string meshoptTriangleGlb() {
            json + u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
 }
 
+// The triangle as a KHR_draco_mesh_compression primitive: accessors without views, the Draco
+// stream in the BIN chunk.
+std::string dracoTriangleGlb() {
+    const float p[3][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    draco::TriangleSoupMeshBuilder builder;
+    builder.Start(1);
+    const int position = builder.AddAttribute(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32);
+    builder.SetAttributeValuesForFace(position, draco::FaceIndex(0), p[0], p[1], p[2]);
+    const std::unique_ptr<draco::Mesh> mesh = builder.Finalize();
+    draco::Encoder encoder;
+    draco::EncoderBuffer encoded;
+    if (!encoder.EncodeMeshToBuffer(*mesh, &encoded).ok()) return {};
+    std::string bin(encoded.data(), encoded.size());
+    const size_t streamBytes = bin.size();
+    while (bin.size() % 4) bin += '\0';
+    std::string json = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)"
+                       R"("extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"],)"
+                       R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"extensions":{"KHR_draco_mesh_compression":)"
+                       R"({"bufferView":0,"attributes":{"POSITION":)" + std::to_string(mesh->attribute(position)->unique_id()) + R"(}}}}]}],)"
+                       R"("accessors":[{"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},)"
+                       R"({"componentType":5123,"count":3,"type":"SCALAR"}],)"
+                       R"("bufferViews":[{"buffer":0,"byteLength":)" + std::to_string(streamBytes) + R"(}],)" +
+                       R"("buffers":[{"byteLength":)" + std::to_string(bin.size()) + "}]}";
+    while (json.size() % 4) json += ' ';
+    return "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size() + 8 + bin.size())) + u32(uint32_t(json.size())) + "JSON" +
+           json + u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+}
+
 std::string binaryPly() {
     std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
                     "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
@@ -110,6 +140,7 @@ int main(int argc, char** argv) {
         "usemtl red\nf 1/1/1 2/2/1 3/3/1\ng other\no obj\nf -3 -2 -1\n");
     put(dir, "fuzz_gltf", "two-nodes.glb", triangleGlb());
     put(dir, "fuzz_gltf", "meshopt.glb", meshoptTriangleGlb());
+    put(dir, "fuzz_gltf", "draco.glb", dracoTriangleGlb());
     put(dir, "fuzz_camera_path", "keys.path", "# px py pz tx ty tz\n0 0 3 0 0 0\n1 1 2 0 0 0\n0 2 1 0 0.5 0\n");
     // A 12^3 u8 sphere, after the 8-byte header the fuzz target reads: dims, type, iso.
     {

@@ -4,6 +4,8 @@
 #include <string_view>
 #include <vector>
 
+#include <draco/compression/decode.h>
+#include <draco/core/decoder_buffer.h>
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
@@ -13,7 +15,7 @@
 namespace cuberille::scene {
 namespace {
 
-constexpr std::string_view kMeshopt = "EXT_meshopt_compression";
+constexpr std::string_view kMeshopt = "EXT_meshopt_compression", kDraco = "KHR_draco_mesh_compression";
 
 /// One compressed view's parameters (EXT_meshopt_compression, "bufferView extension").
 struct MeshoptView {
@@ -91,22 +93,160 @@ bool isFallbackBuffer(const nlohmann::json& buffer) {
     return meshopt != ext->end() && meshopt->is_object() && meshopt->value("fallback", false) == true;
 }
 
+[[noreturn]] void failPrimitive(const std::string& file, const std::string& at, const std::string& problem) {
+    throw InputError(file + ": " + at + ", KHR_draco_mesh_compression: " + problem);
+}
+
+// `count` elements of `components` values of the accessor's component type from a decoded Draco
+// attribute, point by point (a point's value through the attribute's own mapping: Draco stores
+// each distinct value once), as little-endian bytes the accessor reads in place.
+template <class T>
+void appendConverted(const draco::PointAttribute& attribute, size_t points, int components, std::vector<unsigned char>& out) {
+    std::vector<T> values(static_cast<size_t>(components));
+    for (size_t p = 0; p < points; ++p) {
+        attribute.ConvertValue<T>(attribute.mapped_index(draco::PointIndex(uint32_t(p))), int8_t(components), values.data());
+        const auto* bytes = reinterpret_cast<const unsigned char*>(values.data());
+        out.insert(out.end(), bytes, bytes + values.size() * sizeof(T));
+    }
+}
+
+// A new buffer and a view over all of it: where decoded data lives.
+int appendBufferView(tinygltf::Model& model, std::vector<unsigned char> bytes) {
+    tinygltf::Buffer buffer;
+    buffer.data = std::move(bytes);
+    tinygltf::BufferView view;
+    view.buffer = int(model.buffers.size());
+    view.byteLength = buffer.data.size();
+    model.buffers.push_back(std::move(buffer));
+    model.bufferViews.push_back(view);
+    return int(model.bufferViews.size() - 1);
+}
+
+// The accessor `index` made to read `bytes` (count elements, tightly packed), in place of the
+// accessor's missing or fallback data.
+void pointAccessorAt(tinygltf::Model& model, int index, size_t count, std::vector<unsigned char> bytes) {
+    tinygltf::Accessor& a = model.accessors[size_t(index)];
+    a.bufferView = appendBufferView(model, std::move(bytes));
+    a.byteOffset = 0;
+    a.count = count;
+    a.sparse.isSparse = false;
+}
+
+void decodeDracoPrimitive(tinygltf::Model& model, tinygltf::Primitive& primitive, const tinygltf::Value& ext, const std::string& file,
+                          const std::string& at) {
+    if (!ext.Has("bufferView") || !ext.Get("bufferView").IsInt()) failPrimitive(file, at, "has no bufferView");
+    const int viewIndex = ext.Get("bufferView").Get<int>();
+    if (viewIndex < 0 || size_t(viewIndex) >= model.bufferViews.size()) failPrimitive(file, at, "buffer view " + std::to_string(viewIndex) + " does not exist");
+    const tinygltf::BufferView& bv = model.bufferViews[size_t(viewIndex)];
+    if (bv.buffer < 0 || size_t(bv.buffer) >= model.buffers.size()) failPrimitive(file, at, "its buffer view has no valid buffer");
+    const std::vector<unsigned char>& source = model.buffers[size_t(bv.buffer)].data;
+    if (bv.byteOffset > source.size() || bv.byteLength > source.size() - bv.byteOffset)
+        failPrimitive(file, at, "buffer view " + std::to_string(viewIndex) + " runs past the end of its buffer");
+    draco::DecoderBuffer buffer;
+    buffer.Init(reinterpret_cast<const char*>(source.data() + bv.byteOffset), bv.byteLength);
+    draco::Decoder decoder;
+    auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
+    if (!decoded.ok()) failPrimitive(file, at, "the mesh does not decode (" + decoded.status().error_msg_string() + ")");
+    const std::unique_ptr<draco::Mesh> mesh = std::move(decoded).value();
+    const size_t points = mesh->num_points(), faces = mesh->num_faces();
+    if (points > (size_t(1) << 32) - 1) failPrimitive(file, at, "too many points");
+
+    // Triangles: the primitive's index accessor, in its own component type where the points fit.
+    if (primitive.indices < 0) {
+        tinygltf::Accessor indices;
+        indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+        indices.type = TINYGLTF_TYPE_SCALAR;
+        model.accessors.push_back(indices);
+        primitive.indices = int(model.accessors.size() - 1);
+    }
+    if (size_t(primitive.indices) >= model.accessors.size()) failPrimitive(file, at, "its index accessor does not exist");
+    const int indexType = model.accessors[size_t(primitive.indices)].componentType;
+    const size_t indexBytes = indexType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ? 1 : indexType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? 2 : 4;
+    if (indexBytes < 4 && points > (size_t(1) << (8 * indexBytes)))
+        failPrimitive(file, at, std::to_string(points) + " points do not fit its " + std::to_string(8 * indexBytes) + "-bit indices");
+    std::vector<unsigned char> indexData(faces * 3 * indexBytes);
+    for (size_t f = 0; f < faces; ++f)
+        for (int c = 0; c < 3; ++c) {
+            const uint32_t point = mesh->face(draco::FaceIndex(uint32_t(f)))[c].value();
+            std::memcpy(&indexData[(f * 3 + size_t(c)) * indexBytes], &point, indexBytes);  // little-endian: the low bytes
+        }
+    model.accessors[size_t(primitive.indices)].componentType = indexBytes == 4 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT : indexType;
+    pointAccessorAt(model, primitive.indices, faces * 3, std::move(indexData));
+
+    // Attributes: each glTF attribute the extension names, by Draco's unique id.
+    if (!ext.Has("attributes") || !ext.Get("attributes").IsObject()) failPrimitive(file, at, "has no attributes");
+    const tinygltf::Value& attributes = ext.Get("attributes");
+    for (const std::string& name : attributes.Keys()) {
+        const auto accessor = primitive.attributes.find(name);
+        if (accessor == primitive.attributes.end()) continue;  // the primitive does not use it
+        if (accessor->second < 0 || size_t(accessor->second) >= model.accessors.size())
+            failPrimitive(file, at, name + "'s accessor does not exist");
+        const tinygltf::Value& id = attributes.Get(name);
+        const draco::PointAttribute* attribute = id.IsInt() ? mesh->GetAttributeByUniqueId(uint32_t(id.Get<int>())) : nullptr;
+        if (!attribute) failPrimitive(file, at, name + ": no Draco attribute with that id");
+        const tinygltf::Accessor& a = model.accessors[size_t(accessor->second)];
+        const int components = tinygltf::GetNumComponentsInType(uint32_t(a.type));
+        if (components <= 0 || components > 4) failPrimitive(file, at, name + "'s accessor has an invalid type");
+        std::vector<unsigned char> bytes;
+        switch (a.componentType) {
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: appendConverted<float>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: appendConverted<uint8_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_BYTE: appendConverted<int8_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: appendConverted<uint16_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_SHORT: appendConverted<int16_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: appendConverted<uint32_t>(*attribute, points, components, bytes); break;
+        default: failPrimitive(file, at, name + "'s accessor has an invalid component type");
+        }
+        pointAccessorAt(model, accessor->second, points, std::move(bytes));
+    }
+}
+
 }  // namespace
 
-bool mentionsMeshoptCompression(const std::string& json) { return json.find(kMeshopt) != std::string::npos; }
-
-std::string withLoadableFallbackBuffers(const std::string& json) {
-    nlohmann::json doc = nlohmann::json::parse(json, nullptr, false);
-    if (doc.is_discarded()) return json;  // tinygltf reports the parse error with its place
-    auto buffers = doc.find("buffers");
-    if (buffers == doc.end() || !buffers->is_array()) return json;
-    bool changed = false;
-    for (nlohmann::json& buffer : *buffers)
-        if (isFallbackBuffer(buffer)) {
-            buffer["uri"] = "data:application/octet-stream;base64,AAAAAA==";  // tinygltf refuses an empty one
-            buffer["byteLength"] = 4;
-            changed = true;
+void decodeDracoPrimitives(tinygltf::Model& model, const std::string& file) {
+    for (size_t m = 0; m < model.meshes.size(); ++m)
+        for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
+            tinygltf::Primitive& primitive = model.meshes[m].primitives[p];
+            const auto ext = primitive.extensions.find(std::string(kDraco));
+            if (ext != primitive.extensions.end())
+                decodeDracoPrimitive(model, primitive, ext->second, file, "mesh " + std::to_string(m) + ", primitive " + std::to_string(p));
         }
+}
+
+bool mentionsCompression(const std::string& json) {
+    return json.find(kMeshopt) != std::string::npos || json.find(kDraco) != std::string::npos;
+}
+
+std::string parseableByTinygltf(const std::string& json) {
+    nlohmann::json doc = nlohmann::json::parse(json, nullptr, false);
+    if (doc.is_discarded() || !doc.is_object()) return json;  // tinygltf reports the error with its place
+    bool changed = false;
+    if (auto buffers = doc.find("buffers"); buffers != doc.end() && buffers->is_array())
+        for (nlohmann::json& buffer : *buffers)
+            if (isFallbackBuffer(buffer)) {
+                buffer["uri"] = "data:application/octet-stream;base64,AAAAAA==";  // tinygltf refuses an empty one
+                buffer["byteLength"] = 4;
+                changed = true;
+            }
+    auto meshes = doc.find("meshes");
+    auto accessors = doc.find("accessors");
+    if (meshes == doc.end() || !meshes->is_array() || accessors == doc.end() || !accessors->is_array()) return changed ? doc.dump() : json;
+    for (nlohmann::json& mesh : *meshes) {
+        if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array()) continue;
+        for (nlohmann::json& primitive : mesh["primitives"]) {
+            if (!primitive.is_object()) continue;
+            const nlohmann::json* draco = nullptr;
+            if (auto ext = primitive.find("extensions"); ext != primitive.end() && ext->is_object())
+                if (auto d = ext->find(std::string(kDraco)); d != ext->end() && d->is_object()) draco = &*d;
+            const auto indices = primitive.find("indices");
+            if (!draco || indices == primitive.end() || !indices->is_number_unsigned() || !draco->contains("bufferView")) continue;
+            const size_t index = indices->get<size_t>();
+            if (index < accessors->size() && (*accessors)[index].is_object() && !(*accessors)[index].contains("bufferView")) {
+                (*accessors)[index]["bufferView"] = (*draco)["bufferView"];
+                changed = true;
+            }
+        }
+    }
     return changed ? doc.dump() : json;
 }
 

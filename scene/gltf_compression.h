@@ -1,6 +1,7 @@
 #pragma once
 // glTF's compressed geometry, undone before the reader sees it: EXT_meshopt_compression's buffer
-// views decoded into buffers of their own, so every accessor reads them as plain data.
+// views and KHR_draco_mesh_compression's primitives decoded into buffers of their own, so every
+// accessor reads them as plain data.
 //
 // The extension's files carry a "fallback" buffer with no data (glTF 2.0 allows a buffer without
 // a uri only as a GLB's BIN chunk; tinygltf refuses one anywhere else), so the JSON is adjusted
@@ -15,13 +16,16 @@ class Model;
 
 namespace cuberille::scene {
 
-/// Whether a glTF's JSON may hold a meshopt fallback buffer (a byte search, no parse: most files do
-/// not name the extension at all).
-bool mentionsMeshoptCompression(const std::string& json);
+/// Whether a glTF's JSON may need parseableByTinygltf (a byte search, no parse: most files name
+/// neither compression extension).
+bool mentionsCompression(const std::string& json);
 
-/// The JSON with every EXT_meshopt_compression fallback buffer made loadable (see above); any
-/// other JSON (one that does not parse too: tinygltf names its error) returned as it is.
-std::string withLoadableFallbackBuffers(const std::string& json);
+/// The JSON with what tinygltf refuses in compressed files made parseable: every
+/// EXT_meshopt_compression fallback buffer (see above), and every KHR_draco_mesh_compression
+/// primitive's index accessor without a buffer view (tinygltf requires one for indices) given the
+/// primitive's compressed view, which the decoder then replaces. Any other JSON (one that does
+/// not parse too: tinygltf names its error) is returned as it is.
+std::string parseableByTinygltf(const std::string& json);
 
 /// Whether a GLB's header and first chunk hold together: a JSON chunk inside the length the header
 /// gives, the header's length inside the file. Only then do the two functions below apply
@@ -40,5 +44,12 @@ std::string glbJson(const std::string& glb);
 /// model, and points the view at it. Throws InputError naming `file` and the view when the
 /// compressed data is out of range or does not decode.
 void decodeMeshoptBufferViews(tinygltf::Model& model, const std::string& file);
+
+/// Decodes every primitive with KHR_draco_mesh_compression by Debian's Draco: its triangles into
+/// its index accessor, each attribute the extension names (by Draco's unique id) into that
+/// attribute's accessor, converted to the accessor's component type, each in a buffer appended to
+/// the model. Throws InputError naming `file` and the primitive when the data does not decode or
+/// does not fit its accessors.
+void decodeDracoPrimitives(tinygltf::Model& model, const std::string& file);
 
 }  // namespace cuberille::scene

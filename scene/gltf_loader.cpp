@@ -80,9 +80,10 @@ private:
 
     // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
     // attribute is read through AccessorView, which takes any component type, normalised or not.
-    // EXT_meshopt_compression's views are decoded before the reader runs (scene/gltf_compression.h).
-    static constexpr std::array<std::string_view, 11> kSupportedExtensions = {
+    // Compressed views and primitives are decoded before the reader runs (scene/gltf_compression.h).
+    static constexpr std::array<std::string_view, 12> kSupportedExtensions = {
         "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization", "EXT_meshopt_compression",
+        "KHR_draco_mesh_compression",
         "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_pbrSpecularGlossiness", "KHR_materials_specular",
         "KHR_materials_clearcoat", "EXT_texture_webp"};
     static bool supportedExtension(const std::string& name) {
@@ -1075,17 +1076,18 @@ GltfDocument::GltfDocument(const std::filesystem::path& path, const WarningSink&
             throw InputError(file + ": " + std::to_string(bytes.size()) + " bytes, more than a GLB can hold (its length is 32 bits)");
         if (const std::string problem = glbContainerProblem(bytes); !problem.empty()) throw InputError(file + ": " + problem);
         std::string glb = bytes;
-        if (hasJsonChunk(bytes) && mentionsMeshoptCompression(bytes)) glb = glbWithJson(bytes, withLoadableFallbackBuffers(glbJson(bytes)));
+        if (hasJsonChunk(bytes) && mentionsCompression(bytes)) glb = glbWithJson(bytes, parseableByTinygltf(glbJson(bytes)));
         ok = loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(glb.data()), unsigned(glb.size()),
                                          path.parent_path().string());
     } else {
         std::string json = readFileBytes(path);
-        if (mentionsMeshoptCompression(json)) json = withLoadableFallbackBuffers(json);
+        if (mentionsCompression(json)) json = parseableByTinygltf(json);
         ok = loader.LoadASCIIFromString(&model, &error, &warning, json.data(), unsigned(json.size()), path.parent_path().string());
     }
     if (!warning.empty()) warn(file + ": " + warning);
     if (!ok) throw InputError(file + ": " + placeOfLoadError(binary, error));
     decodeMeshoptBufferViews(model, file);
+    decodeDracoPrimitives(model, file);
 }
 
 GltfDocument::GltfDocument(GltfDocument&&) noexcept = default;

@@ -636,14 +636,14 @@ TEST(GltfLoader, QuantizedPositionsReadAsTheirNormalisedValues) {
 TEST(GltfLoader, ARequiredExtensionItCannotReadIsRefusedAndAUsedOneWarnsOnce) {
     testing::GltfBuilder b;
     const int accessor = b.positions(kQuad);
-    b.json()["extensionsUsed"] = {"KHR_draco_mesh_compression", "KHR_texture_basisu"};
-    b.json()["extensionsRequired"] = {"KHR_draco_mesh_compression", "KHR_texture_basisu"};
+    b.json()["extensionsUsed"] = {"EXT_mesh_gpu_instancing", "KHR_texture_basisu"};
+    b.json()["extensionsRequired"] = {"EXT_mesh_gpu_instancing", "KHR_texture_basisu"};
     const std::filesystem::path required = writeQuad(b, accessor, "required");
     try {
         loadGltf(required, [](const std::string&) {});
-        FAIL() << "a file requiring Draco was accepted";
+        FAIL() << "a file requiring instancing and Basis textures was accepted";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find(": requires KHR_draco_mesh_compression, KHR_texture_basisu, which Cuberille "
+        EXPECT_NE(std::string(e.what()).find(": requires EXT_mesh_gpu_instancing, KHR_texture_basisu, which Cuberille "
                                              "cannot read yet"),
                   std::string::npos) << e.what();
     }
