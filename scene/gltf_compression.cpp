@@ -1,6 +1,9 @@
 #include "scene/gltf_compression.h"
 
+#include <algorithm>
 #include <cstring>
+#include <limits>
+#include <type_traits>
 #include <string_view>
 #include <vector>
 
@@ -97,17 +100,58 @@ bool isFallbackBuffer(const nlohmann::json& buffer) {
     throw InputError(file + ": " + at + ", KHR_draco_mesh_compression: " + problem);
 }
 
-// `count` elements of `components` values of the accessor's component type from a decoded Draco
-// attribute, point by point (a point's value through the attribute's own mapping: Draco stores
-// each distinct value once), as little-endian bytes the accessor reads in place.
+// One stored component of Draco type `type` as the accessor's component type T. The accessor
+// describes the decoded data (KHR_draco_mesh_compression), so values are cast, never normalised;
+// a float out of an integer type's range (or NaN) becomes 0 rather than undefined behaviour.
 template <class T>
-void appendConverted(const draco::PointAttribute& attribute, size_t points, int components, std::vector<unsigned char>& out) {
-    std::vector<T> values(static_cast<size_t>(components));
-    for (size_t p = 0; p < points; ++p) {
-        attribute.ConvertValue<T>(attribute.mapped_index(draco::PointIndex(uint32_t(p))), int8_t(components), values.data());
-        const auto* bytes = reinterpret_cast<const unsigned char*>(values.data());
-        out.insert(out.end(), bytes, bytes + values.size() * sizeof(T));
+T castComponent(draco::DataType type, const uint8_t* src) {
+    auto read = [&](auto value) {
+        std::memcpy(&value, src, sizeof value);
+        return value;
+    };
+    double v = 0.0;
+    switch (type) {
+    case draco::DT_INT8: v = read(int8_t{}); break;
+    case draco::DT_UINT8: v = read(uint8_t{}); break;
+    case draco::DT_INT16: v = read(int16_t{}); break;
+    case draco::DT_UINT16: v = read(uint16_t{}); break;
+    case draco::DT_INT32: v = read(int32_t{}); break;
+    case draco::DT_UINT32: v = read(uint32_t{}); break;
+    case draco::DT_INT64: v = double(read(int64_t{})); break;
+    case draco::DT_UINT64: v = double(read(uint64_t{})); break;
+    case draco::DT_FLOAT32: v = read(float{}); break;
+    case draco::DT_FLOAT64: v = read(double{}); break;
+    case draco::DT_BOOL: v = read(uint8_t{}) != 0; break;
+    default: break;
     }
+    if constexpr (std::is_floating_point_v<T>) return T(v);
+    else return v >= double(std::numeric_limits<T>::min()) && v <= double(std::numeric_limits<T>::max()) ? T(v) : T(0);
+}
+
+// `points` elements of `components` values of the accessor's component type from a decoded Draco
+// attribute, point by point (a point's value through the attribute's own mapping: Draco stores
+// each distinct value once), as little-endian bytes the accessor reads in place. The attribute's
+// bytes are read here, bounds checked, not through Draco's ConvertValue: that reads the
+// attribute's `normalized` flag, which a damaged stream leaves an invalid bool (UBSan, the
+// fuzzer's find). Components the attribute lacks are 0. False when the data is out of range.
+template <class T>
+bool appendConverted(const draco::PointAttribute& attribute, size_t points, int components, std::vector<unsigned char>& out) {
+    const size_t size = size_t(std::max(draco::DataTypeLength(attribute.data_type()), 0));
+    const draco::DataBuffer* buffer = attribute.buffer();
+    const int stored = std::min(int(attribute.num_components()), components);
+    if (size == 0 || !buffer || attribute.byte_stride() < 0 || attribute.byte_offset() < 0) return false;
+    if (!attribute.is_mapping_identity() && attribute.indices_map_size() < points) return false;
+    for (size_t p = 0; p < points; ++p) {
+        const uint64_t index = attribute.mapped_index(draco::PointIndex(uint32_t(p))).value();
+        const uint64_t at = uint64_t(attribute.byte_offset()) + uint64_t(attribute.byte_stride()) * index;
+        if (index > (uint64_t(1) << 32) || at + uint64_t(stored) * size > buffer->data_size()) return false;
+        for (int c = 0; c < components; ++c) {
+            const T value = c < stored ? castComponent<T>(attribute.data_type(), buffer->data() + at + size_t(c) * size) : T(0);
+            const auto* bytes = reinterpret_cast<const unsigned char*>(&value);
+            out.insert(out.end(), bytes, bytes + sizeof(T));
+        }
+    }
+    return true;
 }
 
 // A new buffer and a view over all of it: where decoded data lives.
@@ -188,15 +232,17 @@ void decodeDracoPrimitive(tinygltf::Model& model, tinygltf::Primitive& primitive
         const int components = tinygltf::GetNumComponentsInType(uint32_t(a.type));
         if (components <= 0 || components > 4) failPrimitive(file, at, name + "'s accessor has an invalid type");
         std::vector<unsigned char> bytes;
+        bool read = false;
         switch (a.componentType) {
-        case TINYGLTF_COMPONENT_TYPE_FLOAT: appendConverted<float>(*attribute, points, components, bytes); break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: appendConverted<uint8_t>(*attribute, points, components, bytes); break;
-        case TINYGLTF_COMPONENT_TYPE_BYTE: appendConverted<int8_t>(*attribute, points, components, bytes); break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: appendConverted<uint16_t>(*attribute, points, components, bytes); break;
-        case TINYGLTF_COMPONENT_TYPE_SHORT: appendConverted<int16_t>(*attribute, points, components, bytes); break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: appendConverted<uint32_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: read = appendConverted<float>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: read = appendConverted<uint8_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_BYTE: read = appendConverted<int8_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: read = appendConverted<uint16_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_SHORT: read = appendConverted<int16_t>(*attribute, points, components, bytes); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: read = appendConverted<uint32_t>(*attribute, points, components, bytes); break;
         default: failPrimitive(file, at, name + "'s accessor has an invalid component type");
         }
+        if (!read) failPrimitive(file, at, name + ": the decoded attribute's values are out of range");
         pointAccessorAt(model, accessor->second, points, std::move(bytes));
     }
 }

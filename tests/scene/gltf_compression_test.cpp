@@ -224,6 +224,21 @@ TEST(MeshoptCompression, EveryModeAndFilterLoadsAsItsUncompressedTwin) {
 
 // A file whose compressed data is damaged or whose parameters are wrong is bad input naming the
 // file, the view and the problem, never a crash.
+// Standard base64 back to bytes (the test files' data URIs).
+std::string base64Decode(const std::string& in) {
+    std::string out;
+    uint32_t bits = 0;
+    int count = 0;
+    for (const char ch : in) {
+        const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        const char* at = std::strchr(k, ch);
+        if (ch == '=' || !at || !*at) break;
+        bits = (bits << 6) | uint32_t(at - k);
+        if ((count += 6) >= 8) out += char((bits >> (count -= 8)) & 0xff);
+    }
+    return out;
+}
+
 // A file edited into a bad one, and what its refusal must say.
 struct BadFileCase {
     const char* what;
@@ -426,6 +441,34 @@ TEST(DracoCompression, BadStreamsAndAccessorsAreInputErrorsNamingThePrimitive) {
     const BadFileCase narrow = {"289 points in 8-bit indices", [](nlohmann::json& j) { j["accessors"][3]["componentType"] = 5121; },
                                 "289 points do not fit its 8-bit indices"};
     expectRefused(writeDracoGrid(wavyGrid(17), "draco-narrow", 0, narrow.edit), narrow);
+}
+
+// Every byte of a Draco stream replaced by each of a few values: the file loads or is refused
+// with an input error, never undefined behaviour (under the sanitizer build: Draco leaves a
+// damaged stream's `normalized` flag an invalid bool, which the fuzzer found through Draco's own
+// value conversion; the reader converts values itself).
+TEST(DracoCompression, EveryCorruptedByteOfAStreamLoadsOrIsRefused) {
+    const fs::path path = writeDracoGrid(wavyGrid(4), "draco-corrupt", 0);
+    nlohmann::json j = nlohmann::json::parse(std::ifstream(path));
+    const std::string uri = j["buffers"][0]["uri"];
+    std::string stream = base64Decode(uri.substr(uri.find(',') + 1));
+    const size_t streamBytes = j["bufferViews"][0]["byteLength"];
+    int loaded = 0, refused = 0;
+    for (size_t i = 0; i < streamBytes; ++i)
+        for (const uint8_t value : {0x00, 0x65, 0xff}) {
+            std::string damaged = stream;
+            damaged[i] = char(value);
+            j["buffers"][0]["uri"] = "data:application/octet-stream;base64," + testing::base64(damaged);
+            std::ofstream(path) << j.dump();
+            try {
+                loadGltf(path, kQuiet);
+                ++loaded;
+            } catch (const InputError&) {
+                ++refused;
+            }
+        }
+    EXPECT_GT(refused, 0);
+    EXPECT_EQ(loaded + refused, int(streamBytes) * 3);
 }
 
 // Debian's libdraco exports its own copy of tinygltf; linked in the wrong order, the loader's
