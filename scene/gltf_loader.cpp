@@ -1069,6 +1069,17 @@ GltfDocument::GltfDocument(const std::filesystem::path& path, const WarningSink&
     std::string error, warning;
     const bool binary = fileKindOf(path) == FileKind::Glb;
     bool ok = false;
+    // tinygltf reports most problems through `error`, but some malformed files make it throw from
+    // inside (a vector's at() on an empty list: libFuzzer's find on a GLB): those are bad input too.
+    auto parse = [&](auto&& load) {
+        try {
+            ok = load();
+        } catch (const std::bad_alloc&) {
+            throw;
+        } catch (const std::exception& e) {
+            throw InputError(file + ": not a glTF file tinygltf can parse (" + e.what() + ")");
+        }
+    };
     if (binary) {
         // Read here (as LoadBinaryFromFile would) so the container is checked before tinygltf parses it.
         const std::string bytes = readFileBytes(path);
@@ -1077,12 +1088,14 @@ GltfDocument::GltfDocument(const std::filesystem::path& path, const WarningSink&
         if (const std::string problem = glbContainerProblem(bytes); !problem.empty()) throw InputError(file + ": " + problem);
         std::string glb = bytes;
         if (hasJsonChunk(bytes) && mentionsCompression(bytes)) glb = glbWithJson(bytes, parseableByTinygltf(glbJson(bytes)));
-        ok = loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(glb.data()), unsigned(glb.size()),
-                                         path.parent_path().string());
+        parse([&] {
+            return loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(glb.data()),
+                                               unsigned(glb.size()), path.parent_path().string());
+        });
     } else {
         std::string json = readFileBytes(path);
         if (mentionsCompression(json)) json = parseableByTinygltf(json);
-        ok = loader.LoadASCIIFromString(&model, &error, &warning, json.data(), unsigned(json.size()), path.parent_path().string());
+        parse([&] { return loader.LoadASCIIFromString(&model, &error, &warning, json.data(), unsigned(json.size()), path.parent_path().string()); });
     }
     if (!warning.empty()) warn(file + ": " + warning);
     if (!ok) throw InputError(file + ": " + placeOfLoadError(binary, error));
