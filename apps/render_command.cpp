@@ -133,10 +133,10 @@ std::filesystem::path writeFrameImage(const RenderOptions& o, int index, const R
     const std::filesystem::path file = frameFile(o, index);
     // The depth view of a 3D scene holds distances: EXR keeps them, 8-bit files get them legible.
     const bool depthIsDistance = scene::fileKindOf(o.scene) != scene::FileKind::TriangleList;
-    if (render::displayChangesImage(o.view, depthIsDistance) && imageFormatFor(file) != ImageFormat::Exr)
-        writeImageAtomically(file, render::displayImage(r.image, o.view, depthIsDistance), imageWriteOptions(o));
-    else
-        writeImageAtomically(file, r.image, imageWriteOptions(o));
+    raster::Image legible;
+    const raster::Image& image =
+        imageFormatFor(file) == ImageFormat::Exr ? r.image : render::displayImage(r.image, o.view, depthIsDistance, legible);
+    writeImageAtomically(file, image, imageWriteOptions(o));
     return file;
 }
 

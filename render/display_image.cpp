@@ -78,9 +78,10 @@ raster::Image legibleDepth(const raster::Image& distances) {
     return out;
 }
 
-raster::Image displayImage(const raster::Image& image, View view, bool depthIsDistance) {
-    if (displayChangesImage(view, depthIsDistance)) return legibleDepth(image);
-    return image;
+const raster::Image& displayImage(const raster::Image& image, View view, bool depthIsDistance, raster::Image& legible) {
+    if (view != View::Depth || !depthIsDistance) return image;
+    legible = legibleDepth(image);
+    return legible;
 }
 
 std::vector<uint8_t> displayRgba8(const raster::Image& image, bool alpha) {

@@ -21,12 +21,9 @@ raster::Image legibleDepth(const raster::Image& distances);
 
 /// The image an 8- or 16-bit file shows for a view: the depth view's distances made legible
 /// (`depthIsDistance`: a 3D scene's depth view; a 2D .tri scene's is the stored depth), any
-/// other view as it is.
-raster::Image displayImage(const raster::Image& image, View view, bool depthIsDistance);
-
-/// Whether displayImage changes the image; where it does not, writers take the image itself
-/// rather than displayImage's copy of it (33 MB at 1920x1080).
-inline bool displayChangesImage(View view, bool depthIsDistance) { return view == View::Depth && depthIsDistance; }
+/// other view as it is: `image` itself, not a copy (33 MB at 1920x1080), or the legible depth,
+/// made in `legible`.
+const raster::Image& displayImage(const raster::Image& image, View view, bool depthIsDistance, raster::Image& legible);
 
 /// The image's pixels as 8- or 16-bit samples (16-bit ones as host-order pairs of bytes):
 /// sRGB-encoded straight colour, then linear alpha when `alpha`; 3 or 4 samples a pixel.

@@ -61,12 +61,13 @@ size_t cameraCount(const LoadedScene& scene) {
 }
 
 raster::Image displayImage(const LoadedScene& scene, const FrameSettings& f, const RenderResult& r) {
-    return displayImage(r.image, f.view, !scene.isTriangleList());
+    raster::Image legible;
+    return displayImage(r.image, f.view, !scene.isTriangleList(), legible);
 }
 
 std::vector<uint8_t> displayPixels(const LoadedScene& scene, const FrameSettings& f, const RenderResult& r) {
-    if (displayChangesImage(f.view, !scene.isTriangleList())) return displayRgba8(displayImage(scene, f, r), hasAlpha(f));
-    return displayRgba8(r.image, hasAlpha(f));
+    raster::Image legible;
+    return displayRgba8(displayImage(r.image, f.view, !scene.isTriangleList(), legible), hasAlpha(f));
 }
 
 namespace {

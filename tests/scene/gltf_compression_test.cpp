@@ -75,22 +75,27 @@ Encoded vertexStream(const void* data, size_t count, size_t stride, const std::s
     return e;
 }
 
-// Positions through the exponential filter (15-bit mantissas) and normals through the octahedral
-// one (8-bit): the plain twin holds what the filters decode to.
-Encoded filteredPositions(const Grid& g) {
-    std::vector<unsigned char> encoded(g.vertices * 12);
-    meshopt_encodeFilterExp(encoded.data(), g.vertices, 12, 15, g.positions.data());
-    Encoded e = vertexStream(encoded.data(), g.vertices, 12, "EXPONENTIAL");
-    meshopt_decodeFilterExp(e.plain.data(), g.vertices, 12);
+// A float stream through one of meshoptimizer's filters (its encoder and decoder), then the vertex
+// codec: the plain twin holds what the filter decodes to.
+using FilterEncoder = void (*)(void*, size_t, size_t, int, const float*);
+using FilterDecoder = void (*)(void*, size_t, size_t);
+Encoded filteredStream(const std::vector<float>& data, size_t count, size_t stride, int bits, FilterEncoder encode,
+                       FilterDecoder decode, const std::string& filter) {
+    std::vector<unsigned char> encoded(count * stride);
+    encode(encoded.data(), count, stride, bits, data.data());
+    Encoded e = vertexStream(encoded.data(), count, stride, filter);
+    decode(e.plain.data(), count, stride);
     return e;
 }
 
+// Positions through the exponential filter (15-bit mantissas), normals through the octahedral one
+// (8-bit).
+Encoded filteredPositions(const Grid& g) {
+    return filteredStream(g.positions, g.vertices, 12, 15, meshopt_encodeFilterExp, meshopt_decodeFilterExp, "EXPONENTIAL");
+}
+
 Encoded filteredNormals(const Grid& g) {
-    std::vector<unsigned char> encoded(g.vertices * 4);
-    meshopt_encodeFilterOct(encoded.data(), g.vertices, 4, 8, g.normals4.data());
-    Encoded e = vertexStream(encoded.data(), g.vertices, 4, "OCTAHEDRAL");
-    meshopt_decodeFilterOct(e.plain.data(), g.vertices, 4);
-    return e;
+    return filteredStream(g.normals4, g.vertices, 4, 8, meshopt_encodeFilterOct, meshopt_decodeFilterOct, "OCTAHEDRAL");
 }
 
 Encoded indexStream(const std::vector<uint32_t>& indices, bool triangles) {
