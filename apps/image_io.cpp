@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "apps/oiio_module.h"
+#include "scene/environment_map.h"
 #include "apps/png_file.h"
 #include "render/display_image.h"
 #include "raster/parallel.h"
@@ -73,6 +74,16 @@ raster::Image readImage(const std::filesystem::path& path) {
     const std::string error = oiioModule().readImage(path.string(), image);
     if (!error.empty()) throw scene::InputError(path.string() + ": cannot read image: " + error);
     return image;
+}
+
+void registerEnvironmentReaders() {
+    scene::registerEnvironmentReader(".exr", [](const std::filesystem::path& path) {
+        const raster::Image rgba = readImage(path);
+        scene::EquirectangularImage rgb{rgba.width, rgba.height, std::vector<float>(size_t(rgba.width) * size_t(rgba.height) * 3)};
+        for (size_t i = 0; i < size_t(rgba.width) * size_t(rgba.height); ++i)
+            for (int k = 0; k < 3; ++k) rgb.rgb[3 * i + size_t(k)] = rgba.rgba[4 * i + size_t(k)];
+        return rgb;
+    });
 }
 
 }  // namespace cuberille::apps

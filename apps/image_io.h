@@ -31,6 +31,10 @@ ImageFormat imageFormatFor(const std::filesystem::path& path);
 void writeImageAtomically(const std::filesystem::path& path, const raster::Image& image,
                           const ImageWriteOptions& options = {});
 
+/// Lets the library read OpenEXR environment maps (--environment FILE.exr) through this
+/// program's OpenImageIO module, which is loaded only when such a file is read.
+void registerEnvironmentReaders();
+
 /// Reads a PNG, or any image OpenImageIO reads, as float RGBA (8-bit formats decoded from sRGB to
 /// linear is NOT applied: values are the file's, scaled to [0, 1]).
 raster::Image readImage(const std::filesystem::path& path);

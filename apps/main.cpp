@@ -12,6 +12,7 @@
 #include "apps/accuracy_command.h"
 #include "apps/explain_command.h"
 #include "apps/fly_command.h"
+#include "apps/image_io.h"
 #include "apps/batch_command.h"
 #include "apps/render_command.h"
 #include "apps/render_options_cli.h"
@@ -257,6 +258,7 @@ int main(int argc, char** argv) {
         app.exit(e);
         return kExitBadInput;
     }
+    cuberille::apps::registerEnvironmentReaders();
 
     try {
         cuberille::raster::useInstructionSetFromEnvironment();

@@ -128,6 +128,12 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
                        "drawn again when the camera moves), scene (every caster: drawn once for a turntable or a "
                        "batch of views) or auto (scene for --turntable, else view)")
         ->capture_default_str();
+    render->add_option("--environment", o.environment,
+                       "Image-based lighting: neutral (the built-in studio) or an equirectangular radiance map (.hdr, "
+                       ".exr); it replaces the ambient term and, for a model without lights of its own, the default "
+                       "key light");
+    render->add_option("--environment-intensity", o.environmentIntensity, "With --environment: its radiance scaled")
+        ->capture_default_str();
     render->add_flag("--quiet", o.quiet, "Print nothing on success");
     return render;
 }

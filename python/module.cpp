@@ -81,6 +81,8 @@ render::FrameSettings frameSettings(int width, int height, int msaa, const py::k
         else if (k == "shadow_map_size") f.shadows.mapSizeTexels = value.cast<int>();
         else if (k == "soft_samples") f.shadows.softSamplesPerSide = value.cast<int>();
         else if (k == "shadow_focus") f.shadows.focus = render::parseMapFocus(value.cast<std::string>());
+        else if (k == "environment") f.environment = py::str(value).cast<std::string>();  // a name or a path-like
+        else if (k == "environment_intensity") f.environmentIntensity = value.cast<float>();
         else if (k == "background") {
             const auto v = value.cast<std::vector<float>>();
             if (v.size() != 3 && v.size() != 4) throw scene::InputError("background: expected (r, g, b) or (r, g, b, a), each in [0, 1]");

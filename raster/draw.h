@@ -34,6 +34,7 @@ enum class ShadingModel : uint8_t {
 };
 
 class Texture;
+class EnvironmentLight;
 
 enum class LightType : uint8_t { Directional, Point, Spot };
 
@@ -60,6 +61,9 @@ struct Lighting {
     glm::vec3 ambient{0.0f};  // linear RGB, added unshadowed (times occlusion)
     Light lights[kMaxLights];
     int lightCount = 0;
+    /// Image-based lighting (raster/environment_light.h), added unshadowed (times occlusion) to
+    /// the lit models besides the ambient term; null: none. Must outlive the frame.
+    const EnvironmentLight* environment = nullptr;
 
     static Lighting directional(const glm::vec3& directionToLight, const glm::vec3& intensity,
                                 const glm::vec3& ambient) {

@@ -17,6 +17,7 @@
 #include <glm/glm.hpp>
 
 #include "raster/draw.h"
+#include "raster/environment_light.h"
 #include "raster/texture.h"
 #include "raster/limits.h"
 #include "raster/setup.h"
@@ -64,7 +65,9 @@ struct ConstantColorShader {
 /// over the result: BrdfExtensions::clearcoat); per light, with light intensity E
 /// (pi x irradiance, see Light), E n.l ((1 - F) c_diff + pi F D V) with Schlick's F, the GGX
 /// D and the height-correlated Smith V. Ambient: ambient x occlusion x (c_diff + F0), a
-/// uniform environment without image-based lighting. Emissive is added last.
+/// uniform environment. An environment light (Lighting::environment, image-based lighting)
+/// adds occlusion x (c_diff E(n) + S(r) (F0 A + F90 B)) (raster/environment_light.h). Emissive
+/// is added last.
 template <ShadingModel kModel>
 class SurfaceShader {
 public:
@@ -74,7 +77,8 @@ public:
     SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
         coated_ = kModel == ShadingModel::MetallicRoughness && state.brdf.clearcoat > 0.0f;
-        fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 &&
+        environment_ = state.lighting.environment;
+        fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 && !environment_ &&
                         state.lighting.lights[0].type == LightType::Directional &&
                         state.lighting.lights[0].visibility == nullptr && layout.texCoord < 0 &&
                         layout.alpha < 0 && !hasEmissive_;
@@ -392,6 +396,10 @@ private:
             }
         }
         counters.lightEvaluations += uint64_t(count) * lighting.lightCount;
+        if (environment_) {
+            environmentIrradiance(count, a, occlusion, irradiance);
+            counters.environmentPixels += uint64_t(count);
+        }
         for (int k = 0; k < 3; ++k)
             for (int i = 0; i < count; ++i) a.radiance[k][i] = a.albedo[k][i] * irradiance[k][i];
     }
@@ -401,6 +409,7 @@ private:
         float alpha2[N], nDotV[N];
         float diffuse[3][N], f0[3][N], view[3][N];
         float f90[N];  // with KHR_materials_specular only; 1 otherwise, and not stored
+        float roughness[N];  // perceptual, floored: what the environment's levels are indexed by
     };
 
     // Two passes, each a loop across the queue the compiler vectorises (a light's type, range
@@ -439,6 +448,10 @@ private:
                 directional ? addLight<true, false>(light, q, a, m) : addLight<false, false>(light, q, a, m);
         }
         counters.lightEvaluations += uint64_t(count) * lighting.lightCount;
+        if (environment_) {
+            withF90 ? addEnvironment<true>(count, a, occlusion, m) : addEnvironment<false>(count, a, occlusion, m);
+            counters.environmentPixels += uint64_t(count);
+        }
         if (textured) counters.textureSamples += uint64_t(count);
         if (coated_) clearcoat(q, a, occlusion, m, counters);
     }
@@ -467,6 +480,15 @@ private:
             a.coatWeight[i] = coat * (0.04f + 0.96f * pow5(1.0f - ncDotV[i]));
             for (int k = 0; k < 3; ++k) a.coatRadiance[k][i] = s_.lighting.ambient[k] * occlusion[i] * a.coatWeight[i];
         }
+        // The environment seen in the coat: its filtered radiance around the coat's mirror
+        // direction, times w, as the ambient term above takes the layer's albedo as 1.
+        if (environment_)
+            for (int i = 0; i < count; ++i) {
+                const float r = std::max(0.03f, std::clamp(s_.brdf.clearcoatRoughness * roughness.g[i], 0.0f, 1.0f));
+                float rgb[3];
+                reflectedRadiance(nc[0][i], nc[1][i], nc[2][i], m.view[0][i], m.view[1][i], m.view[2][i], r, rgb);
+                for (int k = 0; k < 3; ++k) a.coatRadiance[k][i] += rgb[k] * occlusion[i] * a.coatWeight[i];
+            }
         for (int l = 0; l < s_.lighting.lightCount; ++l) {
             const Light& light = s_.lighting.lights[l];
             light.type == LightType::Directional ? addCoatLight<true>(light, q, a, m, nc, alpha2, ncDotV)
@@ -518,6 +540,7 @@ private:
             // A floor on roughness: a perfect mirror's highlight is a delta no sample can hit.
             const float r = std::max(0.03f, std::clamp(roughness, 0.0f, 1.0f));
             m.alpha2[i] = r * r * r * r;  // (roughness²)²
+            m.roughness[i] = r;
             const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
             storeMaterial(i, albedo * (1.0f - metallic), glm::mix(glm::vec3(s_.dielectricF0), albedo, metallic), a, occlusion, m);
         }
@@ -535,6 +558,7 @@ private:
             const float metallic = std::clamp(s_.metallic * texels.b[i], 0.0f, 1.0f);
             const float r = std::max(0.03f, std::clamp(s_.roughness * texels.g[i], 0.0f, 1.0f));
             m.alpha2[i] = r * r * r * r;
+            m.roughness[i] = r;
             const float specular = std::clamp(s_.brdf.specularStrength * strength.a[i], 0.0f, 1.0f);
             const glm::vec3 tint = s_.brdf.specularColor * glm::vec3(color.r[i], color.g[i], color.b[i]);
             const glm::vec3 dielectricF0 = glm::min(s_.dielectricF0 * tint, glm::vec3(1.0f)) * specular;
@@ -565,6 +589,7 @@ private:
             const float glossiness = std::clamp(s_.brdf.glossiness * texels.a[i], 0.0f, 1.0f);
             const float r = std::max(0.03f, 1.0f - glossiness);
             m.alpha2[i] = r * r * r * r;  // ((1 - glossiness)²)²
+            m.roughness[i] = r;
             const glm::vec3 albedo(a.albedo[0][i], a.albedo[1][i], a.albedo[2][i]);
             storeMaterial(i, albedo * (1.0f - std::max({specular.r, specular.g, specular.b})), specular, a, occlusion, m);
         }
@@ -618,6 +643,41 @@ private:
         }
     }
 
+    // The environment's light at every pixel (raster/environment_light.h): occlusion x (c_diff E(n)
+    // + S(r, roughness) (F0 A + F90 B)), r the view reflected about n, F90 = 1 unless kF90.
+    template <bool kF90>
+    void addEnvironment(int count, PixelAttributes& a, const float* occlusion, const SurfaceAtPixels& m) const {
+        const float* dfg = EnvironmentLight::dfgTable();
+        for (int i = 0; i < count; ++i) {
+            const float nx = a.normal[0][i], ny = a.normal[1][i], nz = a.normal[2][i];
+            const glm::vec3 e = glm::max(EnvironmentLight::irradianceAt(environment_->shIrradiance, nx, ny, nz), glm::vec3(0.0f));
+            float specular[3];
+            reflectedRadiance(nx, ny, nz, m.view[0][i], m.view[1][i], m.view[2][i], m.roughness[i], specular);
+            float scaleA, scaleB;
+            EnvironmentLight::dfgAt(dfg, m.nDotV[i], m.roughness[i], scaleA, scaleB);
+            const float f90 = kF90 ? m.f90[i] : 1.0f;
+            for (int k = 0; k < 3; ++k)
+                a.radiance[k][i] += occlusion[i] * (m.diffuse[k][i] * e[k] + specular[k] * (m.f0[k][i] * scaleA + f90 * scaleB));
+        }
+    }
+
+    // Lambert's share of the environment: occlusion x E(n), added to each pixel's irradiance.
+    void environmentIrradiance(int count, const PixelAttributes& a, const float* occlusion, float (&irradiance)[3][N]) const {
+        for (int i = 0; i < count; ++i) {
+            const glm::vec3 e = glm::max(
+                EnvironmentLight::irradianceAt(environment_->shIrradiance, a.normal[0][i], a.normal[1][i], a.normal[2][i]),
+                glm::vec3(0.0f));
+            for (int k = 0; k < 3; ++k) irradiance[k][i] += occlusion[i] * e[k];
+        }
+    }
+
+    // S(r, roughness) for the view (vx, vy, vz) reflected about the normal (nx, ny, nz).
+    [[gnu::always_inline]] void reflectedRadiance(float nx, float ny, float nz, float vx, float vy, float vz, float roughness,
+                                                  float (&rgb)[3]) const {
+        const float twoNDotV = 2.0f * (nx * vx + ny * vy + nz * vz);
+        environment_->specularAt(twoNDotV * nx - vx, twoNDotV * ny - vy, twoNDotV * nz - vz, roughness, rgb[0], rgb[1], rgb[2]);
+    }
+
     void addEmissive(int count, PixelAttributes& a, StageCounters& counters) const {
         const glm::vec3 e = s_.emissive;
         if (layout_.texCoord >= 0 && s_.textures.emissive) {
@@ -669,6 +729,7 @@ private:
     VaryingLayout layout_;
     bool hasEmissive_ = false;
     bool coated_ = false;  // KHR_materials_clearcoat
+    const EnvironmentLight* environment_ = nullptr;
     bool fusedLambert_ = false;
 };
 

@@ -71,6 +71,11 @@ struct FrameSettings {
     int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
     bool debugCamera = false; // voxel models: show the frame's selection from behind and above
     rt::ShadowOptions shadows; // --shadows, --soft, --light-radius, --shadow-map-size, --soft-samples
+    /// --environment neutral|FILE: image-based lighting from the built-in studio or an
+    /// equirectangular radiance map (scene/environment_map.h); empty: none. It replaces the
+    /// ambient term, and the default key light of a model without lights of its own.
+    std::string environment;
+    float environmentIntensity = 1.0f;  // --environment-intensity: the environment's radiance scaled
     /// --background R,G,B[,A]: display (sRGB) values and opacity in [0, 1], instead of the
     /// scene's own; an opacity below 1 gives the image coverage alpha.
     std::optional<glm::vec4> background;

@@ -118,6 +118,7 @@ void load3d(LoadedScene::State& s) {
     if (s.procedural) {
         s.posed = scene::makeProceduralScene(s.name, s.options.detail);
         s.ownCamera = s.posed.camera;
+        s.ownLighting = s.posed.lighting;
     } else if (scene::isGltfKind(s.kind)) {
         s.gltf.emplace(s.name, s.warn);
         return;
@@ -161,15 +162,30 @@ double LoadedScene::State::poseFor(const FrameSettings& f) {
 void LoadedScene::State::frameFor(const FrameSettings& f) {
     if (procedural) {
         posed.camera = f.placement ? scene::placeCamera(*f.placement, ownCamera, bounds.min, bounds.max) : ownCamera;
+        posed.lighting = ownLighting;
+    } else {
+        scene::ModelSceneOptions view;
+        view.azimuthDegrees = f.azimuth;
+        view.elevationDegrees = f.elevation;
+        view.cameraIndex = f.cameraIndex;
+        view.placement = f.placement;
+        view.keyLightBesideCamera = f.ground;
+        scene::frameModelScene(posed, bounds, fileCameras, fileLights, view, name);
+    }
+    environmentFor(f);
+}
+
+void LoadedScene::State::environmentFor(const FrameSettings& f) {
+    if (f.environment.empty()) {
+        environment.reset();
         return;
     }
-    scene::ModelSceneOptions view;
-    view.azimuthDegrees = f.azimuth;
-    view.elevationDegrees = f.elevation;
-    view.cameraIndex = f.cameraIndex;
-    view.placement = f.placement;
-    view.keyLightBesideCamera = f.ground;
-    scene::frameModelScene(posed, bounds, fileCameras, fileLights, view, name);
+    environment = scene::loadEnvironment(f.environment, f.environmentIntensity);
+    raster::Lighting& l = posed.lighting;
+    l.environment = environment.get();
+    l.ambient = glm::vec3(0.0f);  // the environment is the light from everywhere
+    // The default key light stood in for an environment; a model's own lights stay.
+    if (!procedural && fileLights.empty()) l.lightCount = 0;
 }
 
 void LoadedScene::State::groundFor(const FrameSettings& f) {

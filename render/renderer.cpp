@@ -525,7 +525,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
           {"lightEvaluations", c.lightEvaluations},
           {"specularGlossinessPixels", c.specularGlossinessPixels},
           {"dielectricSpecularPixels", c.dielectricSpecularPixels},
-          {"clearcoatPixels", c.clearcoatPixels}}},
+          {"clearcoatPixels", c.clearcoatPixels},
+          {"environmentPixels", c.environmentPixels}}},
         {"outputMerge", {{"pixelsAlphaTested", c.pixelsAlphaTested}, {"pixelsBlended", c.pixelsBlended}}},
     };
     j["load"] = {{"verticesSkinned", r.load.verticesSkinned},

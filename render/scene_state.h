@@ -12,6 +12,7 @@
 #include "render/loaded_scene.h"
 #include "render/scene_culling.h"
 #include "render/scene_shadows.h"
+#include "scene/environment_map.h"
 #include "scene/gltf_loader.h"
 #include "scene/scene.h"
 #include "scene/tri_scene.h"
@@ -38,7 +39,9 @@ struct LoadedScene::State {
     std::vector<scene::Camera> fileCameras;
     std::vector<raster::Light> fileLights;
     scene::Bounds bounds;
-    scene::Camera ownCamera;       // a built-in scene's own camera (and its lighting stays put)
+    scene::Camera ownCamera;       // a built-in scene's own camera and lighting
+    raster::Lighting ownLighting;
+    std::shared_ptr<const raster::EnvironmentLight> environment;  // the frame's --environment, or null
     bool groundHeld = false;       // posed.meshes ends with the --ground floor for the pose held
     bool groundAsked = false;      // what the last frame asked (the hierarchies were built for it)
 
@@ -54,8 +57,12 @@ struct LoadedScene::State {
     /// A 3D scene at the frame's pose (glTF: its animation and time; posed again only when they
     /// differ from the pose held). Returns the milliseconds spent posing.
     double poseFor(const FrameSettings& f);
-    /// The frame's camera and lights on `posed` (render/renderer.cpp applies zoom and orbit).
+    /// The frame's camera and lights on `posed` (render/renderer.cpp applies zoom and orbit),
+    /// with the frame's environment (environmentFor).
     void frameFor(const FrameSettings& f);
+    /// --environment: the environment lights the scene instead of its ambient term, and instead
+    /// of the default key light of a model without lights of its own (docs/conventions.md).
+    void environmentFor(const FrameSettings& f);
     /// The --ground floor added to or taken from `posed` as the frame asks, after frameFor (the
     /// framing is the model's); the shadow and cull hierarchies are rebuilt when it comes or goes.
     void groundFor(const FrameSettings& f);

@@ -32,7 +32,8 @@ class Scene:
         linear RGBA (colour premultiplied by alpha; for view="depth", distances from the eye).
         Options: threads, view, azimuth, elevation, camera_index, eye, target, up, fov, orbit,
         time, animation, zoom, orthographic, shadows, soft, light_radius, shadow_map_size, soft_samples,
-        shadow_focus (view, the default for one frame, or scene: a sun's map kept across views), frustum_cull, ground, shadow_catcher, bvh_update, supersample, texture_filter, depth, background, legend, pixel_error,
+        shadow_focus (view, the default for one frame, or scene: a sun's map kept across views),
+        environment ("neutral" or an equirectangular .hdr radiance map), environment_intensity, frustum_cull, ground, shadow_catcher, bvh_update, supersample, texture_filter, depth, background, legend, pixel_error,
         voxel_resolution, no_hybrid, no_occlusion, warmup. Afterwards `stats` holds the frame's
         statistics as `--stats` writes them."""
         image = self._scene.render(width, height, msaa, linear, **options)

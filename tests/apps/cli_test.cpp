@@ -520,6 +520,30 @@ TEST_F(Cli, ShadowOptionsAreCheckedWithExitTwoAndNothingWritten) {
     expectRefusedWithoutOutput(cases, out);
 }
 
+// --environment: the built-in studio, and an OpenEXR map read through the program's OpenImageIO
+// module (the library reads .hdr itself); a map that cannot be used is exit 2 naming it.
+TEST_F(Cli, EnvironmentsLightTheModelFromTheStudioOrAnExrAndBadOnesGiveExitTwo) {
+    const fs::path obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const fs::path exr = dir_ / "sky.exr", out = dir_ / "o.png", json = dir_ / "s.json";
+    cuberille::raster::Image sky{64, 32, {}};
+    sky.rgba.assign(size_t(64 * 32 * 4), 0.5f);
+    cuberille::apps::writeImageAtomically(exr, sky);
+    for (const std::string& environment : {std::string("neutral"), exr.string()}) {
+        const CommandRun r = run("render " + obj.string() + " --width 48 --height 32 --environment " + environment +
+                                 " --out " + out.string() + " --stats " + json.string());
+        ASSERT_EQ(r.exitCode, 0) << environment << ": " << r.output;
+        const nlohmann::json stats = nlohmann::json::parse(std::ifstream(json));
+        EXPECT_GT(stats["stages"]["shade"]["environmentPixels"].get<uint64_t>(), 0u) << environment;
+        EXPECT_EQ(stats["stages"]["shade"]["environmentPixels"], stats["stages"]["shade"]["pixelsShaded"]) << environment;
+        fs::remove(out);
+    }
+    const std::pair<std::string, std::string> cases[] = {
+        {"render " + obj.string() + " --environment " + (dir_ / "none.hdr").string(), (dir_ / "none.hdr").string()},
+        {"render " + obj.string() + " --environment neutral --environment-intensity -2", "--environment-intensity"},
+    };
+    expectRefusedWithoutOutput(cases, out);
+}
+
 TEST_F(Cli, AccuracyKnobsAreCheckedWithExitTwoAndNothingWritten) {
     const fs::path obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     const fs::path out = dir_ / "o.png";
