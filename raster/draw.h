@@ -53,6 +53,10 @@ struct Light {
     /// width; 1 = lit). Null: unshadowed. Computed before the frame by rt/shadows.h; the shade
     /// stage only multiplies it in, so raster/ knows nothing of how shadows are found.
     const float* visibility = nullptr;
+    /// The share of the light's specular term the shade stage adds (1: all of it). 0 for a light
+    /// that stands in for an environment's dominant direction, whose reflection the environment's
+    /// own specular levels already hold (raster/environment_light.h).
+    float specular = 1.0f;
 };
 
 inline constexpr int kMaxLights = 8;
@@ -64,6 +68,9 @@ struct Lighting {
     /// Image-based lighting (raster/environment_light.h), added unshadowed (times occlusion) to
     /// the lit models besides the ambient term; null: none. Must outlive the frame.
     const EnvironmentLight* environment = nullptr;
+    /// With an environment: a light of `lights` stands for its dominant direction, so the shade
+    /// stage takes the irradiance without it (EnvironmentLight::shIrradianceLessDominant).
+    bool environmentLessDominantLight = false;
 
     static Lighting directional(const glm::vec3& directionToLight, const glm::vec3& intensity,
                                 const glm::vec3& ambient) {

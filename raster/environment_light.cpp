@@ -359,6 +359,32 @@ void fillLevel(const std::vector<Image>& chain, const std::vector<BorderedLevel>
 /// Luminance weights of linear Rec. 709 RGB.
 double luminance(const glm::vec3& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
 
+/// The dominant light and the irradiance without it (EnvironmentLight::dominantDirection).
+void separateDominantLight(EnvironmentLight& e) {
+    const glm::vec3(&c)[9] = e.shIrradiance;
+    std::copy_n(c, 9, e.shIrradianceLessDominant);
+    // The linear band is c[3] x + c[1] y + c[2] z per channel (irradianceAt's order).
+    const glm::dvec3 axis(luminance(c[3]), luminance(c[1]), luminance(c[2]));
+    if (!(glm::dot(axis, axis) > 0.0)) return;  // no direction stands out: no light
+    const glm::dvec3 d = glm::normalize(axis);
+    e.dominantDirection = glm::vec3(d);
+    glm::vec3 intensity;
+    for (int k = 0; k < 3; ++k) intensity[k] = float(std::max(0.0, 2.0 * (c[3][k] * d.x + c[1][k] * d.y + c[2][k] * d.z)));
+    e.dominantIntensity = intensity;
+    // The light's bands: I/4, (I/2) n.d, and (5 I / 32)(3 (n.d)² - 1) written in the polynomials
+    // xy, yz, 3z² - 1, xz, x² - y² (with x² + y² + z² = 1).
+    const glm::vec3 i = intensity;
+    const glm::vec3 band2 = i * (5.0f / 32.0f);
+    glm::vec3(&r)[9] = e.shIrradianceLessDominant;
+    r[0] -= i * 0.25f;
+    r[1] -= i * (0.5f * float(d.y)), r[2] -= i * (0.5f * float(d.z)), r[3] -= i * (0.5f * float(d.x));
+    r[4] -= band2 * float(6.0 * d.x * d.y);
+    r[5] -= band2 * float(6.0 * d.y * d.z);
+    r[6] -= band2 * float((3.0 * d.z * d.z - 1.0) / 2.0);
+    r[7] -= band2 * float(6.0 * d.x * d.z);
+    r[8] -= band2 * float(1.5 * (d.x * d.x - d.y * d.y));
+}
+
 }  // namespace
 
 struct EnvironmentPreparation {
@@ -367,20 +393,18 @@ struct EnvironmentPreparation {
         EnvironmentLight::dfgTable();  // made now, not in the first frame that shades with it
         const Image map = cleanedSource(width, height, rgb, intensity);
         projectIrradiance(map, e.shIrradiance);
-        // The linear band (y, z, x) points where the light comes from.
-        const glm::dvec3 axis(luminance(e.shIrradiance[3]), luminance(e.shIrradiance[1]), luminance(e.shIrradiance[2]));
-        if (glm::dot(axis, axis) > 0.0) e.dominantDirection = glm::vec3(glm::normalize(axis));
+        separateDominantLight(e);
         const std::vector<Image> chain = octahedralChain(map);
         std::vector<BorderedLevel> borderedChain;
         for (const Image& level : chain) borderedChain.push_back(bordered(level));
         size_t floats = 0;
         for (int k = 0; k < EnvironmentLight::kSpecularLevels; ++k) {
-            e.levelOffset_[k] = floats;
+            e.levelOffset_[k] = int(floats);
             const size_t stride = size_t(e.levelSide(k)) + 2;
             floats += stride * stride * 3;
         }
         e.texels_.resize(floats);
-        for (int k = 0; k < EnvironmentLight::kSpecularLevels; ++k) fillLevel(chain, borderedChain, k, e.texels_.data() + e.levelOffset_[k]);
+        for (int k = 0; k < EnvironmentLight::kSpecularLevels; ++k) fillLevel(chain, borderedChain, k, e.texels_.data() + size_t(e.levelOffset_[k]));
         return e;
     }
 };
@@ -391,19 +415,20 @@ EnvironmentLight EnvironmentLight::fromEquirectangular(int width, int height, co
 
 namespace {
 
-/// The built-in studio's light sources, all in linear radiance. The values put a white
-/// Lambertian surface facing the key at about 1, as the default key light and ambient do
-/// (0.85 + 0.12), and an upward-facing one at about 0.8.
+/// The built-in studio's light sources, all in linear radiance. A white Lambertian surface facing
+/// the default camera (azimuth 30, elevation 20: scene/camera.h) shows about 1, display white,
+/// as the default key light and ambient show one facing the light (0.97): a model's albedo reads
+/// as itself. Facing the key it shows about 1.3, facing the floor a quarter of that.
 struct SoftBox {
     glm::dvec3 towards;   // from the model
     double halfAngleRadians;
     double radiance;
 };
-constexpr double kDomeAbove = 0.55, kDomeBelow = 0.16;  // grey dome: the zenith and the floor
+constexpr double kDomeAbove = 0.75, kDomeBelow = 0.22;  // grey dome: the zenith and the floor
 const SoftBox kStudioBoxes[] = {
-    {{-0.55, 0.65, 0.55}, 0.30, 8.0},   // key: above, in front, to the left
-    {{0.85, 0.25, 0.45}, 0.26, 2.5},    // fill: low, to the right
-    {{0.25, 0.55, -0.80}, 0.20, 4.0},   // rim: behind and above
+    {{-0.55, 0.65, 0.55}, 0.30, 10.0},  // key: above, in front, to the left
+    {{0.85, 0.25, 0.45}, 0.26, 3.5},    // fill: low, to the right
+    {{0.25, 0.55, -0.80}, 0.20, 5.0},   // rim: behind and above
 };
 /// The boxes' edges soften over this fraction of their half angle, so reflections of them on
 /// smooth surfaces have no aliased rim.
@@ -440,7 +465,7 @@ const float* EnvironmentLight::dfgTable() {
     static const std::vector<float> table = [] {
         constexpr int n = kDfgTableSide;
         std::vector<float> t(size_t(2 * n * n));
-        for (int j = 0; j < n; ++j) {
+        forEachRow(n, [&](int j) {  // each entry on its own: the same bits at any thread count
             // The shade stage floors roughness at 0.03 and n.v at 1e-4; so do the entries.
             const double roughness = std::max(0.03, double(j) / (n - 1)), alpha = roughness * roughness, a2 = alpha * alpha;
             for (int i = 0; i < n; ++i) {
@@ -464,7 +489,7 @@ const float* EnvironmentLight::dfgTable() {
                 t[size_t(2 * (j * n + i))] = float(a / kDfgSamples);
                 t[size_t(2 * (j * n + i) + 1)] = float(b / kDfgSamples);
             }
-        }
+        });
         return t;
     }();
     return table.data();

@@ -62,7 +62,8 @@ public:
     /// (key, fill and rim), as model viewers' neutral environments are lit; see the .cpp.
     static EnvironmentLight neutral(float intensity = 1.0f);
 
-    /// E(n): the radiance a white Lambertian surface of unit normal n shows.
+    /// E(n): the radiance a white Lambertian surface of unit normal n shows (the dominant light's
+    /// share included).
     glm::vec3 irradiance(const glm::vec3& n) const {
         return irradianceAt(shIrradiance, n.x, n.y, n.z);
     }
@@ -119,11 +120,10 @@ public:
         const float fx = unitInterval(nDotV) * kLast, fy = unitInterval(roughness) * kLast;
         const int x0 = std::min(int(fx), kDfgTableSide - 2), y0 = std::min(int(fy), kDfgTableSide - 2);
         const float tx = fx - float(x0), ty = fy - float(y0);
-        const float* p = table + 2 * (y0 * kDfgTableSide + x0);
-        const float* q = p + 2 * kDfgTableSide;
+        const int p = 2 * (y0 * kDfgTableSide + x0), q = p + 2 * kDfgTableSide;  // 32-bit: gather lanes
         const float w00 = (1.0f - tx) * (1.0f - ty), w10 = tx * (1.0f - ty), w01 = (1.0f - tx) * ty, w11 = tx * ty;
-        a = p[0] * w00 + p[2] * w10 + q[0] * w01 + q[2] * w11;
-        b = p[1] * w00 + p[3] * w10 + q[1] * w01 + q[3] * w11;
+        a = table[p] * w00 + table[p + 2] * w10 + table[q] * w01 + table[q + 2] * w11;
+        b = table[p + 1] * w00 + table[p + 3] * w10 + table[q + 1] * w01 + table[q + 3] * w11;
     }
     /// The split-sum table: kDfgTableSide² (A, B) pairs, row j at roughness j / (side - 1),
     /// column i at n.v = i / (side - 1); computed once per process, in double, in a fixed order.
@@ -132,10 +132,18 @@ public:
     /// The nine irradiance coefficients (see irradianceAt).
     glm::vec3 shIrradiance[9] = {};
 
-    /// The direction the environment's light mostly comes from: its linear band's axis
-    /// (luminance-weighted), towards the light. Where a frame's shadows need one light to stand
-    /// for the environment, it stands there (render/).
-    glm::vec3 dominantDirection{0.0f, 1.0f, 0.0f};
+    /// The environment's dominant light, for a frame that must shadow it (render/: --shadows on a
+    /// model lit by the environment alone). A directional light of intensity I from direction d
+    /// lights a white Lambertian surface as I max(0, n.d) = I (1/4 + n.d / 2 + 5/16 P2(n.d) - ...)
+    /// in Legendre terms; d is the axis of the irradiance's linear band (luminance-weighted) and I
+    /// is chosen so the light's n.d / 2 is that band along d. shIrradianceLessDominant is the
+    /// irradiance with the light's bands 0 to 2 taken out, so the light and the rest together give
+    /// the same diffuse light as the whole environment, up to the clamped cosine's band 4 (3/32 I
+    /// at most). The light casts the shadows; the environment's reflections keep it (the light's
+    /// own specular is off: Light::specular = 0).
+    glm::vec3 dominantDirection{0.0f, 1.0f, 0.0f};  // towards the light
+    glm::vec3 dominantIntensity{0.0f};
+    glm::vec3 shIrradianceLessDominant[9] = {};
 
     /// Level k's side: halved per level from the sharpest, down to kSmoothestLevelTexels.
     static constexpr int levelSide(int k) { return std::max(kSharpestLevelTexels >> k, kSmoothestLevelTexels); }
@@ -151,17 +159,18 @@ private:
         const float fx = u * float(side) + 0.5f, fy = v * float(side) + 0.5f;
         const int x0 = int(fx), y0 = int(fy);  // fx, fy > 0: truncation is floor
         const float tx = fx - float(x0), ty = fy - float(y0);
-        const float* p = texels_.data() + levelOffset_[level] + 3 * (size_t(y0) * size_t(stride) + size_t(x0));
-        const float* q = p + 3 * size_t(stride);
+        // 32-bit indices (every level together is under 2^18 floats): lanes of gathers.
+        const int p = levelOffset_[level] + 3 * (y0 * stride + x0), q = p + 3 * stride;
+        const float* t = texels_.data();
         const float w00 = (1.0f - tx) * (1.0f - ty), w10 = tx * (1.0f - ty), w01 = (1.0f - tx) * ty, w11 = tx * ty;
-        r = p[0] * w00 + p[3] * w10 + q[0] * w01 + q[3] * w11;
-        g = p[1] * w00 + p[4] * w10 + q[1] * w01 + q[4] * w11;
-        b = p[2] * w00 + p[5] * w10 + q[2] * w01 + q[5] * w11;
+        r = t[p] * w00 + t[p + 3] * w10 + t[q] * w01 + t[q + 3] * w11;
+        g = t[p + 1] * w00 + t[p + 4] * w10 + t[q + 1] * w01 + t[q + 4] * w11;
+        b = t[p + 2] * w00 + t[p + 5] * w10 + t[q + 2] * w01 + t[q + 5] * w11;
     }
 
     friend struct EnvironmentPreparation;
     std::vector<float> texels_;              // every level, bordered
-    size_t levelOffset_[kSpecularLevels] = {};  // in floats
+    int levelOffset_[kSpecularLevels] = {};  // in floats
 };
 
 }  // namespace cuberille::raster

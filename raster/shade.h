@@ -78,6 +78,9 @@ public:
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
         coated_ = kModel == ShadingModel::MetallicRoughness && state.brdf.clearcoat > 0.0f;
         environment_ = state.lighting.environment;
+        if (environment_)
+            environmentSh_ = state.lighting.environmentLessDominantLight ? &environment_->shIrradianceLessDominant
+                                                                           : &environment_->shIrradiance;
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 && !environment_ &&
                         state.lighting.lights[0].type == LightType::Directional &&
                         state.lighting.lights[0].visibility == nullptr && layout.texCoord < 0 &&
@@ -516,7 +519,8 @@ private:
             const float nDotL = glm::dot(n, in.toLight);
             const glm::vec3 h = safeNormalize(in.toLight + view);
             const float nDotH = std::max(glm::dot(n, h), 0.0f);
-            const glm::vec3 term = in.intensity * (nDotL * specularLobe(alpha2[i], n, h, nDotH, nDotL, ncDotV[i]) * a.coatWeight[i]);
+            const glm::vec3 term =
+                in.intensity * (nDotL * specularLobe(alpha2[i], n, h, nDotH, nDotL, ncDotV[i]) * light.specular * a.coatWeight[i]);
             const bool lit = nDotL > 0.0f;  // a select, as in addLight
             a.coatRadiance[0][i] += lit ? term.r : 0.0f;
             a.coatRadiance[1][i] += lit ? term.g : 0.0f;
@@ -633,7 +637,9 @@ private:
             const float schlick = pow5(1.0f - vDotH);
             const glm::vec3 f90(kF90 ? m.f90[i] : 1.0f);
             const glm::vec3 fresnel = f0 + (f90 - f0) * schlick;
-            const glm::vec3 brdf = (glm::vec3(1.0f) - fresnel) * diffuse + specularLobe(alpha2, n, h, nDotH, nDotL, nDotV) * fresnel;
+            // x light.specular: x 1 exactly for every light but an environment's dominant one.
+            const glm::vec3 brdf =
+                (glm::vec3(1.0f) - fresnel) * diffuse + specularLobe(alpha2, n, h, nDotH, nDotL, nDotV) * light.specular * fresnel;
             const glm::vec3 term = in.intensity * nDotL * brdf;
             // A select, not a branch: an unlit pixel's term may be Inf or NaN, and is not added.
             const bool lit = nDotL > 0.0f;
@@ -647,17 +653,24 @@ private:
     // + S(r, roughness) (F0 A + F90 B)), r the view reflected about n, F90 = 1 unless kF90.
     template <bool kF90>
     void addEnvironment(int count, PixelAttributes& a, const float* occlusion, const SurfaceAtPixels& m) const {
-        const float* dfg = EnvironmentLight::dfgTable();
+        // Passes, as the material's: each a loop across the queue with no arrays of its own.
+        float specular[3][N];
         for (int i = 0; i < count; ++i) {
             const float nx = a.normal[0][i], ny = a.normal[1][i], nz = a.normal[2][i];
-            const glm::vec3 e = glm::max(EnvironmentLight::irradianceAt(environment_->shIrradiance, nx, ny, nz), glm::vec3(0.0f));
-            float specular[3];
-            reflectedRadiance(nx, ny, nz, m.view[0][i], m.view[1][i], m.view[2][i], m.roughness[i], specular);
+            const float twoNDotV = 2.0f * (nx * m.view[0][i] + ny * m.view[1][i] + nz * m.view[2][i]);
+            environment_->specularAt(twoNDotV * nx - m.view[0][i], twoNDotV * ny - m.view[1][i], twoNDotV * nz - m.view[2][i],
+                                     m.roughness[i], specular[0][i], specular[1][i], specular[2][i]);
+        }
+        const float* dfg = EnvironmentLight::dfgTable();
+        for (int i = 0; i < count; ++i) {
             float scaleA, scaleB;
             EnvironmentLight::dfgAt(dfg, m.nDotV[i], m.roughness[i], scaleA, scaleB);
+            const glm::vec3 e = glm::max(
+                EnvironmentLight::irradianceAt(*environmentSh_, a.normal[0][i], a.normal[1][i], a.normal[2][i]), glm::vec3(0.0f));
             const float f90 = kF90 ? m.f90[i] : 1.0f;
-            for (int k = 0; k < 3; ++k)
-                a.radiance[k][i] += occlusion[i] * (m.diffuse[k][i] * e[k] + specular[k] * (m.f0[k][i] * scaleA + f90 * scaleB));
+            a.radiance[0][i] += occlusion[i] * (m.diffuse[0][i] * e.x + specular[0][i] * (m.f0[0][i] * scaleA + f90 * scaleB));
+            a.radiance[1][i] += occlusion[i] * (m.diffuse[1][i] * e.y + specular[1][i] * (m.f0[1][i] * scaleA + f90 * scaleB));
+            a.radiance[2][i] += occlusion[i] * (m.diffuse[2][i] * e.z + specular[2][i] * (m.f0[2][i] * scaleA + f90 * scaleB));
         }
     }
 
@@ -665,7 +678,7 @@ private:
     void environmentIrradiance(int count, const PixelAttributes& a, const float* occlusion, float (&irradiance)[3][N]) const {
         for (int i = 0; i < count; ++i) {
             const glm::vec3 e = glm::max(
-                EnvironmentLight::irradianceAt(environment_->shIrradiance, a.normal[0][i], a.normal[1][i], a.normal[2][i]),
+                EnvironmentLight::irradianceAt(*environmentSh_, a.normal[0][i], a.normal[1][i], a.normal[2][i]),
                 glm::vec3(0.0f));
             for (int k = 0; k < 3; ++k) irradiance[k][i] += occlusion[i] * e[k];
         }
@@ -730,6 +743,7 @@ private:
     bool hasEmissive_ = false;
     bool coated_ = false;  // KHR_materials_clearcoat
     const EnvironmentLight* environment_ = nullptr;
+    const glm::vec3 (*environmentSh_)[9] = nullptr;  // its irradiance, less a dominant light drawn apart
     bool fusedLambert_ = false;
 };
 

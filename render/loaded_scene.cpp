@@ -95,13 +95,17 @@ scene::Mesh groundUnder(const scene::Bounds& b) {
 }
 
 /// The floor's albedo for --shadow-catcher: the background's linear colour over the irradiance a
-/// lit patch of floor receives (ambient plus every directional light's n.l), so the floor
+/// lit patch of floor receives (ambient, an environment's E(up), every directional light's n.l), so the floor
 /// shades to the background where nothing shadows it and to the background times the fraction
 /// of light that arrives where something does. A point or spot light lights a floor unevenly,
 /// which no single albedo can undo: refused.
 glm::vec3 catcherAlbedo(const scene::Scene& s, const glm::vec3& backgroundLinear, const std::string& name) {
     const glm::vec3 up(0.0f, 1.0f, 0.0f);
     glm::vec3 irradiance = s.lighting.ambient;
+    if (const raster::EnvironmentLight* e = s.lighting.environment)
+        irradiance += glm::max(raster::EnvironmentLight::irradianceAt(
+                                   s.lighting.environmentLessDominantLight ? e->shIrradianceLessDominant : e->shIrradiance, 0, 1, 0),
+                               glm::vec3(0.0f));
     for (int l = 0; l < s.lighting.lightCount; ++l) {
         const raster::Light& light = s.lighting.lights[l];
         if (light.type != raster::LightType::Directional)
@@ -184,8 +188,20 @@ void LoadedScene::State::environmentFor(const FrameSettings& f) {
     raster::Lighting& l = posed.lighting;
     l.environment = environment.get();
     l.ambient = glm::vec3(0.0f);  // the environment is the light from everywhere
-    // The default key light stood in for an environment; a model's own lights stay.
-    if (!procedural && fileLights.empty()) l.lightCount = 0;
+    // The default key light stood in for an environment; a model's own lights stay. Asked for
+    // shadows, a model lit by the environment alone has them cast by its dominant light, drawn
+    // apart from the rest of it (raster/environment_light.h, dominantDirection).
+    if (procedural || !fileLights.empty()) return;
+    l.lightCount = 0;
+    if (f.shadows.mode != rt::ShadowMode::None && environment->dominantIntensity != glm::vec3(0.0f)) {
+        raster::Light& dominant = l.lights[0];
+        dominant = raster::Light{};
+        dominant.direction = -environment->dominantDirection;
+        dominant.intensity = environment->dominantIntensity;
+        dominant.specular = 0.0f;
+        l.lightCount = 1;
+        l.environmentLessDominantLight = true;
+    }
 }
 
 void LoadedScene::State::groundFor(const FrameSettings& f) {

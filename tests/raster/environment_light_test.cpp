@@ -181,6 +181,28 @@ TEST(EnvironmentLight, SplitSumTableMatchesTheBrdfsDirectionalAlbedo) {
     EXPECT_LE(worstGrazing, 1e-2);
 }
 
+// The dominant light I max(0, n.d) and the irradiance less its bands 0 to 2 together give the
+// whole environment's irradiance but for the clamped cosine's bands from 4 on: max(0, x) less
+// 1/4 + x/2 + 5/16 P2(x) is at most 3/32 in size (at x = 0).
+TEST(EnvironmentLight, TheDominantLightAndTheRestGiveTheWholeIrradiance) {
+    for (const EnvironmentLight& e : {environmentOf(smoothSky, 256), EnvironmentLight::neutral()}) {
+        const glm::vec3 i = e.dominantIntensity, d = e.dominantDirection;
+        EXPECT_GT(i.g, 0.1f);
+        EXPECT_NEAR(glm::length(d), 1.0f, 1e-6f);
+        std::mt19937 rng(17);
+        for (int k = 0; k < 500; ++k) {
+            const glm::vec3 n(randomUnit(rng));
+            const glm::vec3 whole = e.irradiance(n);
+            const glm::vec3 parts = EnvironmentLight::irradianceAt(e.shIrradianceLessDominant, n.x, n.y, n.z) +
+                                    i * std::max(0.0f, glm::dot(n, d));
+            for (int c = 0; c < 3; ++c) ASSERT_NEAR(parts[c], whole[c], 3.0f / 32.0f * i[c] + 1e-5f) << k;
+        }
+        // The light comes from where the environment is brightest: its irradiance is larger
+        // facing d than facing away.
+        EXPECT_GT(e.irradiance(d).g, e.irradiance(-d).g);
+    }
+}
+
 TEST(EnvironmentLight, PreparedTheSameBitsAtAnyThreadCount) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> u(0.0f, 4.0f);
@@ -217,12 +239,15 @@ TEST(EnvironmentLight, BadTexelsCountAsBlack) {
 
 TEST(EnvironmentLight, TheNeutralStudioIsLitFromAboveAndInFront) {
     const EnvironmentLight e = EnvironmentLight::neutral();
+    const glm::vec3 towardsCamera(0.470f, 0.342f, 0.814f);  // azimuth 30, elevation 20 (scene::frameBounds)
+    const glm::vec3 camera = e.irradiance(towardsCamera);
     const glm::vec3 key = e.irradiance(glm::normalize(glm::vec3(-0.55f, 0.65f, 0.55f)));
     const glm::vec3 up = e.irradiance({0, 1, 0}), down = e.irradiance({0, -1, 0}), back = e.irradiance({0, 0, -1});
-    // A white surface facing the key shows about what the default key light and ambient give a
-    // surface facing it (0.97); one facing the floor, a fraction of what one facing up shows.
-    EXPECT_GT(key.g, 0.85f);
-    EXPECT_LT(key.g, 1.3f);
+    // A white surface facing the default camera shows about display white (the default key
+    // light and ambient give 0.97 facing the light); facing the key more, the floor much less.
+    EXPECT_GT(camera.g, 0.9f);
+    EXPECT_LT(camera.g, 1.15f);
+    EXPECT_GT(key.g, camera.g);
     EXPECT_GT(up.g, down.g * 2.0f);
     EXPECT_GT(key.g, back.g * 1.5f);
     EXPECT_EQ(key.r, key.g);  // neutral: grey light

@@ -396,6 +396,32 @@ TEST(Ground, TheFloorCatchesTheModelsShadowAndComesAndGoesWithTheSetting) {
     EXPECT_THROW(render::render(render::LoadedScene("field"), builtIn), scene::InputError);
 }
 
+// --shadows with an environment and no lights of the model's own: the environment's dominant
+// light casts the pillar's shadow onto the floor, and only darkens (its specular is off, and the
+// rest of the environment's diffuse light is what it was less the light's bands). Away from the
+// shadow the floor shows about what the whole environment gives it unshadowed: the light's
+// clamped cosine beyond band 2, at most 3/32 of its intensity (raster/environment_light.h).
+TEST(Ground, AnEnvironmentsDominantLightCastsTheModelsShadow) {
+    PillarOnTheFloor pillar("environment-shadow");
+    pillar.frame.environment = "neutral";
+    render::FrameSettings unshadowed = pillar.frame;
+    unshadowed.shadows.mode = rt::ShadowMode::None;
+    const render::LoadedScene scene(pillar.ply.string());
+    const render::RenderResult shadowed = render::render(scene, pillar.frame);
+    const render::RenderResult lit = render::render(scene, unshadowed);
+    EXPECT_EQ(shadowed.stats.counters.lightEvaluations, shadowed.stats.counters.pixelsShaded) << "one light: the dominant one";
+    EXPECT_EQ(lit.stats.counters.lightEvaluations, 0u) << "no light without shadows: the environment alone";
+    const auto [darker, brighter] = darkenedPixels(shadowed.image, lit.image);
+    EXPECT_GT(darker, 100) << "the pillar's shadow on the floor";
+    const glm::vec3 dominant = raster::EnvironmentLight::neutral().dominantIntensity;
+    const float bound = 3.0f / 32.0f * std::max({dominant.r, dominant.g, dominant.b}) * 0.5f;  // x the floor's albedo 0.5
+    for (const auto& [x, y] : {std::pair{4, 86}, {155, 86}}) {  // the floor's near corners, far from the shadow
+        const float* a = shadowed.image.pixel(x, y);
+        const float* b = lit.image.pixel(x, y);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(a[k], b[k], bound) << x << "," << y;
+    }
+}
+
 // Where a ray in double precision meets a triangle (Moller-Trumbore): its distance along `d`, or
 // -1; `margin` gets how far inside the triangle it passes, in barycentric units (negative:
 // outside by that much), so a ray too close to an edge to decide can be told apart.

@@ -184,8 +184,8 @@ TEST(RealData, AssetGeneratorModelsMatchTheirSampleImages) {
     std::sort(models.begin(), models.end());
     std::ostringstream report;
     report << "| model | triangles | covered cells | variation | structure (correlation) | colour (chroma distance) | "
-              "brightness (ratio) | verdict |\n"
-           << "|---|---:|---:|---:|---:|---:|---:|---|\n";
+              "brightness (ratio) | verdict | with `--environment neutral`: structure, colour, brightness |\n"
+           << "|---|---:|---:|---:|---:|---:|---:|---|---|\n";
     int compared = 0, failed = 0;
     for (const fs::path& model : models) {
         const std::string name = model.stem().string();
@@ -199,7 +199,7 @@ TEST(RealData, AssetGeneratorModelsMatchTheirSampleImages) {
         o.elevation = 0.0f;
         o.quiet = true;
         std::string verdict;
-        Comparison c;
+        Comparison c, lit;  // lit: the same with the built-in studio environment
         apps::RenderResult r;
         if (pointsAndLinesByDesign(model.filename().string())) {
             verdict = "not compared: points and lines are not drawn (by design)";
@@ -225,16 +225,24 @@ TEST(RealData, AssetGeneratorModelsMatchTheirSampleImages) {
             const double w = aspect >= 1.0 ? side : side * aspect, h = aspect >= 1.0 ? side / aspect : side;
             const double cx = reference.width / 2.0, cy = reference.height / 2.0;
             const glm::vec3 background(s.background);
-            c = compare(cellsOf(r.image, lo.x, lo.y, hi.x, hi.y, &background),
-                        cellsOf(reference, cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2));
+            const CellGrid sampleCells = cellsOf(reference, cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2);
+            c = compare(cellsOf(r.image, lo.x, lo.y, hi.x, hi.y, &background), sampleCells);
+            apps::RenderOptions withEnvironment = o;
+            withEnvironment.environment = "neutral";
+            lit = compare(cellsOf(apps::renderScene(withEnvironment).image, lo.x, lo.y, hi.x, hi.y, &background), sampleCells);
             ++compared;
             const bool structured = c.variation >= 0.1;
-            const bool structureWrong = structured && !(c.correlation >= 0.3);
             // A flat model is judged on its colour and its brightness: the viewer's image-based
             // lighting and ours differ by a factor (measured over the flat models: kFlatBrightness
-            // below), never by the order of magnitude of a black or a washed-out model.
-            const bool colourWrong = !structured && (c.chromaDistance > 0.15 || !(c.brightnessRatio >= 1.0 / kFlatBrightness &&
-                                                                                  c.brightnessRatio <= kFlatBrightness));
+            // below), never by the order of magnitude of a black or a washed-out model. Both
+            // lightings are judged, the default key light and the studio environment.
+            auto wrongStructure = [&](const Comparison& k) { return structured && !(k.correlation >= 0.3); };
+            auto wrongColour = [&](const Comparison& k) {
+                return !structured && (k.chromaDistance > 0.15 ||
+                                       !(k.brightnessRatio >= 1.0 / kFlatBrightness && k.brightnessRatio <= kFlatBrightness));
+            };
+            const bool structureWrong = wrongStructure(c) || wrongStructure(lit);
+            const bool colourWrong = wrongColour(c) || wrongColour(lit);
             const bool blended = name.starts_with("Material_AlphaBlend");
             // Material_AlphaMask_03 cuts everything away (alphaCutoff 1.1) by design.
             const bool emptyByDesign = name == "Material_AlphaMask_03";
@@ -252,17 +260,18 @@ TEST(RealData, AssetGeneratorModelsMatchTheirSampleImages) {
             if (!blended && !animated && c.cells > 0 && (structureWrong || colourWrong)) {
                 ++failed;
                 ADD_FAILURE() << name << ": correlation " << c.correlation << ", chroma distance " << c.chromaDistance
-                              << ", brightness ratio " << c.brightnessRatio;
+                              << ", brightness ratio " << c.brightnessRatio << "; with the environment " << lit.correlation
+                              << ", " << lit.chromaDistance << ", " << lit.brightnessRatio;
             }
             if (c.cells == 0 && !emptyByDesign) {
                 ++failed;
                 ADD_FAILURE() << name << ": covers no whole cell of its own bounds";
             }
         }
-        char line[512];
-        std::snprintf(line, sizeof line, "| %s | %zu | %d | %.3f | %.3f | %.3f | %.2f | %s |\n", name.c_str(),
+        char line[640];
+        std::snprintf(line, sizeof line, "| %s | %zu | %d | %.3f | %.3f | %.3f | %.2f | %s | %.3f, %.3f, %.2f |\n", name.c_str(),
                       r.sceneTriangles, c.cells, c.variation, c.correlation, c.chromaDistance, c.brightnessRatio,
-                      verdict.c_str());
+                      verdict.c_str(), lit.correlation, lit.chromaDistance, lit.brightnessRatio);
         report << line;
     }
     // Into the build tree: a test leaves the working tree as it found it.
