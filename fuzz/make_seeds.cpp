@@ -121,6 +121,25 @@ std::unique_ptr<voxel::MeshView> tetrahedron() {
 
 }  // namespace
 
+/// A 16 x 8 equirectangular Radiance file: run-length scanlines (a run and a literal per channel)
+/// or flat pixels.
+std::string radianceHdr(bool runLength) {
+    std::string hdr = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\nEXPOSURE=1.0\n\n-Y 8 +X 16\n";
+    for (int y = 0; y < 8; ++y) {
+        if (!runLength) {
+            for (int x = 0; x < 16; ++x) hdr += {char(x * 16), char(y * 32), char(128), char(128 + (x & 3))};
+            continue;
+        }
+        hdr += {char(2), char(2), char(0), char(16)};
+        for (int channel = 0; channel < 4; ++channel) {
+            hdr += {char(128 + 8), char(channel == 3 ? 129 : 64 + y)};  // a run of 8
+            hdr += char(8);                                               // then 8 literal bytes
+            for (int x = 0; x < 8; ++x) hdr += char(channel == 3 ? 128 : x * 30);
+        }
+    }
+    return hdr;
+}
+
 int main(int argc, char** argv) {
     if (argc != 2) {
         std::fprintf(stderr, "usage: make_seeds OUTPUT_DIR\n");
@@ -141,6 +160,8 @@ int main(int argc, char** argv) {
     put(dir, "fuzz_gltf", "two-nodes.glb", triangleGlb());
     put(dir, "fuzz_gltf", "meshopt.glb", meshoptTriangleGlb());
     put(dir, "fuzz_gltf", "draco.glb", dracoTriangleGlb());
+    put(dir, "fuzz_hdr", "runs.hdr", radianceHdr(true));
+    put(dir, "fuzz_hdr", "flat.hdr", radianceHdr(false));
     put(dir, "fuzz_camera_path", "keys.path", "# px py pz tx ty tz\n0 0 3 0 0 0\n1 1 2 0 0 0\n0 2 1 0 0.5 0\n");
     // A 12^3 u8 sphere, after the 8-byte header the fuzz target reads: dims, type, iso.
     {

@@ -99,9 +99,15 @@ EquirectangularImage readRadianceHdr(const std::filesystem::path& path) {
         throw fail("a size of " + std::to_string(width) + "x" + std::to_string(height) + " (each side 1 to 65536)");
     const std::string truncated =
         "truncated (the file ends before its " + std::to_string(width) + "x" + std::to_string(height) + " pixels do)";
+    // Before allocating: the fewest bytes those pixels can take (a run-length line in runs of 127,
+    // 2 bytes each, per channel, after its 4-byte marker; a flat one 4 bytes a pixel), so a small
+    // file cannot ask for gigabytes.
+    const bool alwaysFlat = width < 8 || width > 0x7fff;
+    const size_t leastLineBytes = alwaysFlat ? 4 * size_t(width) : 4 + 4 * 2 * ((size_t(width) + 126) / 127);
+    if (!in.has(leastLineBytes * size_t(height))) throw fail(truncated);
     EquirectangularImage image{width, height, std::vector<float>(size_t(width) * size_t(height) * 3)};
     std::vector<uint8_t> rgbe(size_t(width) * 4);
-    bool flat = width < 8 || width > 0x7fff;  // the encoder's own rule: such lines are never run-length
+    bool flat = alwaysFlat;  // the encoder's own rule: such lines are never run-length
     for (int y = 0; y < height; ++y) {
         if (!flat) {
             if (!in.has(4)) throw fail(truncated);

@@ -28,6 +28,10 @@ CASES = [
     ("demo", dict(width=160, height=90, msaa=4, detail=0.5), ["--width", "160", "--height", "90", "--msaa", "4", "--detail", "0.5"]),
     ("torus.ply", dict(width=160, height=120, ground=True, shadows="auto", soft=True, shadow_focus="scene"),
      ["--width", "160", "--height", "120", "--ground", "--shadows", "auto", "--soft", "--shadow-focus", "scene"]),
+    ("spinning-box.gltf", dict(width=160, height=120, msaa=4, environment="neutral", environment_intensity=1.5, ground=True,
+                               shadows="raytraced"),
+     ["--width", "160", "--height", "120", "--msaa", "4", "--environment", "neutral", "--environment-intensity", "1.5",
+      "--ground", "--shadows", "raytraced"]),
 ]
 
 

@@ -71,10 +71,13 @@ TEST_F(RadianceHdr, DamagedFilesAreRefusedNamingTheFileAndTheFault) {
         {writeBytes("flipped.hdr", header + "+Y 4 +X 8\n", grey), "the orientation +Y 4 +X 8"},
         {writeBytes("huge.hdr", header + "-Y 4 +X 100000000\n", grey), "a size of 100000000x4"},
         {writeBytes("short.hdr", header + "-Y 4 +X 16\n", grey), "truncated (the file ends before its 16x4 pixels do)"},
-        // A run of length zero: the scanline would never end.
-        {writeBytes("zero.hdr", header + "-Y 1 +X 8\n", {2, 2, 0, 8, 0, 0, 0, 0}), "a run-length count of 0"},
-        {writeBytes("overrun.hdr", header + "-Y 1 +X 8\n", {2, 2, 0, 8, 128 + 9, 7}), "a run-length count of 137"},
-        {writeBytes("narrow.hdr", header + "-Y 1 +X 8\n", {2, 2, 0, 9}), "a scanline of 9 pixels in an image 8 wide"},
+        // The largest size allowed, in a few bytes: refused before 51 GB of floats are asked for.
+        {writeBytes("vast.hdr", header + "-Y 65536 +X 65536\n", grey), "truncated (the file ends before its 65536x65536 pixels do)"},
+        // A run of length zero: the scanline would never end. (Each line padded past the least
+        // bytes a line of 8 can take, 12, so the size check does not refuse it first.)
+        {writeBytes("zero.hdr", header + "-Y 1 +X 8\n", {2, 2, 0, 8, 0, 0, 0, 0, 0, 0, 0, 0}), "a run-length count of 0"},
+        {writeBytes("overrun.hdr", header + "-Y 1 +X 8\n", {2, 2, 0, 8, 128 + 9, 7, 0, 0, 0, 0, 0, 0}), "a run-length count of 137"},
+        {writeBytes("narrow.hdr", header + "-Y 1 +X 8\n", {2, 2, 0, 9, 0, 0, 0, 0, 0, 0, 0, 0}), "a scanline of 9 pixels in an image 8 wide"},
         {writeBytes("cut.hdr", header + "-Y 2 +X 8\n", {2, 2, 0, 8, 128 + 8, 1, 128 + 8, 1}), "truncated"},
     };
     for (const auto& [path, message] : cases) {
