@@ -94,6 +94,10 @@ void validate(const State& s, const FrameSettings& o) {
         throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
     if (o.frustumCull && !threeD) throw InputError("--frustum-cull: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.ground && (!threeD || s.procedural)) throw InputError("--ground: only for model files (glTF, PLY, OBJ), not " + s.name);
+    // A .tri scene's triangles are flat colours; a voxel model's frame takes the voxel scene's own
+    // lighting, which the environment does not reach yet. Refused rather than ignored.
+    if (!o.environment.empty() && !threeD)
+        throw InputError("--environment: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.shadowCatcher && !o.ground) throw InputError("--shadow-catcher: needs --ground (the floor that catches the shadow)");
     if (o.shadowCatcher && sh.mode == rt::ShadowMode::None)
         throw InputError("--shadow-catcher: needs --shadows map, hybrid or raytraced (without them there is no shadow to catch)");

@@ -540,6 +540,7 @@ TEST_F(Cli, EnvironmentsLightTheModelFromTheStudioOrAnExrAndBadOnesGiveExitTwo) 
     const std::pair<std::string, std::string> cases[] = {
         {"render " + obj.string() + " --environment " + (dir_ / "none.hdr").string(), (dir_ / "none.hdr").string()},
         {"render " + obj.string() + " --environment neutral --environment-intensity -2", "--environment-intensity"},
+        {"render " + write("flat.tri", "0 0 1 0 0 1 1\n").string() + " --environment neutral", "--environment: only for 3D scenes"},
     };
     expectRefusedWithoutOutput(cases, out);
 }
