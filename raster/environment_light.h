@@ -45,8 +45,8 @@ public:
     /// a 128-texel cube map face (what glTF viewers prefilter from).
     static constexpr int kSharpestLevelTexels = 256;
     /// The least side of a level. The octahedral fold bends the map along its diagonals, and
-    /// bilinear texels bridge the bend with a chord: at 8 texels a side that chord was 8% off a
-    /// smooth environment's filtered radiance at roughness 1, at 32 under 1%.
+    /// bilinear texels bridge the bend with chords; 32 texels a side keep the chords short for a
+    /// few kilobytes (levels 3 to 5 all have this side).
     static constexpr int kSmoothestLevelTexels = 32;
     /// The split-sum table's side: (n.v, roughness) on a 32 x 32 grid, bilinear.
     static constexpr int kDfgTableSide = 32;

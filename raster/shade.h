@@ -653,7 +653,8 @@ private:
     // + S(r, roughness) (F0 A + F90 B)), r the view reflected about n, F90 = 1 unless kF90.
     template <bool kF90>
     void addEnvironment(int count, PixelAttributes& a, const float* occlusion, const SurfaceAtPixels& m) const {
-        // Passes, as the material's: each a loop across the queue with no arrays of its own.
+        // Two passes, as the material's: the reflections' fetches (a loop GCC vectorises with
+        // gathers), then the irradiance, the split-sum table and the sum per pixel.
         float specular[3][N];
         for (int i = 0; i < count; ++i) {
             const float nx = a.normal[0][i], ny = a.normal[1][i], nz = a.normal[2][i];
