@@ -91,15 +91,18 @@ glm::dvec3 equirectDirection(double u, double v) {
     return {std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi)};
 }
 
+/// The octahedron's fold of the lower half (y < 0) onto the square's corners; its own inverse.
+void foldLowerHalf(double& px, double& pz) {
+    const double fx = (1.0 - std::fabs(pz)) * (px < 0.0 ? -1.0 : 1.0);
+    const double fz = (1.0 - std::fabs(px)) * (pz < 0.0 ? -1.0 : 1.0);
+    px = fx, pz = fz;
+}
+
 /// The octahedral map's direction at (u, v) in [0, 1]² (the inverse of specularAt's fold).
 glm::dvec3 octahedralDirection(double u, double v) {
     double px = 2.0 * u - 1.0, pz = 2.0 * v - 1.0;
     const double y = 1.0 - std::fabs(px) - std::fabs(pz);
-    if (y < 0.0) {
-        const double fx = (1.0 - std::fabs(pz)) * (px < 0.0 ? -1.0 : 1.0);
-        const double fz = (1.0 - std::fabs(px)) * (pz < 0.0 ? -1.0 : 1.0);
-        px = fx, pz = fz;
-    }
+    if (y < 0.0) foldLowerHalf(px, pz);
     return glm::normalize(glm::dvec3(px, y, pz));
 }
 
@@ -107,11 +110,7 @@ glm::dvec3 octahedralDirection(double u, double v) {
 glm::dvec2 octahedralCoordinates(const glm::dvec3& d) {
     const double inv = 1.0 / std::max(std::fabs(d.x) + std::fabs(d.y) + std::fabs(d.z), 1e-300);
     double px = d.x * inv, pz = d.z * inv;
-    if (d.y < 0.0) {
-        const double fx = (1.0 - std::fabs(pz)) * (px < 0.0 ? -1.0 : 1.0);
-        const double fz = (1.0 - std::fabs(px)) * (pz < 0.0 ? -1.0 : 1.0);
-        px = fx, pz = fz;
-    }
+    if (d.y < 0.0) foldLowerHalf(px, pz);
     return {px * 0.5 + 0.5, pz * 0.5 + 0.5};
 }
 
@@ -133,15 +132,22 @@ struct BorderedLevel {
     std::vector<float> rgb;
 };
 
-BorderedLevel bordered(const Image& level) {
+/// A square octahedral level's (side + 2)² texels, its border folded in, written to `out`: the
+/// layout of BorderedLevel and of EnvironmentLight's levels alike.
+void writeBordered(const Image& level, float* out) {
     const int side = level.width, stride = side + 2;
-    BorderedLevel out{side, std::vector<float>(size_t(stride) * stride * 3)};
     for (int y = -1; y <= side; ++y)
         for (int x = -1; x <= side; ++x) {
             const float* t = octahedralTexel(level, x, y);
-            float* o = out.rgb.data() + 3 * (size_t(y + 1) * stride + size_t(x + 1));
+            float* o = out + 3 * (size_t(y + 1) * stride + size_t(x + 1));
             o[0] = t[0], o[1] = t[1], o[2] = t[2];
         }
+}
+
+BorderedLevel bordered(const Image& level) {
+    const size_t stride = size_t(level.width) + 2;
+    BorderedLevel out{level.width, std::vector<float>(stride * stride * 3)};
+    writeBordered(level, out.rgb.data());
     return out;
 }
 
@@ -176,25 +182,29 @@ Rgb bilinearEquirect(const Image& map, double u, double v) {
 
 // --- 1. The source, cleaned and halved ----------------------------------------------------
 
+/// The 2x2 box average of an image (an odd last row or column averaged with itself): the source's
+/// reduction and the octahedral copy's mips alike.
+Image halved(const Image& map) {
+    Image half{std::max(1, map.width / 2), std::max(1, map.height / 2), {}};
+    half.rgb.resize(size_t(half.width) * size_t(half.height) * 3);
+    forEachRow(half.height, [&](int y) {
+        const int y0 = std::min(2 * y, map.height - 1), y1 = std::min(2 * y + 1, map.height - 1);
+        for (int x = 0; x < half.width; ++x) {
+            const int x0 = std::min(2 * x, map.width - 1), x1 = std::min(2 * x + 1, map.width - 1);
+            for (int c = 0; c < 3; ++c)
+                half.at(x, y)[c] = 0.25f * ((map.at(x0, y0)[c] + map.at(x1, y0)[c]) + (map.at(x0, y1)[c] + map.at(x1, y1)[c]));
+        }
+    });
+    return half;
+}
+
 Image cleanedSource(int width, int height, const float* rgb, float intensity) {
     Image map{width, height, std::vector<float>(size_t(width) * size_t(height) * 3)};
     for (size_t i = 0; i < map.rgb.size(); ++i) {
         const float x = rgb[i] * intensity;
         map.rgb[i] = std::isfinite(x) && x > 0.0f ? x : 0.0f;
     }
-    while (map.width > kMaxSourceWidth) {
-        Image half{std::max(1, map.width / 2), std::max(1, map.height / 2), {}};
-        half.rgb.resize(size_t(half.width) * size_t(half.height) * 3);
-        forEachRow(half.height, [&](int y) {
-            const int y0 = std::min(2 * y, map.height - 1), y1 = std::min(2 * y + 1, map.height - 1);
-            for (int x = 0; x < half.width; ++x) {
-                const int x0 = std::min(2 * x, map.width - 1), x1 = std::min(2 * x + 1, map.width - 1);
-                for (int c = 0; c < 3; ++c)
-                    half.at(x, y)[c] = 0.25f * ((map.at(x0, y0)[c] + map.at(x1, y0)[c]) + (map.at(x0, y1)[c] + map.at(x1, y1)[c]));
-            }
-        });
-        map = std::move(half);
-    }
+    while (map.width > kMaxSourceWidth) map = halved(map);
     return map;
 }
 
@@ -262,18 +272,7 @@ std::vector<Image> octahedralChain(const Image& map) {
         }
     });
     chain.push_back(std::move(top));
-    while (chain.back().width > 1) {
-        const Image& above = chain.back();
-        Image level{above.width / 2, above.height / 2, {}};
-        level.rgb.resize(size_t(level.width) * size_t(level.height) * 3);
-        forEachRow(level.height, [&](int y) {
-            for (int x = 0; x < level.width; ++x)
-                for (int c = 0; c < 3; ++c)
-                    level.at(x, y)[c] = 0.25f * ((above.at(2 * x, 2 * y)[c] + above.at(2 * x + 1, 2 * y)[c]) +
-                                                 (above.at(2 * x, 2 * y + 1)[c] + above.at(2 * x + 1, 2 * y + 1)[c]));
-        });
-        chain.push_back(std::move(level));
-    }
+    while (chain.back().width > 1) chain.push_back(halved(chain.back()));
     return chain;
 }
 
@@ -335,7 +334,7 @@ Rgb filteredRadiance(const std::vector<BorderedLevel>& chain, const glm::dvec3& 
 
 /// Level `level`'s texels, its border included (the fold's copies).
 void fillLevel(const std::vector<Image>& chain, const std::vector<BorderedLevel>& borderedChain, int level, float* out) {
-    const int side = EnvironmentLight::levelSide(level), stride = side + 2;
+    const int side = EnvironmentLight::levelSide(level);
     const std::vector<LobeSample> samples = lobeSamples(level);
     Image inner{side, side, std::vector<float>(size_t(side) * side * 3)};
     forEachRow(side, [&](int y) {
@@ -350,12 +349,7 @@ void fillLevel(const std::vector<Image>& chain, const std::vector<BorderedLevel>
             o[0] = float(r.r), o[1] = float(r.g), o[2] = float(r.b);
         }
     });
-    for (int y = -1; y <= side; ++y)
-        for (int x = -1; x <= side; ++x) {
-            const float* t = octahedralTexel(inner, x, y);
-            float* o = out + 3 * (size_t(y + 1) * stride + size_t(x + 1));
-            o[0] = t[0], o[1] = t[1], o[2] = t[2];
-        }
+    writeBordered(inner, out);
 }
 
 /// Luminance weights of linear Rec. 709 RGB.

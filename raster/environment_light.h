@@ -144,6 +144,11 @@ public:
     glm::vec3 dominantDirection{0.0f, 1.0f, 0.0f};  // towards the light
     glm::vec3 dominantIntensity{0.0f};
     glm::vec3 shIrradianceLessDominant[9] = {};
+    /// The coefficients a frame shades with: all of shIrradiance, or shIrradianceLessDominant when
+    /// the frame draws the dominant light apart (Lighting::environmentLessDominantLight).
+    const glm::vec3 (&irradianceHarmonics(bool lessDominantLight) const)[9] {
+        return lessDominantLight ? shIrradianceLessDominant : shIrradiance;
+    }
 
     /// Level k's side: halved per level from the sharpest, down to kSmoothestLevelTexels.
     static constexpr int levelSide(int k) { return std::max(kSharpestLevelTexels >> k, kSmoothestLevelTexels); }

@@ -78,9 +78,7 @@ public:
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
         coated_ = kModel == ShadingModel::MetallicRoughness && state.brdf.clearcoat > 0.0f;
         environment_ = state.lighting.environment;
-        if (environment_)
-            environmentSh_ = state.lighting.environmentLessDominantLight ? &environment_->shIrradianceLessDominant
-                                                                           : &environment_->shIrradiance;
+        if (environment_) environmentSh_ = &environment_->irradianceHarmonics(state.lighting.environmentLessDominantLight);
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 && !environment_ &&
                         state.lighting.lights[0].type == LightType::Directional &&
                         state.lighting.lights[0].visibility == nullptr && layout.texCoord < 0 &&

@@ -103,9 +103,9 @@ glm::vec3 catcherAlbedo(const scene::Scene& s, const glm::vec3& backgroundLinear
     const glm::vec3 up(0.0f, 1.0f, 0.0f);
     glm::vec3 irradiance = s.lighting.ambient;
     if (const raster::EnvironmentLight* e = s.lighting.environment)
-        irradiance += glm::max(raster::EnvironmentLight::irradianceAt(
-                                   s.lighting.environmentLessDominantLight ? e->shIrradianceLessDominant : e->shIrradiance, 0, 1, 0),
-                               glm::vec3(0.0f));
+        irradiance += glm::max(
+            raster::EnvironmentLight::irradianceAt(e->irradianceHarmonics(s.lighting.environmentLessDominantLight), 0, 1, 0),
+            glm::vec3(0.0f));
     for (int l = 0; l < s.lighting.lightCount; ++l) {
         const raster::Light& light = s.lighting.lights[l];
         if (light.type != raster::LightType::Directional)

@@ -216,7 +216,9 @@ TEST(EnvironmentLight, PreparedTheSameBitsAtAnyThreadCount) {
     for (const ThreadCount count : kThreadCounts) {
         const ThreadCountScope scope(count);
         EnvironmentLight e = EnvironmentLight::fromEquirectangular(600, 300, rgb.data());
-        if (count.exact) EXPECT_EQ(scope.ran(), count.threads);
+        if (count.exact) {
+            EXPECT_EQ(scope.ran(), count.threads);
+        }
         if (!first) {
             first.emplace(std::move(e));
             continue;
@@ -279,21 +281,7 @@ raster::DrawCall quad(raster::ShadingModel model, const std::vector<glm::vec3>& 
     return d;
 }
 
-struct Shaded {
-    raster::Image image;
-    raster::StageCounters counters;
-};
-
-Shaded shade(const raster::DrawCall& d) {
-    raster::Pipeline p;
-    p.beginFrame(frame(kSize, kSize, 1));
-    p.draw(d);
-    p.endFrame();
-    Shaded s;
-    raster::resolveColor(p.framebuffer(), s.image);
-    s.counters = p.stats().counters;
-    return s;
-}
+ResolvedDraw shade(const raster::DrawCall& d) { return renderResolved(d, kSize, kSize); }
 
 const std::vector<glm::vec3> kFacingViewer(6, glm::vec3(0, 0, -1));
 
@@ -308,7 +296,7 @@ TEST(EnvironmentLighting, MetallicRoughnessPixelsAreTheSplitSumOfTheirInputs) {
         d.state.metallic = metallic;
         d.state.roughness = roughness;
         d.state.lighting.environment = &e;
-        const Shaded s = shade(d);
+        const ResolvedDraw s = shade(d);
         EXPECT_EQ(s.counters.environmentPixels, s.counters.pixelsShaded);
         const glm::dvec3 albedo(0.8, 0.5, 0.2), n(0, 0, -1);
         const glm::dvec3 diffuse = albedo * (1.0 - metallic), f0 = glm::mix(glm::dvec3(0.04), albedo, double(metallic));
@@ -333,7 +321,7 @@ TEST(EnvironmentLighting, AConstantEnvironmentShowsOnWhiteSurfacesAsItsRadiance)
     const EnvironmentLight e = environmentOf([](const glm::dvec3&) { return glm::dvec3(0.25, 0.5, 1.0); }, 128);
     raster::DrawCall d = quad(raster::ShadingModel::Lambert, kFacingViewer);
     d.state.lighting.environment = &e;
-    const Shaded lambert = shade(d);
+    const ResolvedDraw lambert = shade(d);
     EXPECT_EQ(lambert.counters.environmentPixels, lambert.counters.pixelsShaded);
     EXPECT_EQ(lambert.counters.pixelsShaded, uint64_t(kSize * kSize));
     for (int y = 0; y < kSize; ++y)
@@ -350,7 +338,7 @@ TEST(EnvironmentLighting, ADrawWithoutAnEnvironmentNeverEvaluatesOne) {
     for (raster::ShadingModel model : {raster::ShadingModel::Lambert, raster::ShadingModel::MetallicRoughness}) {
         raster::DrawCall d = quad(model, kFacingViewer);
         d.state.lighting.ambient = glm::vec3(0.2f);
-        const Shaded s = shade(d);
+        const ResolvedDraw s = shade(d);
         EXPECT_GT(s.counters.pixelsShaded, 0u);
         EXPECT_EQ(s.counters.environmentPixels, 0u);
     }

@@ -48,21 +48,7 @@ struct Quad {
     }
 };
 
-struct Rendered {
-    raster::Image image;
-    raster::StageCounters counters;
-};
-
-Rendered render(const DrawCall& d) {
-    raster::Pipeline p;
-    p.beginFrame(frame(kSize, kSize, 1));
-    p.draw(d);
-    p.endFrame();
-    Rendered r;
-    raster::resolveColor(p.framebuffer(), r.image);
-    r.counters = p.stats().counters;
-    return r;
-}
+ResolvedDraw render(const DrawCall& d) { return renderResolved(d, kSize, kSize); }
 
 glm::vec4 at(const raster::Image& image, int x, int y) {
     const float* p = image.pixel(x, y);
@@ -168,7 +154,7 @@ TEST(SpecularGlossiness, MatchesTheReferenceBrdfAtEveryPixel) {
         d.state.brdf.specularFactor = mat.specular;
         d.state.brdf.glossiness = mat.glossiness;
         d.state.metallic = 0.5f, d.state.roughness = 0.2f;  // not read
-        const Rendered r = render(d);
+        const ResolvedDraw r = render(d);
         EXPECT_EQ(r.counters.specularGlossinessPixels, r.counters.pixelsShaded);
         EXPECT_GT(r.counters.pixelsShaded, 0u);
         const glm::dvec3 specular(mat.specular);
@@ -212,7 +198,7 @@ TEST(DielectricSpecular, MatchesTheReferenceBrdfAtEveryPixel) {
         d.state.brdf.dielectricSpecular = true;
         d.state.brdf.specularStrength = mat.strength;
         d.state.brdf.specularColor = mat.color;
-        const Rendered r = render(d);
+        const ResolvedDraw r = render(d);
         EXPECT_EQ(r.counters.dielectricSpecularPixels, r.counters.pixelsShaded);
         const glm::dvec3 albedo(0.8, 0.5, 0.2);
         const glm::dvec3 dielectricF0 = glm::min(0.04 * glm::dvec3(mat.color), glm::dvec3(1.0)) * double(mat.strength);
@@ -261,7 +247,7 @@ TEST(Clearcoat, LaysTheReferenceCoatOverTheMaterialAtEveryPixel) {
         d.state.brdf.clearcoat = k.clearcoat;
         d.state.brdf.clearcoatRoughness = 0.1f;
         d.state.emissive = glm::vec3(0.05f, 0.1f, 0.0f);
-        const Rendered r = render(d);
+        const ResolvedDraw r = render(d);
         EXPECT_EQ(r.counters.clearcoatPixels, r.counters.pixelsShaded);
         const glm::dvec3 albedo(0.8, 0.5, 0.2), toLight = kSunTowards, surface(0, 0, -1), tilted = glm::normalize(glm::dvec3(s, 0.0, -c));
         const glm::dvec3 base = k.normalMapped ? tilted : surface, coatNormal = k.coatMapped ? tilted : surface;
@@ -291,7 +277,7 @@ TEST(MetallicRoughness, AmbientAndEmissiveAddWithoutLights) {
     d.state.metallic = 0.0f;
     d.state.lighting.ambient = glm::vec3(0.2f);
     d.state.emissive = glm::vec3(0.1f, 0.0f, 0.3f);
-    const Rendered r = render(d);
+    const ResolvedDraw r = render(d);
     // ambient x (c_diff + F0) + emissive
     const glm::vec3 expected = 0.2f * (0.5f + 0.04f) + glm::vec3(0.1f, 0.0f, 0.3f);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(at(r.image, 3, 5)[c], expected[c], 1e-6f);
@@ -370,7 +356,7 @@ TEST(NormalMap, FlatTexelKeepsTheNormalAndATiltedOneTiltsTheLighting) {
         d.state.textures.normal.texture = &map;
         d.state.lighting.lights[0] = directionalLight({0, 0, 1}, glm::vec3(1.0f));  // from the viewer
         d.state.lighting.lightCount = 1;
-        const Rendered r = render(d);
+        const ResolvedDraw r = render(d);
         EXPECT_EQ(r.counters.textureSamples, r.counters.pixelsShaded);
         return at(r.image, 4, 4).r;
     };
@@ -433,7 +419,7 @@ TEST(Effects, AbsentEffectsRunZeroTimes) {
     const Quad quad;
     // Constant colour: nothing interpolated, nothing fetched, nothing lit.
     DrawCall flat = quad.call(ShadingModel::ConstantColor);
-    Rendered r = render(flat);
+    ResolvedDraw r = render(flat);
     EXPECT_EQ(r.counters.pixelsShaded, uint64_t(kSize) * kSize);
     EXPECT_EQ(r.counters.varyingsInterpolated, 0u);
     EXPECT_EQ(r.counters.textureSamples, 0u);

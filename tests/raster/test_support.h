@@ -7,6 +7,7 @@
 #include "raster/framebuffer.h"
 #include "raster/limits.h"
 #include "raster/pipeline.h"
+#include "raster/resolve.h"
 #include "scene/tri_scene.h"
 
 namespace cuberille::testing {
@@ -32,6 +33,20 @@ inline void drawFrame(raster::Pipeline& p, const raster::FramebufferDesc& desc, 
     p.beginFrame(desc);
     p.draw(draw);
     p.endFrame();
+}
+
+/// One draw into a fresh 1-sample frame, resolved: the image and the stage counters.
+struct ResolvedDraw {
+    raster::Image image;
+    raster::StageCounters counters;
+};
+inline ResolvedDraw renderResolved(const raster::DrawCall& draw, int width, int height) {
+    raster::Pipeline p;
+    drawFrame(p, frame(width, height, 1), draw);
+    ResolvedDraw r;
+    raster::resolveColor(p.framebuffer(), r.image);
+    r.counters = p.stats().counters;
+    return r;
 }
 
 inline void renderTri(raster::Pipeline& p, const scene::TriScene& s, int width, int height,
