@@ -110,9 +110,11 @@ struct MaterialTextures {
     TextureBinding clearcoat;          // R: the clear coat's weight, x BrdfExtensions::clearcoat
     TextureBinding clearcoatRoughness; // G: the clear coat's roughness, x BrdfExtensions::clearcoatRoughness
     TextureBinding clearcoatNormal;    // the clear coat's own normal map (tangent space, needs tangents)
+    TextureBinding sheenColor;         // linear RGB (sRGB decoded): the sheen's colour, x BrdfExtensions::sheenColor
+    TextureBinding sheenRoughness;     // A: the sheen's roughness, x BrdfExtensions::sheenRoughness
     bool any() const {
         return baseColor || metallicRoughness || normal || occlusion || emissive || specular || specularColor || clearcoat ||
-               clearcoatRoughness || clearcoatNormal;
+               clearcoatRoughness || clearcoatNormal || sheenColor || sheenRoughness;
     }
 };
 
@@ -154,6 +156,10 @@ struct BrdfExtensions {
     /// before normal mapping.
     float clearcoat = 0.0f, clearcoatRoughness = 0.0f;
     float clearcoatNormalScale = 1.0f;
+    /// KHR_materials_sheen (a colour > 0): a microfibre layer of this colour and roughness over
+    /// the material, which it dims by its albedo (raster/sheen_lobe.h), under any clear coat.
+    glm::vec3 sheenColor{0.0f};
+    float sheenRoughness = 0.0f;
 };
 
 struct DrawState {

@@ -21,6 +21,7 @@
 #include "raster/texture.h"
 #include "raster/limits.h"
 #include "raster/setup.h"
+#include "raster/sheen_lobe.h"
 #include "raster/stats.h"
 #include "raster/vertex.h"
 
@@ -61,8 +62,9 @@ struct ConstantColorShader {
 /// The BRDF (MetallicRoughness, glTF 2.0 appendix B): c_diff = albedo (1 - metallic),
 /// F0 = mix(dielectricF0, albedo, metallic) (0.04 unless KHR_materials_ior), alpha = roughness² (or from the
 /// specular-glossiness model: BrdfExtensions::specularGlossiness; KHR_materials_specular tints and scales the
-/// dielectric F0 and F90: BrdfExtensions::dielectricSpecular; KHR_materials_clearcoat lays a second GGX lobe
-/// over the result: BrdfExtensions::clearcoat); per light, with light intensity E
+/// dielectric F0 and F90: BrdfExtensions::dielectricSpecular; KHR_materials_sheen lays a microfibre lobe over
+/// it: BrdfExtensions::sheenColor; KHR_materials_clearcoat a second GGX lobe over the result:
+/// BrdfExtensions::clearcoat); per light, with light intensity E
 /// (pi x irradiance, see Light), E n.l ((1 - F) c_diff + pi F D V) with Schlick's F, the GGX
 /// D and the height-correlated Smith V. Ambient: ambient x occlusion x (c_diff + F0), a
 /// uniform environment. An environment light (Lighting::environment, image-based lighting)
@@ -77,6 +79,8 @@ public:
     SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
         coated_ = kModel == ShadingModel::MetallicRoughness && state.brdf.clearcoat > 0.0f;
+        if (kModel == ShadingModel::MetallicRoughness && state.brdf.sheenColor != glm::vec3(0.0f))
+            sheenAlbedo_ = sheenAlbedoTable();
         environment_ = state.lighting.environment;
         if (environment_) environmentSh_ = &environment_->irradianceHarmonics(state.lighting.environmentLessDominantLight);
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 && !environment_ &&
@@ -454,7 +458,70 @@ private:
             counters.environmentPixels += uint64_t(count);
         }
         if (textured) counters.textureSamples += uint64_t(count);
+        if (sheenAlbedo_) sheen(q, a, occlusion, m, counters);
         if (coated_) clearcoat(q, a, occlusion, m, counters);
+    }
+
+    // KHR_materials_sheen: the material so far (lights, ambient, environment; emission comes
+    // after) dimmed by s = clamp(1 - max(c) E(n.v, r), 0, 1), plus the sheen's own light: per
+    // light E n.l pi D V c (raster/sheen_lobe.h), ambient x occlusion x c E(n.v, r), and the
+    // environment's irradiance x occlusion x c E(n.v, r) — a broad lobe lit by the irradiance,
+    // where a GPU viewer reads a map prefiltered with the Charlie lobe (docs/formats.md). c the
+    // sheen colour, r its roughness, each a factor times its texture.
+    [[gnu::noinline]] void sheen(const ShadeQueue& q, PixelAttributes& a, const float* occlusion, const SurfaceAtPixels& m,
+                                 StageCounters& counters) const {
+        const int count = q.count;
+        FetchedTexels color, roughnessTexels;
+        fetchOrOnes(s_.textures.sheenColor, count, a, color, counters);
+        fetchOrOnes(s_.textures.sheenRoughness, count, a, roughnessTexels, counters);
+        float sheenColor[3][N], alpha[N], radiance[3][N];
+        for (int i = 0; i < count; ++i) {
+            const glm::vec3 c = glm::clamp(s_.brdf.sheenColor * glm::vec3(color.r[i], color.g[i], color.b[i]), 0.0f, 1.0f);
+            const float r = std::max(kSheenRoughnessFloor, std::clamp(s_.brdf.sheenRoughness * roughnessTexels.a[i], 0.0f, 1.0f));
+            alpha[i] = r * r;
+            const float albedo = sheenAlbedo(sheenAlbedo_, m.nDotV[i], r);
+            const float scale = std::clamp(1.0f - std::max({c.r, c.g, c.b}) * albedo, 0.0f, 1.0f);
+            glm::vec3 ambient = s_.lighting.ambient;
+            if (environment_)
+                ambient += glm::max(EnvironmentLight::irradianceAt(*environmentSh_, a.normal[0][i], a.normal[1][i], a.normal[2][i]),
+                                    glm::vec3(0.0f));
+            for (int k = 0; k < 3; ++k) {
+                sheenColor[k][i] = c[k];
+                a.radiance[k][i] *= scale;
+                radiance[k][i] = ambient[k] * occlusion[i] * c[k] * albedo;
+            }
+        }
+        for (int l = 0; l < s_.lighting.lightCount; ++l) {
+            const Light& light = s_.lighting.lights[l];
+            light.type == LightType::Directional ? addSheenLight<true>(light, q, a, m, sheenColor, alpha, radiance)
+                                                 : addSheenLight<false>(light, q, a, m, sheenColor, alpha, radiance);
+        }
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < count; ++i) a.radiance[k][i] += radiance[k][i];
+        counters.sheenPixels += uint64_t(count);
+    }
+
+    // One light's sheen term E n.l pi D V c where n.l > 0. Not x light.specular: the sheen reads
+    // the environment through its irradiance, which leaves out the dominant light drawn apart.
+    template <bool kDirectional>
+    void addSheenLight(const Light& light, const ShadeQueue& q, const PixelAttributes& a, const SurfaceAtPixels& m,
+                       const float (&sheenColor)[3][N], const float* alpha, float (&radiance)[3][N]) const {
+        float shadowed[N];
+        shadowMask(light, q, shadowed);
+        for (int i = 0; i < q.count; ++i) {
+            Incident in;
+            if constexpr (kDirectional)
+                in = {-light.direction, light.intensity};
+            else
+                in = incident(light, a, i);
+            in.intensity *= shadowed[i];
+            const glm::vec3 n(a.normal[0][i], a.normal[1][i], a.normal[2][i]), view(m.view[0][i], m.view[1][i], m.view[2][i]);
+            const float nDotL = glm::dot(n, in.toLight);
+            const float nDotH = glm::dot(n, safeNormalize(in.toLight + view));
+            const float lobe = float(M_PI) * charlieDistribution(alpha[i], nDotH) * neubeltVisibility(std::max(nDotL, 1e-4f), m.nDotV[i]);
+            const bool lit = nDotL > 0.0f;
+            for (int k = 0; k < 3; ++k) radiance[k][i] += lit ? in.intensity[k] * nDotL * lobe * sheenColor[k][i] : 0.0f;
+        }
     }
 
     // KHR_materials_clearcoat: the coat's weight w = clearcoat x (0.04 + 0.96 (1 - n_c.v)^5)
@@ -741,6 +808,7 @@ private:
     VaryingLayout layout_;
     bool hasEmissive_ = false;
     bool coated_ = false;  // KHR_materials_clearcoat
+    const float* sheenAlbedo_ = nullptr;  // KHR_materials_sheen: its albedo table, when the draw has a sheen
     const EnvironmentLight* environment_ = nullptr;
     const glm::vec3 (*environmentSh_)[9] = nullptr;  // its irradiance, less a dominant light drawn apart
     bool fusedLambert_ = false;

@@ -28,6 +28,7 @@ StageCounters& StageCounters::operator+=(const StageCounters& o) {
     specularGlossinessPixels += o.specularGlossinessPixels;
     dielectricSpecularPixels += o.dielectricSpecularPixels;
     clearcoatPixels += o.clearcoatPixels;
+    sheenPixels += o.sheenPixels;
     environmentPixels += o.environmentPixels;
     pixelsAlphaTested += o.pixelsAlphaTested;
     pixelsBlended += o.pixelsBlended;

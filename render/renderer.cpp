@@ -224,7 +224,7 @@ void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
         scene::MeshTextures& t = m.textures;
         for (scene::MeshTexture* slot :
              {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive, &t.specular, &t.specularColor, &t.clearcoat,
-              &t.clearcoatRoughness, &t.clearcoatNormal})
+              &t.clearcoatRoughness, &t.clearcoatNormal, &t.sheenColor, &t.sheenRoughness})
             retarget(*slot);
     }
 }
@@ -530,6 +530,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
           {"specularGlossinessPixels", c.specularGlossinessPixels},
           {"dielectricSpecularPixels", c.dielectricSpecularPixels},
           {"clearcoatPixels", c.clearcoatPixels},
+          {"sheenPixels", c.sheenPixels},
           {"environmentPixels", c.environmentPixels}}},
         {"outputMerge", {{"pixelsAlphaTested", c.pixelsAlphaTested}, {"pixelsBlended", c.pixelsBlended}}},
     };

@@ -81,11 +81,11 @@ private:
     // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
     // attribute is read through AccessorView, which takes any component type, normalised or not.
     // Compressed views and primitives are decoded before the reader runs (scene/gltf_compression.h).
-    static constexpr std::array<std::string_view, 12> kSupportedExtensions = {
+    static constexpr std::array<std::string_view, 13> kSupportedExtensions = {
         "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization", "EXT_meshopt_compression",
         "KHR_draco_mesh_compression",
         "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_pbrSpecularGlossiness", "KHR_materials_specular",
-        "KHR_materials_clearcoat", "EXT_texture_webp"};
+        "KHR_materials_clearcoat", "KHR_materials_sheen", "EXT_texture_webp"};
     static bool supportedExtension(const std::string& name) {
         return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), name) != kSupportedExtensions.end();
     }
@@ -680,6 +680,26 @@ private:
         m.textures.emissive = bindTexture(mat.emissiveTexture, "emissive", true, prim, vertexCount, where, uvs, m);
         if (const auto it = mat.extensions.find("KHR_materials_clearcoat"); it != mat.extensions.end())
             addClearcoat(it->second, prim, vertexCount, where, uvs, m);
+        if (const auto it = mat.extensions.find("KHR_materials_sheen"); it != mat.extensions.end())
+            addSheen(it->second, prim, vertexCount, where, uvs, m);
+    }
+
+    // KHR_materials_sheen: the sheen's colour (a factor times the sRGB colour texture's RGB) and
+    // roughness (a factor times the linear roughness texture's alpha). A zero colour factor
+    // disables the layer, as the extension says, and then no texture of it is loaded.
+    void addSheen(const tinygltf::Value& ext, const tinygltf::Primitive& prim, size_t vertexCount, const std::string& where,
+                  TexCoordSet& uvs, Mesh& m) {
+        const std::string place = where + ": KHR_materials_sheen";
+        float color[3] = {0.0f, 0.0f, 0.0f}, roughness = 0.0f;
+        unitFactors(ext, "sheenColorFactor", 3, color, place);
+        unitFactors(ext, "sheenRoughnessFactor", 0, &roughness, place);
+        m.brdf.sheenColor = glm::vec3(color[0], color[1], color[2]);
+        m.brdf.sheenRoughness = roughness;
+        if (m.brdf.sheenColor == glm::vec3(0.0f)) return;
+        m.textures.sheenColor =
+            bindTexture(textureInfoIn(ext, "sheenColorTexture", place), "sheen colour", true, prim, vertexCount, where, uvs, m);
+        m.textures.sheenRoughness = bindTexture(textureInfoIn(ext, "sheenRoughnessTexture", place), "sheen roughness", false,
+                                                prim, vertexCount, where, uvs, m);
     }
 
     // KHR_materials_clearcoat: the coat's weight and roughness (factors times the R and G of

@@ -34,6 +34,8 @@ struct MeshTextures {
     MeshTexture clearcoat;          // R: KHR_materials_clearcoat's weight
     MeshTexture clearcoatRoughness; // G: KHR_materials_clearcoat's roughness
     MeshTexture clearcoatNormal;    // KHR_materials_clearcoat's own normal map; needs tangents
+    MeshTexture sheenColor;         // RGB: KHR_materials_sheen's colour
+    MeshTexture sheenRoughness;     // A: KHR_materials_sheen's roughness
 };
 
 /// The reflectance of a dielectric at normal incidence against air, F0 = ((ior - 1) / (ior + 1))²
@@ -60,7 +62,7 @@ struct Mesh {
     float ior = 1.5f;  // KHR_materials_ior: the dielectric part's index of refraction (0: F0 = 1)
     /// KHR_materials_pbrSpecularGlossiness (color and alpha are then the diffuse factor,
     /// textures.baseColor the diffuse texture, textures.metallicRoughness the specular-glossiness
-    /// texture), KHR_materials_specular and KHR_materials_clearcoat.
+    /// texture), KHR_materials_specular, KHR_materials_clearcoat and KHR_materials_sheen.
     raster::BrdfExtensions brdf;
     glm::vec3 emissive{0.0f};  // linear RGB factor
     float normalScale = 1.0f, occlusionStrength = 1.0f;

@@ -46,7 +46,7 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         d.state.textures = {bind(m.textures.baseColor), bind(m.textures.metallicRoughness), bind(m.textures.normal),
                             bind(m.textures.occlusion), bind(m.textures.emissive), bind(m.textures.specular),
                             bind(m.textures.specularColor), bind(m.textures.clearcoat), bind(m.textures.clearcoatRoughness),
-                            bind(m.textures.clearcoatNormal)};
+                            bind(m.textures.clearcoatNormal), bind(m.textures.sheenColor), bind(m.textures.sheenRoughness)};
         d.state.cull = m.doubleSided ? raster::CullMode::None : cull;
         d.state.constantColor = glm::vec4(m.color, m.alpha);
         d.state.alphaMode = m.alphaMode;

@@ -354,6 +354,38 @@ TEST(GltfLoader, ClearcoatIsReadAndBadValuesAreRefused) {
     fs::remove_all(dir);
 }
 
+// KHR_materials_sheen: the colour factor and its sRGB texture, the roughness factor and its linear
+// texture; a zero colour disables the layer (its textures unbound); a factor outside [0, 1] is
+// refused.
+TEST(GltfLoader, SheenIsReadAndBadValuesAreRefused) {
+    const fs::path dir = cuberille::testing::uniqueTempPath("gltf-sheen");
+    auto write = [&](const std::string& ext, const fs::path& path) { writeWithMaterialExtension(dir, "KHR_materials_sheen", ext, path); };
+    write(R"("sheenColorFactor": [1, 0.5, 0.25], "sheenRoughnessFactor": 0.4, "sheenColorTexture": {"index": 0},
+             "sheenRoughnessTexture": {"index": 0})",
+          dir / "t.gltf");
+    std::vector<std::string> warnings;
+    const GltfScene scene = loadGltf(dir / "t.gltf", [&](const std::string& w) { warnings.push_back(w); });
+    const Mesh& fan = scene.meshes[1];
+    EXPECT_EQ(fan.brdf.sheenColor, glm::vec3(1.0f, 0.5f, 0.25f));
+    EXPECT_EQ(fan.brdf.sheenRoughness, 0.4f);
+    ASSERT_TRUE(fan.textures.sheenColor);
+    ASSERT_TRUE(fan.textures.sheenRoughness);
+    EXPECT_NEAR(fan.textures.sheenColor.texture->texel(0, 1, 0).r, 0.2158f, 1e-3f) << "decoded from sRGB";
+    EXPECT_NEAR(fan.textures.sheenRoughness.texture->texel(0, 1, 0).r, 128.0f / 255.0f, 1e-6f) << "read linear";
+    for (const std::string& w : warnings) EXPECT_EQ(w.find("KHR_materials_sheen"), std::string::npos) << w;
+    EXPECT_EQ(scene.meshes[0].brdf.sheenColor, glm::vec3(0.0f));
+    write(R"("sheenRoughnessFactor": 0.5, "sheenColorTexture": {"index": 0})", dir / "off.gltf");
+    const GltfScene off = loadGltf(dir / "off.gltf", [](const std::string&) {});
+    EXPECT_EQ(off.meshes[1].brdf.sheenColor, glm::vec3(0.0f));
+    EXPECT_FALSE(off.meshes[1].textures.sheenColor) << "a zero colour (the default) disables the layer";
+    for (const std::string bad : {R"("sheenColorFactor": [1, 2, 1])", R"("sheenRoughnessFactor": -0.1)", R"("sheenColorFactor": 1)",
+                                  R"("sheenColorFactor": [1, 1, 1], "sheenRoughnessTexture": {"index": 7})"}) {
+        write(bad, dir / "bad.gltf");
+        expectRefusedNaming(dir / "bad.gltf", "KHR_materials_sheen", bad);
+    }
+    fs::remove_all(dir);
+}
+
 // EXT_texture_webp: a texture naming a WebP source reads it (lossless here: the texels exactly)
 // in place of its core source, which stays the fallback for readers without WebP; a WebP-only
 // texture (the extension required) reads too.
@@ -649,12 +681,12 @@ TEST(GltfLoader, ARequiredExtensionItCannotReadIsRefusedAndAUsedOneWarnsOnce) {
     }
     testing::GltfBuilder used;
     const int usedAccessor = used.positions(kQuad);
-    used.json()["extensionsUsed"] = {"KHR_materials_sheen"};
+    used.json()["extensionsUsed"] = {"KHR_materials_iridescence"};
     std::vector<std::string> warnings;
     const GltfScene s = loadGltf(writeQuad(used, usedAccessor, "used"), [&](const std::string& w) { warnings.push_back(w); });
     EXPECT_EQ(s.meshes.size(), 1u);
     ASSERT_EQ(warnings.size(), 1u);
-    EXPECT_NE(warnings[0].find("extension KHR_materials_sheen is not supported yet and was ignored"), std::string::npos);
+    EXPECT_NE(warnings[0].find("extension KHR_materials_iridescence is not supported yet and was ignored"), std::string::npos);
 }
 
 TEST(GltfLoader, EmissiveStrengthScalesTheEmissiveFactor) {
