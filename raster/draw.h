@@ -10,6 +10,7 @@
 // GPU command buffer, and executed in flushes).
 
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include <glm/glm.hpp>
@@ -112,9 +113,11 @@ struct MaterialTextures {
     TextureBinding clearcoatNormal;    // the clear coat's own normal map (tangent space, needs tangents)
     TextureBinding sheenColor;         // linear RGB (sRGB decoded): the sheen's colour, x BrdfExtensions::sheenColor
     TextureBinding sheenRoughness;     // A: the sheen's roughness, x BrdfExtensions::sheenRoughness
+    TextureBinding transmission;       // R: the share transmitted, x BrdfExtensions::transmission
+    TextureBinding thickness;          // G: the volume's thickness, x BrdfExtensions::thickness
     bool any() const {
         return baseColor || metallicRoughness || normal || occlusion || emissive || specular || specularColor || clearcoat ||
-               clearcoatRoughness || clearcoatNormal || sheenColor || sheenRoughness;
+               clearcoatRoughness || clearcoatNormal || sheenColor || sheenRoughness || transmission || thickness;
     }
 };
 
@@ -160,6 +163,17 @@ struct BrdfExtensions {
     /// the material, which it dims by its albedo (raster/sheen_lobe.h), under any clear coat.
     glm::vec3 sheenColor{0.0f};
     float sheenRoughness = 0.0f;
+    /// KHR_materials_transmission (> 0): this share of the dielectric's diffuse lobe is light
+    /// passed straight through instead: the draw's pixels multiply what is behind them by their
+    /// transmittance t (1 - F) c_diff and add their own light (output merge's transmitColor).
+    /// Seen straight through — no refraction, no blur by roughness (docs/formats.md).
+    float transmission = 0.0f;
+    /// KHR_materials_volume, with transmission: over a thickness > 0 (world units, times the
+    /// thickness texture), the light is attenuated to attenuationColor every attenuationDistance
+    /// (Beer-Lambert); 0 is thin-walled.
+    float thickness = 0.0f;
+    glm::vec3 attenuationColor{1.0f};
+    float attenuationDistance = std::numeric_limits<float>::infinity();
 };
 
 struct DrawState {
@@ -184,6 +198,9 @@ struct DrawState {
     glm::vec3 cameraPosition{0.0f};  // world space: the view vector of MetallicRoughness
     AlphaMode alphaMode = AlphaMode::Opaque;
     float alphaCutoff = 0.5f;  // Mask
+    /// Whether output merge composes the draw's pixels over what is behind them through a
+    /// per-channel transmittance (KHR_materials_transmission on the metallic-roughness model).
+    bool transmits() const { return shading == ShadingModel::MetallicRoughness && brdf.transmission > 0.0f; }
 };
 
 struct DrawCall {

@@ -39,6 +39,8 @@ struct ShadeQueue {
     uint32_t passMask[kCapacity];     // samples that passed the depth test
     uint32_t pixelIndex[kCapacity];   // y x image width + x: where screen-space inputs are read
     float red[kCapacity], green[kCapacity], blue[kCapacity], alpha[kCapacity];
+    // Written by transmissive draws only (DrawState::transmits): the light seen through each pixel.
+    float transmitRed[kCapacity], transmitGreen[kCapacity], transmitBlue[kCapacity];
 };
 
 struct ConstantColorShader {
@@ -81,6 +83,17 @@ public:
         coated_ = kModel == ShadingModel::MetallicRoughness && state.brdf.clearcoat > 0.0f;
         if (kModel == ShadingModel::MetallicRoughness && state.brdf.sheenColor != glm::vec3(0.0f))
             sheenAlbedo_ = sheenAlbedoTable();
+        transmissive_ = state.transmits();
+        // KHR_materials_volume: ln(attenuation colour) / distance, per unit of thickness; and
+        // its exponential at the factor's thickness, which is all a draw without a thickness
+        // texture needs (no exp per pixel).
+        const BrdfExtensions& b = state.brdf;
+        volume_ = transmissive_ && b.thickness > 0.0f && std::isfinite(b.attenuationDistance) && b.attenuationColor != glm::vec3(1.0f);
+        if (volume_)
+            for (int k = 0; k < 3; ++k) {
+                logAttenuation_[k] = std::log(b.attenuationColor[k]) / b.attenuationDistance;
+                attenuation_[k] = std::exp(logAttenuation_[k] * b.thickness);
+            }
         environment_ = state.lighting.environment;
         if (environment_) environmentSh_ = &environment_->irradianceHarmonics(state.lighting.environmentLessDominantLight);
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 && !environment_ &&
@@ -124,6 +137,7 @@ public:
             if (hasEmissive_) addEmissive(q.count, a, counters);
             if (coated_) underTheCoat(q.count, a);
             writeOut(q, a.radiance, a.alpha);
+            if (transmissive_) writeTransmittance(q, a);
         }
     }
 
@@ -144,6 +158,8 @@ private:
         float coatNormal[3][N];
         float coatWeight[N];
         float coatRadiance[3][N];
+        // KHR_materials_transmission only: the light seen through, per channel.
+        float transmit[3][N];
         // The last texture coordinates fetched (fetchAll): glTF's slots mostly share one
         // size and one transform, and then share the transformed UVs and the level of detail.
         struct FetchCoordinates {
@@ -444,6 +460,7 @@ private:
         } else {
             metallicRoughnessMaterial(count, a, occlusion, texels, m);
         }
+        if (transmissive_) transmissionMaterial(count, a, occlusion, m, withF90, counters);
         for (int l = 0; l < lighting.lightCount; ++l) {
             const Light& light = lighting.lights[l];
             const bool directional = light.type == LightType::Directional;
@@ -460,6 +477,48 @@ private:
         if (textured) counters.textureSamples += uint64_t(count);
         if (sheenAlbedo_) sheen(q, a, occlusion, m, counters);
         if (coated_) clearcoat(q, a, occlusion, m, counters);
+    }
+
+    // KHR_materials_transmission: a share t (factor x the texture's R) of the dielectric's diffuse
+    // lobe becomes light passed through — the transmittance t c_diff (1 - F(n.v)), the base colour
+    // tinting it, Schlick's F at the view as the reflection takes its share — and the diffuse lobe
+    // and its ambient keep 1 - t. With KHR_materials_volume, over thickness d the transmittance is
+    // attenuated by attenuationColor^(d / attenuationDistance). Before the lights, which then
+    // light the reduced c_diff; the layers above (sheen, coat) dim the transmittance as they dim
+    // the material.
+    [[gnu::noinline]] void transmissionMaterial(int count, PixelAttributes& a, const float* occlusion, SurfaceAtPixels& m, bool withF90,
+                                                StageCounters& counters) const {
+        FetchedTexels share, thickness;
+        fetchOrOnes(s_.textures.transmission, count, a, share, counters);
+        const bool thicknessTexture = volume_ && layout_.texCoord >= 0 && s_.textures.thickness;
+        if (thicknessTexture) fetchOrOnes(s_.textures.thickness, count, a, thickness, counters);
+        for (int i = 0; i < count; ++i) {
+            const float t = std::clamp(s_.brdf.transmission * share.r[i], 0.0f, 1.0f);
+            const float schlick = pow5(1.0f - m.nDotV[i]), f90 = withF90 ? m.f90[i] : 1.0f;
+            glm::vec3 attenuation(1.0f);
+            if (thicknessTexture) {
+                const float d = s_.brdf.thickness * thickness.g[i];  // 0: thin-walled there
+                for (int k = 0; k < 3; ++k) attenuation[k] = d > 0.0f ? std::exp(logAttenuation_[k] * d) : 1.0f;
+            } else if (volume_) {
+                attenuation = glm::vec3(attenuation_[0], attenuation_[1], attenuation_[2]);
+            }
+            for (int k = 0; k < 3; ++k) {
+                const float fresnel = m.f0[k][i] + (f90 - m.f0[k][i]) * schlick;
+                a.transmit[k][i] = t * m.diffuse[k][i] * (1.0f - fresnel) * attenuation[k];
+                m.diffuse[k][i] *= 1.0f - t;
+                a.radiance[k][i] = s_.lighting.ambient[k] * occlusion[i] * (m.diffuse[k][i] + m.f0[k][i]);
+            }
+        }
+        counters.transmissionPixels += uint64_t(count);
+    }
+
+    void writeTransmittance(ShadeQueue& q, const PixelAttributes& a) const {
+        for (int i = 0; i < q.count; ++i) {
+            // Under a coat, the light through is dimmed by the coat's weight as the material is.
+            const float coat = coated_ ? 1.0f - a.coatWeight[i] : 1.0f;
+            q.transmitRed[i] = a.transmit[0][i] * coat, q.transmitGreen[i] = a.transmit[1][i] * coat,
+            q.transmitBlue[i] = a.transmit[2][i] * coat;
+        }
     }
 
     // KHR_materials_sheen: the material so far (lights, ambient, environment; emission comes
@@ -488,6 +547,7 @@ private:
             for (int k = 0; k < 3; ++k) {
                 sheenColor[k][i] = c[k];
                 a.radiance[k][i] *= scale;
+                if (transmissive_) a.transmit[k][i] *= scale;
                 radiance[k][i] = ambient[k] * occlusion[i] * c[k] * albedo;
             }
         }
@@ -809,6 +869,9 @@ private:
     bool hasEmissive_ = false;
     bool coated_ = false;  // KHR_materials_clearcoat
     const float* sheenAlbedo_ = nullptr;  // KHR_materials_sheen: its albedo table, when the draw has a sheen
+    bool transmissive_ = false;           // KHR_materials_transmission
+    bool volume_ = false;                 // KHR_materials_volume: an attenuating thickness
+    float logAttenuation_[3] = {}, attenuation_[3] = {1.0f, 1.0f, 1.0f};
     const EnvironmentLight* environment_ = nullptr;
     const glm::vec3 (*environmentSh_)[9] = nullptr;  // its irradiance, less a dominant light drawn apart
     bool fusedLambert_ = false;

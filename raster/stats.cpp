@@ -29,6 +29,7 @@ StageCounters& StageCounters::operator+=(const StageCounters& o) {
     dielectricSpecularPixels += o.dielectricSpecularPixels;
     clearcoatPixels += o.clearcoatPixels;
     sheenPixels += o.sheenPixels;
+    transmissionPixels += o.transmissionPixels;
     environmentPixels += o.environmentPixels;
     pixelsAlphaTested += o.pixelsAlphaTested;
     pixelsBlended += o.pixelsBlended;

@@ -41,6 +41,7 @@ struct StageCounters {
     uint64_t dielectricSpecularPixels = 0;  // pixels whose material has KHR_materials_specular
     uint64_t clearcoatPixels = 0;           // pixels under a clear coat (KHR_materials_clearcoat)
     uint64_t sheenPixels = 0;               // pixels with a sheen (KHR_materials_sheen)
+    uint64_t transmissionPixels = 0;        // pixels seen through (KHR_materials_transmission)
     uint64_t environmentPixels = 0;         // pixels lit by an environment (image-based lighting)
     uint64_t pixelsAlphaTested = 0;     // alpha-mask pixels tested against the cutoff
     uint64_t pixelsBlended = 0;         // pixels over-blended onto the target

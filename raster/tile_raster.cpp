@@ -521,7 +521,10 @@ private:
                 writeDepthAndCount(x, y, first, pass, depth, nullptr);
                 if (!state.colorWriteMask) continue;
             }
-            if (state.alphaMode == AlphaMode::Blend) {
+            if (kSurface && state.transmits()) {
+                const glm::vec3 transmittance(queue_.transmitRed[i], queue_.transmitGreen[i], queue_.transmitBlue[i]);
+                transmitColor<S>(target_.color + first, pass, color, transmittance, state.colorWriteMask);
+            } else if (state.alphaMode == AlphaMode::Blend) {
                 blendColor<S>(target_.color + first, pass, color, state.colorWriteMask);
                 ++counters.pixelsBlended;
             } else {

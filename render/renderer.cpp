@@ -224,7 +224,8 @@ void overrideTextureFilters(scene::Scene& s, TextureFilterOverride which) {
         scene::MeshTextures& t = m.textures;
         for (scene::MeshTexture* slot :
              {&t.baseColor, &t.metallicRoughness, &t.normal, &t.occlusion, &t.emissive, &t.specular, &t.specularColor, &t.clearcoat,
-              &t.clearcoatRoughness, &t.clearcoatNormal, &t.sheenColor, &t.sheenRoughness})
+              &t.clearcoatRoughness, &t.clearcoatNormal, &t.sheenColor, &t.sheenRoughness, &t.transmission,
+              &t.thickness})
             retarget(*slot);
     }
 }
@@ -531,6 +532,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
           {"dielectricSpecularPixels", c.dielectricSpecularPixels},
           {"clearcoatPixels", c.clearcoatPixels},
           {"sheenPixels", c.sheenPixels},
+          {"transmissionPixels", c.transmissionPixels},
           {"environmentPixels", c.environmentPixels}}},
         {"outputMerge", {{"pixelsAlphaTested", c.pixelsAlphaTested}, {"pixelsBlended", c.pixelsBlended}}},
     };

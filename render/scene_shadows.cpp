@@ -38,7 +38,7 @@ void SceneShadows::gatherCasters(const scene::Scene& s) {
     indices_.clear();
     ranges_.clear();
     for (const scene::Mesh& m : s.meshes) {
-        if (m.alphaMode == raster::AlphaMode::Blend) continue;
+        if (m.seeThrough()) continue;
         const uint32_t base = uint32_t(positions_.size());
         positions_.insert(positions_.end(), m.positions.begin(), m.positions.end());
         ranges_.push_back({uint32_t(indices_.size() / 3), uint32_t(m.triangleCount()), base,

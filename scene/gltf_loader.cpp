@@ -81,11 +81,11 @@ private:
     // The extensions this reader honours. KHR_mesh_quantization needs nothing of its own: every
     // attribute is read through AccessorView, which takes any component type, normalised or not.
     // Compressed views and primitives are decoded before the reader runs (scene/gltf_compression.h).
-    static constexpr std::array<std::string_view, 13> kSupportedExtensions = {
+    static constexpr std::array<std::string_view, 15> kSupportedExtensions = {
         "KHR_lights_punctual", "KHR_materials_unlit", "KHR_texture_transform", "KHR_mesh_quantization", "EXT_meshopt_compression",
         "KHR_draco_mesh_compression",
         "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_pbrSpecularGlossiness", "KHR_materials_specular",
-        "KHR_materials_clearcoat", "KHR_materials_sheen", "EXT_texture_webp"};
+        "KHR_materials_clearcoat", "KHR_materials_sheen", "KHR_materials_transmission", "KHR_materials_volume", "EXT_texture_webp"};
     static bool supportedExtension(const std::string& name) {
         return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), name) != kSupportedExtensions.end();
     }
@@ -603,6 +603,9 @@ private:
             m.color = glm::vec3(1.0f);
             if (prim.material >= 0 && prim.material < int(model_.materials.size()))
                 addMaterial(model_.materials[prim.material], prim, pos.count, where, m);
+            // KHR_materials_volume's thickness is in the mesh's units: to the world's by the node's
+            // mean scale (the cube root of its volume scale), as positions were taken to the world.
+            m.brdf.thickness *= std::cbrt(std::abs(glm::determinant(glm::mat3(world))));
             if ((m.textures.normal || m.textures.clearcoatNormal) && m.tangents.empty()) {
                 if (const auto it = prim.attributes.find("TANGENT"); it != prim.attributes.end()) {
                     const AccessorView tv = view(it->second, where);
@@ -682,6 +685,38 @@ private:
             addClearcoat(it->second, prim, vertexCount, where, uvs, m);
         if (const auto it = mat.extensions.find("KHR_materials_sheen"); it != mat.extensions.end())
             addSheen(it->second, prim, vertexCount, where, uvs, m);
+        if (const auto it = mat.extensions.find("KHR_materials_transmission"); it != mat.extensions.end())
+            addTransmission(mat, it->second, prim, vertexCount, where, uvs, m);
+    }
+
+    // KHR_materials_transmission: the share of the dielectric's diffuse lobe passed through (a
+    // factor times the linear texture's R); zero, the default, draws the material as without it.
+    // KHR_materials_volume, read with it: the thickness (a factor times the texture's G, in the
+    // mesh's units: the caller scales it to the world's), the attenuation colour and distance.
+    void addTransmission(const tinygltf::Material& mat, const tinygltf::Value& ext, const tinygltf::Primitive& prim,
+                         size_t vertexCount, const std::string& where, TexCoordSet& uvs, Mesh& m) {
+        const std::string place = where + ": KHR_materials_transmission";
+        unitFactors(ext, "transmissionFactor", 0, &m.brdf.transmission, place);
+        if (m.brdf.transmission == 0.0f) return;
+        m.textures.transmission = bindTexture(textureInfoIn(ext, "transmissionTexture", place), "transmission", false, prim,
+                                              vertexCount, where, uvs, m);
+        const auto volume = mat.extensions.find("KHR_materials_volume");
+        if (volume == mat.extensions.end()) return;
+        const std::string volumePlace = where + ": KHR_materials_volume";
+        const tinygltf::Value& v = volume->second;
+        float color[3] = {1.0f, 1.0f, 1.0f};
+        unitFactors(v, "thicknessFactor", 0, &m.brdf.thickness, volumePlace, double(std::numeric_limits<float>::max()));
+        unitFactors(v, "attenuationColor", 3, color, volumePlace);
+        m.brdf.attenuationColor = glm::vec3(color[0], color[1], color[2]);
+        if (v.Has("attenuationDistance")) {
+            const tinygltf::Value& d = v.Get("attenuationDistance");
+            const double distance = d.IsNumber() ? d.GetNumberAsDouble() : -1.0;
+            if (!(distance > 0.0) || !std::isfinite(distance)) fail(volumePlace, "attenuationDistance must be a finite number above 0");
+            m.brdf.attenuationDistance = float(distance);
+        }
+        if (m.brdf.thickness > 0.0f)
+            m.textures.thickness =
+                bindTexture(textureInfoIn(v, "thicknessTexture", volumePlace), "thickness", false, prim, vertexCount, where, uvs, m);
     }
 
     // KHR_materials_sheen: the sheen's colour (a factor times the sRGB colour texture's RGB) and

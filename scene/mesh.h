@@ -36,6 +36,8 @@ struct MeshTextures {
     MeshTexture clearcoatNormal;    // KHR_materials_clearcoat's own normal map; needs tangents
     MeshTexture sheenColor;         // RGB: KHR_materials_sheen's colour
     MeshTexture sheenRoughness;     // A: KHR_materials_sheen's roughness
+    MeshTexture transmission;       // R: KHR_materials_transmission's share
+    MeshTexture thickness;          // G: KHR_materials_volume's thickness
 };
 
 /// The reflectance of a dielectric at normal incidence against air, F0 = ((ior - 1) / (ior + 1))²
@@ -62,7 +64,8 @@ struct Mesh {
     float ior = 1.5f;  // KHR_materials_ior: the dielectric part's index of refraction (0: F0 = 1)
     /// KHR_materials_pbrSpecularGlossiness (color and alpha are then the diffuse factor,
     /// textures.baseColor the diffuse texture, textures.metallicRoughness the specular-glossiness
-    /// texture), KHR_materials_specular, KHR_materials_clearcoat and KHR_materials_sheen.
+    /// texture), KHR_materials_specular, KHR_materials_clearcoat, KHR_materials_sheen,
+    /// KHR_materials_transmission and KHR_materials_volume.
     raster::BrdfExtensions brdf;
     glm::vec3 emissive{0.0f};  // linear RGB factor
     float normalScale = 1.0f, occlusionStrength = 1.0f;
@@ -72,6 +75,9 @@ struct Mesh {
     MeshTextures textures;
 
     size_t triangleCount() const { return indices.size() / 3; }
+    /// Drawn after the opaque meshes, back to front, without depth writes, and left out of shadow
+    /// casters and receivers: blended, or transmitting light (KHR_materials_transmission).
+    bool seeThrough() const { return alphaMode == raster::AlphaMode::Blend || (metallicRoughness && !unlit && brdf.transmission > 0.0f); }
 };
 
 /// Area-weighted vertex normals from the triangles (the cross product's length is twice the

@@ -14,7 +14,7 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
     const glm::mat4 clipFromWorld = camera.clipFromWorld(aspect);
     std::vector<size_t> order, blended;
     for (size_t i = 0; i < meshes.size(); ++i)
-        (meshes[i].alphaMode == raster::AlphaMode::Blend ? blended : order).push_back(i);
+        (meshes[i].seeThrough() ? blended : order).push_back(i);
     std::vector<float> distance(meshes.size(), 0.0f);
     for (size_t i : blended) {
         const Bounds b = boundsOf(meshes[i]);
@@ -46,13 +46,14 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         d.state.textures = {bind(m.textures.baseColor), bind(m.textures.metallicRoughness), bind(m.textures.normal),
                             bind(m.textures.occlusion), bind(m.textures.emissive), bind(m.textures.specular),
                             bind(m.textures.specularColor), bind(m.textures.clearcoat), bind(m.textures.clearcoatRoughness),
-                            bind(m.textures.clearcoatNormal), bind(m.textures.sheenColor), bind(m.textures.sheenRoughness)};
+                            bind(m.textures.clearcoatNormal), bind(m.textures.sheenColor), bind(m.textures.sheenRoughness),
+                            bind(m.textures.transmission), bind(m.textures.thickness)};
         d.state.cull = m.doubleSided ? raster::CullMode::None : cull;
         d.state.constantColor = glm::vec4(m.color, m.alpha);
         d.state.alphaMode = m.alphaMode;
         d.state.alphaCutoff = m.alphaCutoff;
-        d.state.depthWrite = m.alphaMode != raster::AlphaMode::Blend;
-        d.state.lighting = shadowedLighting && m.alphaMode != raster::AlphaMode::Blend ? *shadowedLighting : lighting;
+        d.state.depthWrite = !m.seeThrough();
+        d.state.lighting = shadowedLighting && !m.seeThrough() ? *shadowedLighting : lighting;
         d.state.metallic = m.metallic;
         d.state.roughness = m.roughness;
         d.state.dielectricF0 = dielectricReflectance(m.ior);

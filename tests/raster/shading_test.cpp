@@ -346,6 +346,73 @@ TEST(Sheen, LaysTheReferenceSheenOverTheMaterialAtEveryPixel) {
     EXPECT_EQ(render(quad.call(ShadingModel::MetallicRoughness)).counters.sheenPixels, 0u);
 }
 
+// KHR_materials_transmission (and _volume), against a double-precision reference at every pixel:
+// a transmissive quad over an unlit backdrop B gives R + T B, R the material with its diffuse lobe
+// kept at 1 - t (ambient and the sun), T = t c_diff (1 - F(n.v)) x attenuationColor^(d /
+// distance); over nothing (a transparent clear), R with alpha 1 - mean(T). Thin-walled and with a
+// volume, a whole and a half share, and blended at alpha 0.5 (a R + (a T + 1 - a) B). The
+// counter counts exactly the transmissive pixels, and an opaque draw none.
+TEST(Transmission, ComposesTheReferenceOverWhatIsBehindAtEveryPixel) {
+    struct Case {
+        float transmission;
+        float thickness;  // 0: thin-walled
+        float alpha;      // < 1: blended
+    };
+    const glm::dvec3 backdrop(0.2, 0.6, 0.9), attenuationColor(0.5, 0.8, 1.0);
+    const double attenuationDistance = 1.5;
+    for (const Case k : {Case{1.0f, 0.0f, 1.0f}, Case{0.5f, 0.0f, 1.0f}, Case{1.0f, 2.0f, 1.0f}, Case{1.0f, 0.0f, 0.5f}}) {
+        for (const bool withBackdrop : {true, false}) {
+            const Quad quad;
+            Quad far;
+            for (glm::vec3& p : far.positions) p.z = 0.9f;
+            DrawCall back = far.call(ShadingModel::Unlit);
+            back.state.constantColor = glm::vec4(glm::vec3(backdrop), 1.0f);
+            const glm::dvec3 camera(8.0, 8.0, -20.0);
+            DrawCall glass = sunlitQuad(quad, camera, 0.1f);
+            glass.state.constantColor = glm::vec4(0.8f, 0.5f, 0.2f, k.alpha);
+            glass.state.metallic = 0.0f;
+            glass.state.roughness = 0.4f;
+            glass.state.brdf.transmission = k.transmission;
+            glass.state.brdf.thickness = k.thickness;
+            glass.state.brdf.attenuationColor = glm::vec3(attenuationColor);
+            glass.state.brdf.attenuationDistance = float(attenuationDistance);
+            glass.state.depthWrite = false;
+            if (k.alpha < 1.0f) glass.state.alphaMode = raster::AlphaMode::Blend;
+            raster::Pipeline p;
+            p.beginFrame(frame(kSize, kSize, 1));
+            if (withBackdrop) p.draw(back);
+            p.draw(glass);
+            p.endFrame();
+            raster::Image image;
+            raster::resolveColor(p.framebuffer(), image);
+            EXPECT_EQ(p.stats().counters.transmissionPixels, uint64_t(kSize) * kSize);
+            const glm::dvec3 albedo(0.8, 0.5, 0.2), n(0, 0, -1);
+            const double t = k.transmission, a = k.alpha;
+            for (int y = 0; y < kSize; ++y)
+                for (int x = 0; x < kSize; ++x) {
+                    const glm::dvec3 pixel(x + 0.5, y + 0.5, 0.5), v = glm::normalize(camera - pixel);
+                    const double fresnel = 0.04 + 0.96 * std::pow(1.0 - glm::dot(n, v), 5.0);
+                    glm::dvec3 through = t * albedo * (1.0 - fresnel);
+                    if (k.thickness > 0.0f)
+                        for (int c = 0; c < 3; ++c) through[c] *= std::pow(attenuationColor[c], k.thickness / attenuationDistance);
+                    const glm::dvec3 own = 0.1 * (albedo * (1.0 - t) + 0.04) +
+                                           referenceBrdfOfInputs(albedo * (1.0 - t), glm::dvec3(0.04), 0.16, n, v, kSunTowards, glm::dvec3(2.0));
+                    const glm::dvec3 seen = a * through + (1.0 - a);
+                    const glm::dvec3 behind = withBackdrop ? backdrop : glm::dvec3(0.0);
+                    const glm::dvec3 expected = a * own + seen * behind;
+                    const double alpha = 1.0 - (seen.r + seen.g + seen.b) / 3.0 * (withBackdrop ? 0.0 : 1.0);
+                    for (int ch = 0; ch < 3; ++ch)
+                        ASSERT_NEAR(at(image, x, y)[ch], expected[ch], 2e-4 * std::max(1.0, expected[ch]))
+                            << "transmission " << t << " thickness " << k.thickness << " alpha " << a
+                            << (withBackdrop ? " over the backdrop" : " over nothing") << " at " << x << "," << y;
+                    ASSERT_NEAR(at(image, x, y).a, alpha, 1e-6) << x << "," << y;
+                }
+        }
+    }
+    const Quad quad;
+    EXPECT_EQ(render(quad.call(ShadingModel::MetallicRoughness)).counters.transmissionPixels, 0u);
+}
+
 TEST(MetallicRoughness, AmbientAndEmissiveAddWithoutLights) {
     const Quad quad;
     DrawCall d = quad.call(ShadingModel::MetallicRoughness);

@@ -386,6 +386,57 @@ TEST(GltfLoader, SheenIsReadAndBadValuesAreRefused) {
     fs::remove_all(dir);
 }
 
+// KHR_materials_transmission with KHR_materials_volume: the share and its linear texture, the
+// thickness in world units (the mirrored node's scale (-1, 1, 1) keeps it; (-2, 2, 2), 8 in
+// volume, doubles it) with its texture, the attenuation colour and distance; a transmissive mesh is
+// drawn after the opaque ones (seeThrough); a zero share disables both; bad values are refused.
+TEST(GltfLoader, TransmissionAndVolumeAreReadInWorldUnitsAndBadValuesAreRefused) {
+    const fs::path dir = cuberille::testing::uniqueTempPath("gltf-transmission");
+    auto write = [&](const std::string& ext, const fs::path& path) {
+        writeWithMaterialExtension(dir, "KHR_materials_transmission", ext, path);
+    };
+    const std::string both = R"("transmissionFactor": 0.75, "transmissionTexture": {"index": 0}},
+        "KHR_materials_volume": {"thicknessFactor": 0.5, "thicknessTexture": {"index": 0}, "attenuationColor": [1, 0.5, 0.25],
+                                 "attenuationDistance": 3)";
+    write(both, dir / "t.gltf");
+    std::vector<std::string> warnings;
+    const GltfScene scene = loadGltf(dir / "t.gltf", [&](const std::string& w) { warnings.push_back(w); });
+    for (const size_t fan : {1u, 4u}) {  // the fan under each node
+        const Mesh& m = scene.meshes[fan];
+        EXPECT_EQ(m.brdf.transmission, 0.75f);
+        EXPECT_TRUE(m.seeThrough());
+        ASSERT_TRUE(m.textures.transmission);
+        EXPECT_NEAR(m.textures.transmission.texture->texel(0, 1, 0).r, 128.0f / 255.0f, 1e-6f) << "read linear";
+        EXPECT_NEAR(m.brdf.thickness, 0.5f, 1e-6f);
+        ASSERT_TRUE(m.textures.thickness);
+        EXPECT_EQ(m.brdf.attenuationColor, glm::vec3(1.0f, 0.5f, 0.25f));
+        EXPECT_EQ(m.brdf.attenuationDistance, 3.0f);
+    }
+    EXPECT_FALSE(scene.meshes[0].seeThrough());
+    for (const std::string& w : warnings) EXPECT_EQ(w.find("KHR_materials_"), std::string::npos) << w;
+    {
+        std::string text = texturedGltf(dir, R"("baseColorFactor": [0.9, 0.9, 0.9, 1]})");
+        replaceOnce(text, R"("extensions": {"KHR_materials_unlit": {}})", R"("extensions": {"KHR_materials_transmission": {)" + both + "}}");
+        replaceOnce(text, R"({"mesh": 0, "scale": [-1, 1, 1]})", R"({"mesh": 0, "scale": [-2, 2, 2]})");
+        std::ofstream(dir / "scaled.gltf") << text;
+        EXPECT_NEAR(loadGltf(dir / "scaled.gltf", [](const std::string&) {}).meshes[4].brdf.thickness, 1.0f, 1e-6f);
+    }
+    write(R"("transmissionFactor": 0, "transmissionTexture": {"index": 0})", dir / "off.gltf");
+    const GltfScene off = loadGltf(dir / "off.gltf", [](const std::string&) {});
+    EXPECT_EQ(off.meshes[1].brdf.transmission, 0.0f);
+    EXPECT_FALSE(off.meshes[1].textures.transmission);
+    EXPECT_FALSE(off.meshes[1].seeThrough());
+    for (const auto& [bad, names] :
+         {std::pair<std::string, std::string>{R"("transmissionFactor": 1.5)", "KHR_materials_transmission"},
+          {R"("transmissionFactor": 1}, "KHR_materials_volume": {"thicknessFactor": -1)", "KHR_materials_volume"},
+          {R"("transmissionFactor": 1}, "KHR_materials_volume": {"attenuationDistance": 0)", "KHR_materials_volume"},
+          {R"("transmissionFactor": 1}, "KHR_materials_volume": {"attenuationColor": [1, 1])", "KHR_materials_volume"}}) {
+        write(bad, dir / "bad.gltf");
+        expectRefusedNaming(dir / "bad.gltf", names, bad);
+    }
+    fs::remove_all(dir);
+}
+
 // EXT_texture_webp: a texture naming a WebP source reads it (lossless here: the texels exactly)
 // in place of its core source, which stays the fallback for readers without WebP; a WebP-only
 // texture (the extension required) reads too.
