@@ -33,11 +33,13 @@ std::string u32(uint32_t v) { return std::string(reinterpret_cast<const char*>(&
 
 const char* kTetrahedronObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
 
-std::string triangleGlb() {
+// `materials`: a "materials" array the primitive's material 0 comes from; empty: none.
+std::string triangleGlb(const std::string& materials = "") {
     const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     const std::string bin(reinterpret_cast<const char*>(p), sizeof p);
-    std::string json = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"children":[1]},{"mesh":0,"translation":[1,0,0]}],)"
-                       R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+    std::string json = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"children":[1]},{"mesh":0,"translation":[1,0,0]}],)" +
+                       (materials.empty() ? std::string(R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)")
+                                          : R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"material":0}]}],"materials":)" + materials + ",") +
                        R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
                        R"("bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36}]})";
     while (json.size() % 4) json += ' ';
@@ -158,6 +160,14 @@ int main(int argc, char** argv) {
         "mtllib fuzz.mtl\nnewmtl red\nKd 1 0 0\nd 0.5\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
         "usemtl red\nf 1/1/1 2/2/1 3/3/1\ng other\no obj\nf -3 -2 -1\n");
     put(dir, "fuzz_gltf", "two-nodes.glb", triangleGlb());
+    // Every material extension the reader honours, in one material: the fuzzer starts inside them.
+    put(dir, "fuzz_gltf", "material-extensions.glb",
+        triangleGlb(R"([{"emissiveFactor":[1,0.5,0],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":2},)"
+                    R"("KHR_materials_ior":{"ior":1.7},"KHR_materials_specular":{"specularFactor":0.5,"specularColorFactor":[1,0.9,0.8]},)"
+                    R"("KHR_materials_clearcoat":{"clearcoatFactor":1,"clearcoatRoughnessFactor":0.2},)"
+                    R"("KHR_materials_sheen":{"sheenColorFactor":[0.8,0.7,0.6],"sheenRoughnessFactor":0.5},)"
+                    R"("KHR_materials_transmission":{"transmissionFactor":0.9},)"
+                    R"("KHR_materials_volume":{"thicknessFactor":0.5,"attenuationColor":[0.9,0.5,0.2],"attenuationDistance":2}}}])"));
     put(dir, "fuzz_gltf", "meshopt.glb", meshoptTriangleGlb());
     put(dir, "fuzz_gltf", "draco.glb", dracoTriangleGlb());
     put(dir, "fuzz_hdr", "runs.hdr", radianceHdr(true));

@@ -4,9 +4,9 @@
 //
 // Casters are the opaque and alpha-tested meshes (alpha-tested ones as if opaque), concatenated
 // in world space in draw order, each keeping its culling so the visibility buffer sees what the
-// frame shades. Blended meshes neither cast nor take masks (scene::Scene::draw). Nothing here
-// runs unless a mode is asked for and a light casts shadows: the promise that a stage a scene
-// does not need costs nothing.
+// frame shades. See-through meshes (blended or transmissive: scene::Mesh::seeThrough) neither
+// cast nor take masks (scene::Scene::draw). Nothing here runs unless a mode is asked for and a
+// light casts shadows: the promise that a stage a scene does not need costs nothing.
 
 #include <optional>
 #include <vector>
