@@ -27,6 +27,7 @@
 #include "rt/bvh_refit.h"
 #include "rt/lazy_refit.h"
 #include "rt/ray_query.h"
+#include "rt/uniform_grid.h"
 #include "scene/model_scene.h"
 
 namespace {
@@ -246,6 +247,24 @@ void benchModel(RTCDevice device, const std::string& name) {
                 refitMs, lazyMs, embreeRefitMs, refitMs / embreeRefitMs, degradation, oursClosest, embreeClosest,
                 embreeClosest / oursClosest, oursShadow, embreeShadow, embreeShadow / oursShadow,
                 double(agree) / double(2 * rayCount));
+
+    // Wald et al.'s uniform grid (rt/uniform_grid.h), rebuilt from scratch as every frame of an
+    // animation would, walked one ray at a time (the 3D-DDA baseline of the paper's packets) over
+    // the same rays; its hits must be the BVH's, bit for bit.
+    rt::UniformGrid grid;
+    const double gridMs = medianMs(3, [&] { grid = rt::buildUniformGrid(g->view()); });
+    std::vector<rt::RayHit> fromGrid(rayCount), fromBvh(rayCount);
+    const double gridClosest = raysPerSecondM(rayCount, [&](size_t i) { fromGrid[i] = rt::closestHit(grid, g->view(), primary[i]); });
+    raster::parallelFor(rayCount, [&](size_t i) { fromBvh[i] = rt::closestHit(sah, g->view(), primary[i]); });
+    size_t differ = 0;
+    for (size_t i = 0; i < rayCount; ++i)
+        differ += fromGrid[i].triangle != fromBvh[i].triangle || (fromBvh[i].hit() && fromGrid[i].t != fromBvh[i].t);
+    const double gridShadow = raysPerSecondM(rayCount, [&](size_t i) { ours[i] = rt::anyHit(grid, g->view(), shadow[i]); });
+    std::printf("%-9s grid %dx%dx%d, %zu references: build %.1f ms (SAH BVH %.1f: %.2fx) | closest %.2f M/s (BVH %.2f, "
+                "Embree %.2f: %.2fx slower) | shadow %.2f M/s (BVH %.2f, Embree %.2f: %.2fx slower) | hits unlike the BVH's: %zu\n",
+                name.c_str(), grid.cells.x, grid.cells.y, grid.cells.z, grid.triangleRefs.size(), gridMs, sahMs, sahMs / gridMs,
+                gridClosest, oursClosest, embreeClosest, embreeClosest / gridClosest, gridShadow, oursShadow, embreeShadow,
+                embreeShadow / gridShadow, differ);
 }
 
 // ---- part 2: a skinned animation ------------------------------------------------------------
@@ -264,7 +283,7 @@ void benchAnimation(RTCDevice device, const std::string& name, int frames) {
                 name.c_str(), poses[0].triangles(), frames);
     rt::Bvh refitted = rt::buildBvh(poses[0].view()), lazyTree = refitted;
     rt::LazyRefit lazy(lazyTree);
-    std::vector<double> refit, lazyUpdate, rebuild, embreeRefit, embreeRebuild;
+    std::vector<double> refit, lazyUpdate, rebuild, gridRebuild, embreeRefit, embreeRebuild;
     double worst = 0.0;
     EmbreeScene dynamic(device, poses[0], RTC_BUILD_QUALITY_REFIT, true);
     dynamic.commit();
@@ -279,6 +298,9 @@ void benchAnimation(RTCDevice device, const std::string& name, int frames) {
         const rt::Bvh fresh = rt::buildBvh(poses[size_t(f)].view());
         rebuild.push_back(raster::nowMs() - t0);
         t0 = raster::nowMs();
+        const rt::UniformGrid grid = rt::buildUniformGrid(poses[size_t(f)].view());
+        gridRebuild.push_back(raster::nowMs() - t0);
+        t0 = raster::nowMs();
         dynamic.update(poses[size_t(f)].positions);
         embreeRefit.push_back(raster::nowMs() - t0);
         t0 = raster::nowMs();
@@ -286,9 +308,9 @@ void benchAnimation(RTCDevice device, const std::string& name, int frames) {
         full.commit();
         embreeRebuild.push_back(raster::nowMs() - t0);
     }
-    std::printf("refit %.2f  lazy %.3f  rebuild %.2f | embree refit %.2f  rebuild %.2f | refit/embree %.2f  "
+    std::printf("refit %.2f  lazy %.3f  rebuild %.2f  grid rebuild %.2f | embree refit %.2f  rebuild %.2f | refit/embree %.2f  "
                 "rebuild/embree %.2f | degradation max %.3f (rebuild past 0.4)\n",
-                bench::median(refit), bench::median(lazyUpdate), bench::median(rebuild), bench::median(embreeRefit),
+                bench::median(refit), bench::median(lazyUpdate), bench::median(rebuild), bench::median(gridRebuild), bench::median(embreeRefit),
                 bench::median(embreeRebuild), bench::median(refit) / bench::median(embreeRefit),
                 bench::median(rebuild) / bench::median(embreeRebuild), worst);
 }

@@ -1,0 +1,83 @@
+#pragma once
+// A uniform grid over triangles, rebuilt from scratch every frame (Wald, Ize, Kensler, Knoll and
+// Parker 2006, "Ray Tracing Animated Scenes using Coherent Grid Traversal", section 3): no
+// hierarchy to keep, so any animation works, at a build cost linear in the triangles.
+//
+// The grid has about lambda cells per triangle, cubical ones (§3: N_a = d_a cbrt(lambda N / V)),
+// and each cell lists the triangles whose bounding box overlaps it (the paper's cheap insertion;
+// an exact triangle-in-box test cut references by a third but intersection tests by only a few
+// percent). Here each box is first grown by kGridInsertionMargin, which is what makes the
+// traversal exact (below).
+//
+// Single rays walk the cells in order by the 3D-DDA (Amanatides and Woo 1987), the baseline the
+// paper's packets are measured against. The answer is exactly that of testing every triangle
+// (closestHitBruteForce): the same watertight test decides every hit, ties go to the lower id, and
+// the walk stops only once the best hit lies before the next cell's entry.
+//
+// Why the margin: a hit point lies in its triangle's bounding box, so in every cell that box
+// overlaps; but the walk computes its start cell and each crossing in float, so near a cell's face
+// or corner it may visit the neighbour of the cell the exact ray is in. Each crossing is computed
+// afresh from the cell's face (never accumulated), a few roundings of the coordinates, so the walk
+// is never further than the margin from the exact path, and a triangle whose hit is near a face
+// is listed on both sides of it. A point exactly on a face needs no margin — the walk and the
+// insertion place it by the same floor, and a cell is tested before it is left — and the tests'
+// hard cases (the lattice of faces, edges and vertices, flat and far scenes) pass without it too:
+// it guards the rounding cases no test has found, at the cost of a few more references.
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "rt/aabb.h"
+#include "rt/ray.h"
+#include "rt/triangle_mesh.h"
+
+namespace cuberille::rt {
+
+/// lambda, cells per triangle: Wald et al. found nearly every scene at its best around 5
+/// (Figure 6), and used 5 throughout; for models of millions of triangles, where the build
+/// outweighs the rays, 1 (§4.4).
+inline constexpr float kGridCellsPerTriangle = 5.0f;
+
+/// The most cells along one axis: a bound on memory for a scene of a few huge triangles and
+/// many tiny ones (the teapot in a stadium, which §6 says a uniform grid suits poorly anyway).
+inline constexpr int kGridMaxCellsPerAxis = 1024;
+
+/// How far past its bounding box a triangle is listed, as a fraction of a cell: the walk's
+/// crossings are a few float roundings from the exact ones, orders of magnitude below this.
+/// Absolute floor: 16 ulps of the grid's largest coordinate, for scenes far from the origin.
+inline constexpr float kGridInsertionMargin = 1.0f / 1024.0f;
+
+struct UniformGrid {
+    Aabb bounds;                      // the triangles' box; the cells tile it
+    glm::ivec3 cells{0};              // resolution per axis; 0 for an empty grid
+    glm::vec3 cellSize{0.0f};
+    std::vector<uint32_t> cellStart;  // cell c's triangles: triangleRefs[cellStart[c] .. cellStart[c + 1])
+    std::vector<uint32_t> triangleRefs;  // each cell's triangle ids, ascending
+
+    bool empty() const { return cells.x == 0; }
+    size_t cellCount() const { return size_t(cells.x) * size_t(cells.y) * size_t(cells.z); }
+    size_t cellIndex(int x, int y, int z) const { return (size_t(z) * size_t(cells.y) + size_t(y)) * size_t(cells.x) + size_t(x); }
+};
+
+/// The resolution Wald et al. choose for `triangles` triangles in `bounds`: cubical cells, about
+/// `lambda` per triangle; an axis of zero extent (a flat scene) gets one cell.
+glm::ivec3 gridResolution(const Aabb& bounds, size_t triangles, float lambda = kGridCellsPerTriangle);
+
+/// Builds the grid from scratch, in parallel (counts, prefix sum, fill, each cell's list sorted):
+/// the same grid at any thread count.
+UniformGrid buildUniformGrid(const TriangleMeshView& mesh, float lambda = kGridCellsPerTriangle);
+
+/// The work one walk did: cells visited and triangle tests (after the mailbox).
+struct GridCounters {
+    uint64_t cellsVisited = 0;
+    uint64_t trianglesTested = 0;
+};
+
+/// Closest hit and any hit by the 3D-DDA; exactly closestHitBruteForce's and anyHitBruteForce's
+/// answers (rt/ray_query.h).
+RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
+bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
+
+}  // namespace cuberille::rt

@@ -1,0 +1,158 @@
+// The uniform grid (Wald et al. 2006, §3) gives exactly the brute-force answer (same triangle,
+// same t bits) on random scenes, on the lattice of faces, edges and vertices that breaks naive
+// grid walks, flat and far-from-the-origin scenes, and rays starting on surfaces; its resolution
+// is the paper's; its build is the same at any thread count; the walk tests few triangles.
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include <tbb/global_control.h>
+
+#include "rt/ray_query.h"
+#include "rt/uniform_grid.h"
+#include "tests/rt/rt_test_support.h"
+
+namespace cuberille::rt {
+namespace {
+
+using testing::OwnedMesh;
+
+void expectSameAsBruteForce(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray) {
+    const RayHit expected = closestHitBruteForce(mesh, ray);
+    const RayHit got = closestHit(grid, mesh, ray);
+    ASSERT_EQ(got.triangle, expected.triangle)
+        << "origin " << ray.origin.x << " " << ray.origin.y << " " << ray.origin.z << " direction " << ray.direction.x << " "
+        << ray.direction.y << " " << ray.direction.z << " tMin " << ray.tMin << " tMax " << ray.tMax;
+    if (expected.hit()) {
+        ASSERT_EQ(got.t, expected.t);
+        ASSERT_EQ(got.u, expected.u);
+        ASSERT_EQ(got.v, expected.v);
+    } else {
+        ASSERT_EQ(got.t, std::numeric_limits<float>::infinity());
+    }
+    ASSERT_EQ(anyHit(grid, mesh, ray), anyHitBruteForce(mesh, ray));
+}
+
+TEST(UniformGrid, ClosestAndAnyHitEqualBruteForceOnRandomScenes) {
+    for (const uint32_t seed : {1u, 2u, 3u}) {
+        for (const float lambda : {kGridCellsPerTriangle, 1.0f, 40.0f}) {
+            const OwnedMesh soup = testing::randomSoup(3000, seed, seed == 3 ? 1.5f : 0.3f);  // seed 3: long slivers across cells
+            const UniformGrid grid = buildUniformGrid(soup.view(), lambda);
+            std::mt19937 rng(seed + 100);
+            std::uniform_real_distribution<float> unit(-1.5f, 1.5f), range(0.0f, 3.0f);
+            for (int i = 0; i < 1500; ++i) {
+                Ray ray{{unit(rng), unit(rng), unit(rng)}, {unit(rng), unit(rng), unit(rng)}};
+                if (i % 3 == 0) ray.tMax = range(rng);
+                if (i % 5 == 0) ray.tMin = range(rng) * 0.1f;
+                expectSameAsBruteForce(grid, soup.view(), ray);
+            }
+        }
+    }
+}
+
+// Every lattice coordinate is an integer and, at one cell per unit (lambda = 64 / N: a 4x4x4
+// grid), every cell face lies in a plane of the lattice's faces: rays start in, run along and pass through cell faces, edges and
+// corners, and through triangle edges and vertices, with +0 and -0 components.
+TEST(UniformGrid, RaysAlongCellFacesThroughEdgesAndVerticesEqualBruteForce) {
+    const OwnedMesh lattice = testing::cubeLattice(4);
+    const float nz = -0.0f;
+    const glm::vec3 directions[] = {{0, 0, 1},  {0, 0, -1}, {1, 0, 0},   {0, nz, 1}, {nz, 0, -1}, {nz, nz, 1},
+                                    {1, 1, 0},  {1, 1, 1},  {-1, -1, 1}, {1, 2, 0},  {0, 1, nz},  {0.5f, 0, 1}};
+    for (const float lambda : {kGridCellsPerTriangle, 64.0f / float(lattice.view().triangleCount())}) {
+        const UniformGrid grid = buildUniformGrid(lattice.view(), lambda);
+        if (lambda < 1.0f) ASSERT_EQ(grid.cells, glm::ivec3(4));
+        for (int x = -1; x <= 5; ++x)
+            for (int y = -1; y <= 5; ++y)
+                for (const float fx : {0.0f, 0.5f})
+                    for (const float fy : {0.0f, 0.5f})
+                        for (const float z : {-1.0f, 0.0f, 2.0f, 2.5f})
+                            for (const glm::vec3& d : directions) {
+                                const glm::vec3 o(float(x) + fx, float(y) + fy, z);
+                                expectSameAsBruteForce(grid, lattice.view(), Ray{o, d});
+                                expectSameAsBruteForce(grid, lattice.view(), Ray{{o.z, o.x, o.y}, {d.z, d.x, d.y}});
+                            }
+    }
+}
+
+// A flat scene (one cell thick: the grid is 2D) and the same soup moved 10^5 units from the
+// origin (cells a few hundred ulps of its coordinates wide): the walk's margin still holds.
+TEST(UniformGrid, FlatAndFarFromTheOriginScenesEqualBruteForce) {
+    OwnedMesh flat = testing::randomSoup(2000, 7, 0.2f);
+    for (glm::vec3& p : flat.positions) p.z = 0.0f;
+    OwnedMesh far = testing::randomSoup(2000, 8, 0.2f);
+    for (glm::vec3& p : far.positions) p += glm::vec3(1e5f, -1e5f, 5e4f);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> unit(-1.5f, 1.5f);
+    const UniformGrid flatGrid = buildUniformGrid(flat.view());
+    EXPECT_EQ(flatGrid.cells.z, 1);
+    EXPECT_GT(flatGrid.cells.x, 10);
+    const UniformGrid farGrid = buildUniformGrid(far.view());
+    for (int i = 0; i < 2000; ++i) {
+        const glm::vec3 o(unit(rng), unit(rng), unit(rng)), d(unit(rng), unit(rng), unit(rng));
+        expectSameAsBruteForce(flatGrid, flat.view(), Ray{o, d});
+        expectSameAsBruteForce(flatGrid, flat.view(), Ray{{o.x, o.y, 0.0f}, {d.x, d.y, 0.0f}});  // in the plane
+        expectSameAsBruteForce(farGrid, far.view(), Ray{o + glm::vec3(1e5f, -1e5f, 5e4f), d});
+    }
+}
+
+TEST(UniformGrid, OriginsOnSurfacesEqualBruteForce) {
+    const OwnedMesh sphere = testing::uvSphere(16, 32);
+    const TriangleMeshView m = sphere.view();
+    const UniformGrid grid = buildUniformGrid(m);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), weight(0.0f, 1.0f);
+    for (int i = 0; i < 3000; ++i) {
+        const uint32_t t = uint32_t(rng() % m.triangleCount());
+        float a = weight(rng), b = weight(rng);
+        if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
+        const glm::vec3 p = m.vertex(t, 0) + a * (m.vertex(t, 1) - m.vertex(t, 0)) + b * (m.vertex(t, 2) - m.vertex(t, 0));
+        for (const float tMin : {0.0f, 1e-4f}) expectSameAsBruteForce(grid, m, Ray{p, {unit(rng), unit(rng), unit(rng)}, tMin});
+    }
+}
+
+// §3: N_a = d_a cbrt(lambda N / V), cubical cells; an empty mesh has no cells.
+TEST(UniformGrid, ResolutionIsThePapersCubicalCellsAtLambdaPerTriangle) {
+    Aabb box;
+    box.grow(glm::vec3(0.0f));
+    box.grow(glm::vec3(4.0f, 2.0f, 1.0f));
+    const glm::ivec3 cells = gridResolution(box, 1000, 5.0f);  // 5000 cells of volume 8/5000: side 0.117
+    EXPECT_EQ(cells, glm::ivec3(34, 17, 9));
+    EXPECT_EQ(gridResolution(box, 0), glm::ivec3(0));
+    EXPECT_TRUE(buildUniformGrid(TriangleMeshView{}).empty());
+    EXPECT_FALSE(closestHit(UniformGrid{}, TriangleMeshView{}, Ray{}).hit());
+}
+
+TEST(UniformGrid, TheSameGridAtAnyThreadCount) {
+    const OwnedMesh soup = testing::randomSoup(20000, 5, 0.1f);
+    UniformGrid one, many;
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        one = buildUniformGrid(soup.view());
+    }
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 7);
+        many = buildUniformGrid(soup.view());
+    }
+    EXPECT_EQ(one.cells, many.cells);
+    EXPECT_EQ(one.cellStart, many.cellStart);
+    EXPECT_EQ(one.triangleRefs, many.triangleRefs);
+}
+
+// Coherent-enough rays into a dense soup test a small share of its 20000 triangles, the mailbox
+// keeping a triangle listed in several cells to one test a ray.
+TEST(UniformGrid, WalkTestsFewTriangles) {
+    const OwnedMesh soup = testing::randomSoup(20000, 4, 0.05f);
+    const UniformGrid grid = buildUniformGrid(soup.view());
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    GridCounters counters;
+    const int rays = 1000;
+    for (int i = 0; i < rays; ++i)
+        closestHit(grid, soup.view(), Ray{{unit(rng), unit(rng), -3.0f}, {0.1f * unit(rng), 0.1f * unit(rng), 1.0f}}, &counters);
+    EXPECT_LT(counters.trianglesTested / rays, 200u);
+    EXPECT_GT(counters.cellsVisited, uint64_t(rays));
+}
+
+}  // namespace
+}  // namespace cuberille::rt
