@@ -14,6 +14,7 @@
 
 #include "rt/bvh.h"
 #include "rt/bvh_build.h"
+#include "rt/ray.h"
 #include "rt/triangle_mesh.h"
 
 namespace cuberille::rt::testing {
@@ -58,6 +59,26 @@ inline OwnedMesh cubeLattice(int n) {
                 if (x < n && z < n) quad(vertex(x, y, z), vertex(x, y, z + 1), vertex(x + 1, y, z + 1), vertex(x + 1, y, z));
             }
     return m;
+}
+
+/// The rays that break naive traversal of cubeLattice(4), whose every coordinate is an integer:
+/// starting in, running along and passing through box and cell faces, triangle edges and
+/// vertices, with +0 and -0 components; each also with its axes rotated. f(ray) for each.
+template <class F>
+void forEachLatticeRay(F&& f) {
+    const float nz = -0.0f;
+    const glm::vec3 directions[] = {{0, 0, 1},  {0, 0, -1}, {1, 0, 0},   {0, nz, 1}, {nz, 0, -1}, {nz, nz, 1},
+                                    {1, 1, 0},  {1, 1, 1},  {-1, -1, 1}, {1, 2, 0},  {0, 1, nz},  {0.5f, 0, 1}};
+    for (int x = -1; x <= 5; ++x)
+        for (int y = -1; y <= 5; ++y)
+            for (const float fx : {0.0f, 0.5f})
+                for (const float fy : {0.0f, 0.5f})
+                    for (const float z : {-1.0f, 0.0f, 2.0f, 2.5f})
+                        for (const glm::vec3& d : directions) {
+                            const glm::vec3 o(float(x) + fx, float(y) + fy, z);
+                            f(Ray{o, d});
+                            f(Ray{{o.z, o.x, o.y}, {d.z, d.x, d.y}});
+                        }
 }
 
 /// A closed UV sphere of radius r around c.
