@@ -198,6 +198,103 @@ double raysPerSecondM(size_t rays, F&& trace) {
     return double(rays) / ms / 1000.0;
 }
 
+// ---- part 1b: coherent rays through the grid (Wald et al. 2006, Tables 1, 3 and 4) ----------
+
+/// A 1024x1024 camera's primary rays at the model (its bounding sphere filling the view), one per
+/// pixel centre, in square packets of `side` x `side` pixels, packets in scanline order.
+std::vector<rt::Ray> cameraRays(const Geometry& g, int size, int side) {
+    rt::Aabb b;
+    for (const glm::vec3& p : g.positions) b.grow(p);
+    const glm::vec3 c = b.centre();
+    const float r = 0.5f * glm::length(b.extent());
+    const glm::vec3 eye = c + 2.6f * r * glm::normalize(glm::vec3(0.4f, 0.3f, 1.0f));
+    const glm::vec3 forward = glm::normalize(c - eye), right = glm::normalize(glm::cross(forward, glm::vec3(0, 1, 0)));
+    const glm::vec3 up = glm::cross(right, forward);
+    const float halfWidth = std::tan(glm::radians(20.0f));
+    std::vector<rt::Ray> rays;
+    rays.reserve(size_t(size) * size_t(size));
+    for (int py = 0; py < size; py += side)
+        for (int px = 0; px < size; px += side)
+            for (int y = py; y < py + side; ++y)
+                for (int x = px; x < px + side; ++x) {
+                    const float sx = (2.0f * (float(x) + 0.5f) / float(size) - 1.0f) * halfWidth;
+                    const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(size)) * halfWidth;
+                    rays.push_back(rt::Ray{eye, forward + sx * right + sy * up});
+                }
+    return rays;
+}
+
+void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry& g, const rt::Bvh& sah, const rt::UniformGrid& grid) {
+    constexpr int kSize = 1024;
+    const size_t count = size_t(kSize) * kSize;
+    EmbreeScene embree(device, g, RTC_BUILD_QUALITY_MEDIUM, false);
+    embree.commit();
+    std::vector<rt::RayHit> reference(count);
+    const std::vector<rt::Ray> single = cameraRays(g, kSize, 8);
+    raster::parallelFor(count, [&](size_t i) { reference[i] = rt::closestHit(sah, g.view(), single[i]); });
+    size_t hitCount = 0;
+    for (const rt::RayHit& h : reference) hitCount += h.hit();
+    std::printf("%-9s camera 1024x1024, %.0f%% of rays hit; M rays/s, and per ray: cells visited, triangle tests; hits unlike the BVH's\n",
+                name.c_str(), 100.0 * double(hitCount) / double(count));
+    auto report = [&](const char* what, double mrays, const rt::GridCounters& counters, size_t differ) {
+        std::printf("%-9s   %-26s %6.2f M/s | cells %6.2f  triangle tests %7.2f | %zu\n", name.c_str(), what, mrays,
+                    double(counters.cellsVisited) / double(count), double(counters.trianglesTested) / double(count), differ);
+    };
+    auto differing = [&](const std::vector<rt::RayHit>& hits) {
+        size_t d = 0;
+        for (size_t i = 0; i < count; ++i) d += hits[i].triangle != reference[i].triangle || hits[i].t != reference[i].t;
+        return d;
+    };
+    std::vector<rt::RayHit> hits(count);
+    {
+        const double mrays = raysPerSecondM(count, [&](size_t i) { hits[i] = rt::closestHit(sah, g.view(), single[i]); });
+        report("BVH, single rays", mrays, {}, differing(hits));
+    }
+    {
+        std::vector<uint8_t> hit(count);
+        const double mrays = raysPerSecondM(count, [&](size_t i) {
+            uint32_t t;
+            hit[i] = embree.closest(single[i], &t);
+        });
+        size_t disagree = 0;
+        for (size_t i = 0; i < count; ++i) disagree += bool(hit[i]) != reference[i].hit();
+        std::printf("%-9s   %-26s %6.2f M/s | hit or miss unlike ours: %zu\n", name.c_str(), "Embree, rtcIntersect1", mrays, disagree);
+    }
+    {
+        rt::GridCounters counters;
+        const double mrays = raysPerSecondM(count, [&](size_t i) { hits[i] = rt::closestHit(grid, g.view(), single[i]); });
+        for (size_t i = 0; i < count; i += 97) rt::closestHit(grid, g.view(), single[i], &counters);  // a sample, scaled
+        counters.cellsVisited *= 97, counters.trianglesTested *= 97;
+        report("grid, single rays (3D-DDA)", mrays, counters, differing(hits));
+    }
+    for (const int side : {4, 8}) {
+        const std::vector<rt::Ray> rays = cameraRays(g, kSize, side);
+        const size_t perPacket = size_t(side) * size_t(side), packets = count / perPacket;
+        std::vector<rt::RayHit> packetHits(count);
+        const double ms = medianMs(3, [&] {
+            raster::parallelFor(packets, [&](size_t p) {
+                rt::closestHits(grid, g.view(), std::span(rays).subspan(p * perPacket, perPacket),
+                                std::span(packetHits).subspan(p * perPacket, perPacket));
+            });
+        });
+        rt::GridCounters counters;
+        for (size_t p = 0; p < packets; ++p)
+            rt::closestHits(grid, g.view(), std::span(rays).subspan(p * perPacket, perPacket), std::span(hits).subspan(p * perPacket, perPacket),
+                            &counters);
+        // The single rays are in 8x8 packet order: the same order as side 8's packets, not side 4's.
+        size_t differ = 0;
+        if (side == 8) differ = differing(packetHits);
+        else
+            for (size_t i = 0; i < count; ++i) {  // recompute the reference for this packet order
+                const rt::RayHit expected = rt::closestHit(sah, g.view(), rays[i]);
+                differ += packetHits[i].triangle != expected.triangle || packetHits[i].t != expected.t;
+            }
+        char what[64];
+        std::snprintf(what, sizeof what, "grid, %dx%d packets", side, side);
+        report(what, double(count) / ms / 1000.0, counters, differ);
+    }
+}
+
 void benchModel(RTCDevice device, const std::string& name) {
     const std::optional<Geometry> g = loadGeometry(name);
     if (!g) {
@@ -265,6 +362,7 @@ void benchModel(RTCDevice device, const std::string& name) {
                 name.c_str(), grid.cells.x, grid.cells.y, grid.cells.z, grid.triangleRefs.size(), gridMs, sahMs, sahMs / gridMs,
                 gridClosest, oursClosest, embreeClosest, embreeClosest / gridClosest, gridShadow, oursShadow, embreeShadow,
                 embreeShadow / gridShadow, differ);
+    benchCoherentRays(device, name, *g, sah, grid);
 }
 
 // ---- part 2: a skinned animation ------------------------------------------------------------

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
+#include <optional>
 
 #include <tbb/parallel_for.h>
 
@@ -103,7 +105,127 @@ RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ra
     return best;
 }
 
+// The packet's slices (closestHits): each ray's state as the slices go by.
+struct PacketRay {
+    std::optional<WatertightRay> test;  // set for every ray of the packet
+    float entry = 0.0f;                 // where it enters the grid's box
+    float inverseK = 0.0f;              // 1 / its direction's major component
+};
+
 }  // namespace
+
+void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
+                 GridCounters* counters) {
+    const int n = int(rays.size());
+    for (int i = 0; i < n; ++i) hits[i] = RayHit{}, hits[i].t = rays[i].tMax;
+    if (grid.empty() || n == 0) {
+        for (int i = 0; i < n; ++i) hits[i].t = std::numeric_limits<float>::infinity();
+        return;
+    }
+    // The major axis K of the packet's summed direction, and the way it is travelled.
+    glm::vec3 sum(0.0f);
+    for (const Ray& r : rays) sum += r.direction;
+    const glm::vec3 magnitude = glm::abs(sum);
+    const int k = magnitude.x >= magnitude.y && magnitude.x >= magnitude.z ? 0 : magnitude.y >= magnitude.z ? 1 : 2;
+    const int u = (k + 1) % 3, v = (k + 2) % 3;
+    const int step = sum[k] < 0.0f ? -1 : 1;
+    bool coherent = true;
+    for (const Ray& r : rays) coherent = coherent && (step > 0 ? r.direction[k] > 0.0f : r.direction[k] < 0.0f);
+    if (!coherent) {  // the 3D-DDA, ray by ray: the same answers
+        for (int i = 0; i < n; ++i) hits[i] = closestHit(grid, mesh, rays[i], counters);
+        return;
+    }
+    const GridFrame frame(grid);
+    const glm::vec3 lo = glm::abs(grid.bounds.lo), hi = glm::abs(grid.bounds.hi);
+    const float ulpFloor = 16.0f * std::max({lo.x, lo.y, lo.z, hi.x, hi.y, hi.z}) * std::numeric_limits<float>::epsilon();
+    const glm::vec3 margin = glm::max(grid.cellSize * kGridInsertionMargin, glm::vec3(ulpFloor));
+    PacketRay packet[kMaxGridPacketRays];
+    uint64_t active = 0;  // bit i: ray i is still looking
+    int first = step > 0 ? frame.last[k] : 0;  // the first slice any ray enters
+    for (int i = 0; i < n; ++i) {
+        const Ray& r = rays[i];
+        packet[i].test.emplace(r);
+        packet[i].inverseK = 1.0f / r.direction[k];
+        if (!RayBoxTest(r).hits(grid.bounds.lo, grid.bounds.hi, r.tMin, r.tMax, &packet[i].entry)) continue;
+        active |= uint64_t(1) << i;
+        const int slice = frame.cellOf(r.origin + r.direction * packet[i].entry)[k];
+        first = step > 0 ? std::min(first, slice) : std::max(first, slice);
+    }
+    for (int slice = first; active && slice >= 0 && slice <= frame.last[k]; slice += step) {
+        // Each looking ray's stretch in this slice, between its faces' crossings (clamped to where
+        // it is in the grid and not yet past its best hit): its box, grown by the margin, holds
+        // every hit the ray can have in this slice; the boxes' union gives the rectangle of cells.
+        const float nearFace = grid.bounds.lo[k] + float(slice + (step > 0 ? 0 : 1)) * grid.cellSize[k];
+        const float farFace = grid.bounds.lo[k] + float(slice + (step > 0 ? 1 : 0)) * grid.cellSize[k];
+        glm::vec3 rectLo(std::numeric_limits<float>::max()), rectHi(std::numeric_limits<float>::lowest());
+        float farT[kMaxGridPacketRays];
+        float stretchLo[3][kMaxGridPacketRays], stretchHi[3][kMaxGridPacketRays];
+        uint64_t crossing = 0;
+        for (int axis = 0; axis < 3; ++axis) {  // empty boxes for the rays not crossing: they meet nothing
+            std::fill_n(stretchLo[axis], n, std::numeric_limits<float>::max());
+            std::fill_n(stretchHi[axis], n, std::numeric_limits<float>::lowest());
+        }
+        for (int i = 0; i < n; ++i) {
+            if (!(active >> i & 1)) continue;
+            const Ray& r = rays[i];
+            farT[i] = (farFace - r.origin[k]) * packet[i].inverseK;
+            const float t0 = std::max((nearFace - r.origin[k]) * packet[i].inverseK, packet[i].entry);
+            const float t1 = std::min(farT[i], hits[i].t) * detail::kEntrySlack;
+            if (!(t1 >= t0 / detail::kEntrySlack)) continue;  // not in this slice yet
+            crossing |= uint64_t(1) << i;
+            const glm::vec3 a = r.origin + r.direction * t0, b = r.origin + r.direction * t1;
+            const glm::vec3 boxLo = glm::min(a, b) - margin, boxHi = glm::max(a, b) + margin;
+            for (int axis = 0; axis < 3; ++axis) stretchLo[axis][i] = boxLo[axis], stretchHi[axis][i] = boxHi[axis];
+            rectLo = glm::min(rectLo, boxLo), rectHi = glm::max(rectHi, boxHi);
+        }
+        if (crossing) {
+            const int firstCrossing = std::countr_zero(crossing), lastCrossing = 63 - std::countl_zero(crossing);
+            glm::vec3 a = rectLo, b = rectHi;
+            a[k] = b[k] = grid.bounds.lo[k] + (float(slice) + 0.5f) * grid.cellSize[k];
+            const glm::ivec3 c0 = frame.cellOf(a), c1 = frame.cellOf(b);
+            // A triangle listed in several cells of the slice is tested once in it. Across slices
+            // it may be tested again: a ray's stretch in one slice says nothing of its next one.
+            uint32_t mailbox[64];
+            std::fill(std::begin(mailbox), std::end(mailbox), RayHit::kNone);
+            glm::ivec3 cell;
+            cell[k] = slice;
+            for (cell[v] = c0[v]; cell[v] <= c1[v]; ++cell[v])
+                for (cell[u] = c0[u]; cell[u] <= c1[u]; ++cell[u]) {
+                    if (counters) ++counters->cellsVisited;
+                    const size_t c = grid.cellIndex(cell.x, cell.y, cell.z);
+                    for (uint32_t j = grid.cellStart[c]; j < grid.cellStart[c + 1]; ++j) {
+                        const uint32_t triangle = grid.triangleRefs[j];
+                        if (mailbox[triangle & 63] == triangle) continue;
+                        mailbox[triangle & 63] = triangle;
+                        const glm::vec3 p0 = mesh.vertex(triangle, 0), p1 = mesh.vertex(triangle, 1), p2 = mesh.vertex(triangle, 2);
+                        const glm::vec3 triLo = glm::min(p0, glm::min(p1, p2)), triHi = glm::max(p0, glm::max(p1, p2));
+                        if (glm::any(glm::greaterThan(triLo, rectHi)) || glm::any(glm::lessThan(triHi, rectLo))) continue;
+                        // Frustum culling (Wald et al. §2), per ray: only a ray whose stretch box
+                        // meets the triangle's box can hit it in this slice.
+                        uint64_t candidates = 0;
+                        for (int i = firstCrossing; i <= lastCrossing; ++i) {
+                            const bool overlaps = stretchLo[0][i] <= triHi.x && stretchHi[0][i] >= triLo.x && stretchLo[1][i] <= triHi.y &&
+                                                  stretchHi[1][i] >= triLo.y && stretchLo[2][i] <= triHi.z && stretchHi[2][i] >= triLo.z;
+                            candidates |= uint64_t(overlaps) << i;
+                        }
+                        for (; candidates; candidates &= candidates - 1) {
+                            const int i = std::countr_zero(candidates);
+                            if (counters) ++counters->trianglesTested;
+                            RayHit candidate;
+                            if (!packet[i].test->intersect(p0, p1, p2, rays[i].tMin, hits[i].t, &candidate)) continue;
+                            candidate.triangle = triangle;
+                            if (candidate.closerThan(hits[i].t, hits[i].triangle)) hits[i] = candidate;
+                        }
+                    }
+                }
+        }
+        // Retire the rays whose best hit lies before their exit from this slice (as the walk stops).
+        for (int i = 0; i < n; ++i)
+            if ((active >> i & 1) && hits[i].t * detail::kEntrySlack < farT[i]) active &= ~(uint64_t(1) << i);
+    }
+    for (int i = 0; i < n; ++i)
+        if (!hits[i].hit()) hits[i].t = std::numeric_limits<float>::infinity();
+}
 
 glm::ivec3 gridResolution(const Aabb& bounds, size_t triangles, float lambda) {
     if (triangles == 0 || bounds.empty()) return glm::ivec3(0);

@@ -25,6 +25,7 @@
 // it guards the rounding cases no test has found, at the cost of a few more references.
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -79,5 +80,21 @@ struct GridCounters {
 /// answers (rt/ray_query.h).
 RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
 bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
+
+/// The most rays one packet holds: 8x8, the paper's best size below 250k triangles (§4.1).
+inline constexpr int kMaxGridPacketRays = 64;
+
+/// Closest hits of a packet of rays traced together slice by slice (Wald et al. §2): along the
+/// packet's major axis K, each slice of cells one cell thick is entered once for the whole
+/// packet, and the rectangle of cells the packet's rays cross in it (from each ray's two points on
+/// the slice's faces, grown by the margin) is tested against every ray still looking — one
+/// traversal step for the packet where the 3D-DDA takes one per ray per cell. A ray retires once
+/// its best hit lies before its exit from the slice. The rays need not share an origin (a shadow
+/// packet toward a light) but must all travel the same way along K; a packet that does not (a
+/// wide camera's rays at 45°, rays parallel to every slice) is walked ray by ray instead.
+/// hits[i] is exactly closestHit(rays[i]) (so brute force's), whatever the packet's size and
+/// shape. At most kMaxGridPacketRays rays.
+void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
+                 GridCounters* counters = nullptr);
 
 }  // namespace cuberille::rt

@@ -99,6 +99,82 @@ TEST(UniformGrid, OriginsOnSurfacesEqualBruteForce) {
     }
 }
 
+// Packets (Wald et al. §2) give each ray exactly brute force's hit: camera packets of 8x8 and 4x4
+// rays from a common eye (the pixels of a small image, some rays missing the scene), shadow packets
+// from points on the surface toward one light, segments, and incoherent packets (random
+// directions: walked ray by ray), on random soups at three lambdas.
+TEST(UniformGrid, PacketsGiveEachRayBruteForcesHit) {
+    for (const uint32_t seed : {1u, 2u}) {
+        const OwnedMesh soup = testing::randomSoup(3000, seed, 0.3f);
+        const TriangleMeshView m = soup.view();
+        std::mt19937 rng(seed + 50);
+        std::uniform_real_distribution<float> unit(-1.0f, 1.0f), weight(0.0f, 1.0f);
+        for (const float lambda : {kGridCellsPerTriangle, 1.0f, 20.0f}) {
+            const UniformGrid grid = buildUniformGrid(m, lambda);
+            auto check = [&](const std::vector<Ray>& rays) {
+                std::vector<RayHit> hits(rays.size());
+                closestHits(grid, m, rays, hits);
+                for (size_t i = 0; i < rays.size(); ++i) {
+                    const RayHit expected = closestHitBruteForce(m, rays[i]);
+                    ASSERT_EQ(hits[i].triangle, expected.triangle) << "ray " << i << " of " << rays.size();
+                    ASSERT_EQ(hits[i].t, expected.t);
+                    ASSERT_EQ(hits[i].u, expected.u);
+                    ASSERT_EQ(hits[i].v, expected.v);
+                }
+            };
+            for (int packet = 0; packet < 30; ++packet) {
+                const int side = packet % 2 ? 8 : 4;
+                // A camera outside the soup looking at a random point in it, a packet of its pixels.
+                const glm::vec3 eye = 3.0f * glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)));
+                const glm::vec3 forward = glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)) * 0.5f - eye);
+                const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(0.3f, 1.0f, 0.1f)));
+                const glm::vec3 up = glm::cross(right, forward);
+                const float spread = packet % 3 == 0 ? 0.2f : 0.02f;  // a wide packet and a pixel-sized one
+                std::vector<Ray> camera, shadow;
+                for (int y = 0; y < side; ++y)
+                    for (int x = 0; x < side; ++x) {
+                        Ray r{eye, forward + spread * (float(x - side / 2) * right + float(y - side / 2) * up) / float(side)};
+                        if (packet % 5 == 0) r.tMax = 3.0f;  // segments
+                        camera.push_back(r);
+                    }
+                check(camera);
+                // Shadow rays: from points on random triangles toward one light, leaving at 1e-4.
+                const glm::vec3 light = glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)));
+                for (int i = 0; i < side * side; ++i) {
+                    const uint32_t t = uint32_t(rng() % m.triangleCount());
+                    float a = weight(rng), b = weight(rng);
+                    if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
+                    const glm::vec3 p = m.vertex(t, 0) + a * (m.vertex(t, 1) - m.vertex(t, 0)) + b * (m.vertex(t, 2) - m.vertex(t, 0));
+                    shadow.push_back(Ray{p, light, 1e-4f});
+                }
+                check(shadow);
+                std::vector<Ray> incoherent;
+                for (int i = 0; i < 16; ++i) incoherent.push_back(Ray{{unit(rng), unit(rng), unit(rng)}, {unit(rng), unit(rng), unit(rng)}});
+                check(incoherent);
+            }
+        }
+    }
+}
+
+// The lattice's hard rays (faces, edges, vertices, +0 and -0), in packets of 16 consecutive rays.
+TEST(UniformGrid, PacketsOfTheLatticesHardRaysGiveBruteForcesHits) {
+    const OwnedMesh lattice = testing::cubeLattice(4);
+    const TriangleMeshView m = lattice.view();
+    const UniformGrid grid = buildUniformGrid(m, 64.0f / float(m.triangleCount()));
+    std::vector<Ray> rays;
+    testing::forEachLatticeRay([&](const Ray& ray) { rays.push_back(ray); });
+    for (size_t first = 0; first < rays.size(); first += 16) {
+        const std::span<const Ray> packet(rays.data() + first, std::min<size_t>(16, rays.size() - first));
+        std::vector<RayHit> hits(packet.size());
+        closestHits(grid, m, packet, hits);
+        for (size_t i = 0; i < packet.size(); ++i) {
+            const RayHit expected = closestHitBruteForce(m, packet[i]);
+            ASSERT_EQ(hits[i].triangle, expected.triangle) << "ray " << first + i;
+            if (expected.hit()) ASSERT_EQ(hits[i].t, expected.t);
+        }
+    }
+}
+
 // §3: N_a = d_a cbrt(lambda N / V), cubical cells; an empty mesh has no cells.
 TEST(UniformGrid, ResolutionIsThePapersCubicalCellsAtLambdaPerTriangle) {
     Aabb box;
