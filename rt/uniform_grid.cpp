@@ -35,6 +35,14 @@ struct GridFrame {
     }
 };
 
+// kGridInsertionMargin per axis, with its floor of 16 ulps of the grid's largest coordinate: what
+// the build grows each triangle's box by, and the packets each ray's stretch box.
+glm::vec3 insertionMargin(const UniformGrid& g) {
+    const glm::vec3 lo = glm::abs(g.bounds.lo), hi = glm::abs(g.bounds.hi);
+    const float ulpFloor = 16.0f * std::max({lo.x, lo.y, lo.z, hi.x, hi.y, hi.z}) * std::numeric_limits<float>::epsilon();
+    return glm::max(g.cellSize * kGridInsertionMargin, glm::vec3(ulpFloor));
+}
+
 // The cells a triangle is listed in: those its bounding box, grown by the margin, overlaps.
 CellRange cellsOfTriangle(const GridFrame& frame, const glm::vec3& margin, const TriangleMeshView& mesh, size_t triangle) {
     const Aabb b = mesh.triangleBounds(triangle);
@@ -116,6 +124,13 @@ struct PacketRay {
 
 void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
                  GridCounters* counters) {
+    if (rays.size() > size_t(kMaxGridPacketRays)) {  // more than a packet: packets of the most
+        for (size_t first = 0; first < rays.size(); first += kMaxGridPacketRays) {
+            const size_t count = std::min(rays.size() - first, size_t(kMaxGridPacketRays));
+            closestHits(grid, mesh, rays.subspan(first, count), hits.subspan(first, count), counters);
+        }
+        return;
+    }
     const int n = int(rays.size());
     for (int i = 0; i < n; ++i) hits[i] = RayHit{}, hits[i].t = rays[i].tMax;
     if (grid.empty() || n == 0) {
@@ -136,9 +151,7 @@ void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
         return;
     }
     const GridFrame frame(grid);
-    const glm::vec3 lo = glm::abs(grid.bounds.lo), hi = glm::abs(grid.bounds.hi);
-    const float ulpFloor = 16.0f * std::max({lo.x, lo.y, lo.z, hi.x, hi.y, hi.z}) * std::numeric_limits<float>::epsilon();
-    const glm::vec3 margin = glm::max(grid.cellSize * kGridInsertionMargin, glm::vec3(ulpFloor));
+    const glm::vec3 margin = insertionMargin(grid);
     PacketRay packet[kMaxGridPacketRays];
     uint64_t active = 0;  // bit i: ray i is still looking
     int first = step > 0 ? frame.last[k] : 0;  // the first slice any ray enters
@@ -251,10 +264,7 @@ UniformGrid buildUniformGrid(const TriangleMeshView& mesh, float lambda) {
     grid.cells = gridResolution(grid.bounds, n, lambda);
     if (grid.empty()) return grid;
     grid.cellSize = grid.bounds.extent() / glm::vec3(grid.cells);
-    const glm::vec3 lo = glm::abs(grid.bounds.lo), hi = glm::abs(grid.bounds.hi);
-    const float largest = std::max({lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
-    const float ulpFloor = 16.0f * largest * std::numeric_limits<float>::epsilon();
-    const glm::vec3 margin = glm::max(grid.cellSize * kGridInsertionMargin, glm::vec3(ulpFloor));
+    const glm::vec3 margin = insertionMargin(grid);
     const GridFrame frame(grid);
 
     // Counts, then offsets, then the fill; the fill's order depends on scheduling, so each cell's

@@ -93,7 +93,7 @@ inline constexpr int kMaxGridPacketRays = 64;
 /// packet toward a light) but must all travel the same way along K; a packet that does not (a
 /// wide camera's rays at 45°, rays parallel to every slice) is walked ray by ray instead.
 /// hits[i] is exactly closestHit(rays[i]) (so brute force's), whatever the packet's size and
-/// shape. At most kMaxGridPacketRays rays.
+/// shape. More than kMaxGridPacketRays rays are traced as consecutive packets of that many.
 void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
                  GridCounters* counters = nullptr);
 

@@ -156,7 +156,8 @@ TEST(UniformGrid, PacketsGiveEachRayBruteForcesHit) {
     }
 }
 
-// The lattice's hard rays (faces, edges, vertices, +0 and -0), in packets of 16 consecutive rays.
+// The lattice's hard rays (faces, edges, vertices, +0 and -0), in packets of 16 consecutive rays,
+// and all at once (traced as consecutive packets of 64).
 TEST(UniformGrid, PacketsOfTheLatticesHardRaysGiveBruteForcesHits) {
     const OwnedMesh lattice = testing::cubeLattice(4);
     const TriangleMeshView m = lattice.view();
@@ -173,6 +174,9 @@ TEST(UniformGrid, PacketsOfTheLatticesHardRaysGiveBruteForcesHits) {
             if (expected.hit()) ASSERT_EQ(hits[i].t, expected.t);
         }
     }
+    std::vector<RayHit> all(rays.size());
+    closestHits(grid, m, rays, all);
+    for (size_t i = 0; i < rays.size(); ++i) ASSERT_EQ(all[i].triangle, closestHitBruteForce(m, rays[i]).triangle) << "ray " << i;
 }
 
 // §3: N_a = d_a cbrt(lambda N / V), cubical cells; an empty mesh has no cells.
