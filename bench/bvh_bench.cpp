@@ -293,6 +293,44 @@ void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry
         std::snprintf(what, sizeof what, "grid, %dx%d packets", side, side);
         report(what, double(count) / ms / 1000.0, counters, differ);
     }
+
+    // Shadow rays toward one directional light from the camera's hits (the paper's shadow packets):
+    // each 8x8 tile's hits leave their surface by 1e-4 of the model's size along the normal's
+    // side that faces the light, as one packet.
+    rt::Aabb box;
+    for (const glm::vec3& p : g.positions) box.grow(p);
+    const float offset = 1e-4f * glm::length(box.extent());
+    const glm::vec3 light = glm::normalize(glm::vec3(0.4f, 1.0f, 0.3f));
+    std::vector<rt::Ray> shadow;
+    std::vector<size_t> tileStart{0};
+    for (size_t tile = 0; tile < count / 64; ++tile) {
+        for (size_t i = tile * 64; i < tile * 64 + 64; ++i) {
+            if (!reference[i].hit()) continue;
+            const rt::Ray& r = single[i];
+            const glm::vec3 p0 = g.positions[g.indices[3 * reference[i].triangle]], p1 = g.positions[g.indices[3 * reference[i].triangle + 1]],
+                            p2 = g.positions[g.indices[3 * reference[i].triangle + 2]];
+            const glm::vec3 n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+            const glm::vec3 p = r.origin + r.direction * reference[i].t + n * (offset * (glm::dot(n, light) >= 0.0f ? 1.0f : -1.0f));
+            shadow.push_back(rt::Ray{p, light});
+        }
+        tileStart.push_back(shadow.size());
+    }
+    const size_t shadowCount = shadow.size();
+    std::vector<uint8_t> bvhOccluded(shadowCount), occluded(shadowCount);
+    const double bvhRate = raysPerSecondM(shadowCount, [&](size_t i) { bvhOccluded[i] = rt::anyHit(sah, g.view(), shadow[i]); });
+    const double embreeRate = raysPerSecondM(shadowCount, [&](size_t i) { occluded[i] = embree.occluded(shadow[i]); });
+    const double gridRate = raysPerSecondM(shadowCount, [&](size_t i) { occluded[i] = rt::anyHit(grid, g.view(), shadow[i]); });
+    const double packetMs = medianMs(3, [&] {
+        raster::parallelFor(tileStart.size() - 1, [&](size_t t) {
+            const size_t first = tileStart[t], n = tileStart[t + 1] - first;
+            rt::anyHits(grid, g.view(), std::span(shadow).subspan(first, n), std::span(occluded).subspan(first, n));
+        });
+    });
+    size_t differ = 0;
+    for (size_t i = 0; i < shadowCount; ++i) differ += occluded[i] != bvhOccluded[i];
+    std::printf("%-9s shadow rays from the camera's %zu hits, any hit, M rays/s: BVH %.2f, Embree %.2f, grid single %.2f, grid "
+                "packets (a tile's hits) %.2f | packets unlike the BVH: %zu\n",
+                name.c_str(), shadowCount, bvhRate, embreeRate, gridRate, double(shadowCount) / packetMs / 1000.0, differ);
 }
 
 void benchModel(RTCDevice device, const std::string& name) {

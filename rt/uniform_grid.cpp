@@ -120,14 +120,15 @@ struct PacketRay {
     float inverseK = 0.0f;              // 1 / its direction's major component
 };
 
-}  // namespace
-
-void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
+// closestHits and anyHits: a packet's rays slice by slice (the header). For any hit a ray retires
+// at its first hit, as the walk returns at it.
+template <bool kAnyHit>
+void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
                  GridCounters* counters) {
     if (rays.size() > size_t(kMaxGridPacketRays)) {  // more than a packet: packets of the most
         for (size_t first = 0; first < rays.size(); first += kMaxGridPacketRays) {
             const size_t count = std::min(rays.size() - first, size_t(kMaxGridPacketRays));
-            closestHits(grid, mesh, rays.subspan(first, count), hits.subspan(first, count), counters);
+            tracePacket<kAnyHit>(grid, mesh, rays.subspan(first, count), hits.subspan(first, count), counters);
         }
         return;
     }
@@ -147,7 +148,7 @@ void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
     bool coherent = true;
     for (const Ray& r : rays) coherent = coherent && (step > 0 ? r.direction[k] > 0.0f : r.direction[k] < 0.0f);
     if (!coherent) {  // the 3D-DDA, ray by ray: the same answers
-        for (int i = 0; i < n; ++i) hits[i] = closestHit(grid, mesh, rays[i], counters);
+        for (int i = 0; i < n; ++i) hits[i] = walk<kAnyHit>(grid, mesh, rays[i], counters);
         return;
     }
     const GridFrame frame(grid);
@@ -221,13 +222,19 @@ void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                                                   stretchHi[1][i] >= triLo.y && stretchLo[2][i] <= triHi.z && stretchHi[2][i] >= triLo.z;
                             candidates |= uint64_t(overlaps) << i;
                         }
+                        if (kAnyHit) candidates &= active;  // a ray with a hit is done
                         for (; candidates; candidates &= candidates - 1) {
                             const int i = std::countr_zero(candidates);
                             if (counters) ++counters->trianglesTested;
                             RayHit candidate;
                             if (!packet[i].test->intersect(p0, p1, p2, rays[i].tMin, hits[i].t, &candidate)) continue;
                             candidate.triangle = triangle;
-                            if (candidate.closerThan(hits[i].t, hits[i].triangle)) hits[i] = candidate;
+                            if (kAnyHit) {
+                                hits[i] = candidate;
+                                active &= ~(uint64_t(1) << i);
+                            } else if (candidate.closerThan(hits[i].t, hits[i].triangle)) {
+                                hits[i] = candidate;
+                            }
                         }
                     }
                 }
@@ -239,6 +246,8 @@ void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
     for (int i = 0; i < n; ++i)
         if (!hits[i].hit()) hits[i].t = std::numeric_limits<float>::infinity();
 }
+
+}  // namespace
 
 glm::ivec3 gridResolution(const Aabb& bounds, size_t triangles, float lambda) {
     if (triangles == 0 || bounds.empty()) return glm::ivec3(0);
@@ -299,6 +308,21 @@ RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const R
 
 bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters) {
     return walk<true>(grid, mesh, ray, counters).hit();
+}
+
+void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
+                 GridCounters* counters) {
+    tracePacket<false>(grid, mesh, rays, hits, counters);
+}
+
+void anyHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<uint8_t> occluded,
+             GridCounters* counters) {
+    RayHit hits[kMaxGridPacketRays];
+    for (size_t first = 0; first < rays.size(); first += kMaxGridPacketRays) {
+        const size_t count = std::min(rays.size() - first, size_t(kMaxGridPacketRays));
+        tracePacket<true>(grid, mesh, rays.subspan(first, count), std::span(hits, count), counters);
+        for (size_t i = 0; i < count; ++i) occluded[first + i] = hits[i].hit();
+    }
 }
 
 }  // namespace cuberille::rt

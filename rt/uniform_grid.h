@@ -97,4 +97,9 @@ inline constexpr int kMaxGridPacketRays = 64;
 void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
                  GridCounters* counters = nullptr);
 
+/// Any hit for a packet (shadow rays toward one light, the paper's shadow packets): occluded[i] is
+/// exactly anyHit(rays[i]); a ray retires at its first hit.
+void anyHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<uint8_t> occluded,
+             GridCounters* counters = nullptr);
+
 }  // namespace cuberille::rt

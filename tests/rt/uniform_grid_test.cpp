@@ -99,7 +99,7 @@ TEST(UniformGrid, OriginsOnSurfacesEqualBruteForce) {
     }
 }
 
-// Packets (Wald et al. §2) give each ray exactly brute force's hit: camera packets of 8x8 and 4x4
+// Packets (Wald et al. §2) give each ray exactly brute force's closest hit and any hit: camera packets of 8x8 and 4x4
 // rays from a common eye (the pixels of a small image, some rays missing the scene), shadow packets
 // from points on the surface toward one light, segments, and incoherent packets (random
 // directions: walked ray by ray), on random soups at three lambdas.
@@ -114,7 +114,10 @@ TEST(UniformGrid, PacketsGiveEachRayBruteForcesHit) {
             auto check = [&](const std::vector<Ray>& rays) {
                 std::vector<RayHit> hits(rays.size());
                 closestHits(grid, m, rays, hits);
+                std::vector<uint8_t> occluded(rays.size());
+                anyHits(grid, m, rays, occluded);
                 for (size_t i = 0; i < rays.size(); ++i) {
+                    ASSERT_EQ(bool(occluded[i]), anyHitBruteForce(m, rays[i])) << "any hit, ray " << i << " of " << rays.size();
                     const RayHit expected = closestHitBruteForce(m, rays[i]);
                     ASSERT_EQ(hits[i].triangle, expected.triangle) << "ray " << i << " of " << rays.size();
                     ASSERT_EQ(hits[i].t, expected.t);
@@ -176,7 +179,12 @@ TEST(UniformGrid, PacketsOfTheLatticesHardRaysGiveBruteForcesHits) {
     }
     std::vector<RayHit> all(rays.size());
     closestHits(grid, m, rays, all);
-    for (size_t i = 0; i < rays.size(); ++i) ASSERT_EQ(all[i].triangle, closestHitBruteForce(m, rays[i]).triangle) << "ray " << i;
+    std::vector<uint8_t> occluded(rays.size());
+    anyHits(grid, m, rays, occluded);
+    for (size_t i = 0; i < rays.size(); ++i) {
+        ASSERT_EQ(all[i].triangle, closestHitBruteForce(m, rays[i]).triangle) << "ray " << i;
+        ASSERT_EQ(bool(occluded[i]), anyHitBruteForce(m, rays[i])) << "any hit, ray " << i;
+    }
 }
 
 // §3: N_a = d_a cbrt(lambda N / V), cubical cells; an empty mesh has no cells.
