@@ -431,6 +431,7 @@ private:
         float diffuse[3][N], f0[3][N], view[3][N];
         float f90[N];  // with KHR_materials_specular only; 1 otherwise, and not stored
         float roughness[N];  // perceptual, floored: what the environment's levels are indexed by
+        float irradiance[3][N];  // the environment's E(n), floored at 0: written by addEnvironment, read by the sheen
     };
 
     // Two passes, each a loop across the queue the compiler vectorises (a light's type, range
@@ -541,9 +542,7 @@ private:
             const float albedo = sheenAlbedo(sheenAlbedo_, m.nDotV[i], r);
             const float scale = std::clamp(1.0f - std::max({c.r, c.g, c.b}) * albedo, 0.0f, 1.0f);
             glm::vec3 ambient = s_.lighting.ambient;
-            if (environment_)
-                ambient += glm::max(EnvironmentLight::irradianceAt(*environmentSh_, a.normal[0][i], a.normal[1][i], a.normal[2][i]),
-                                    glm::vec3(0.0f));
+            if (environment_) ambient += glm::vec3(m.irradiance[0][i], m.irradiance[1][i], m.irradiance[2][i]);
             for (int k = 0; k < 3; ++k) {
                 sheenColor[k][i] = c[k];
                 a.radiance[k][i] *= scale;
@@ -553,8 +552,7 @@ private:
         }
         for (int l = 0; l < s_.lighting.lightCount; ++l) {
             const Light& light = s_.lighting.lights[l];
-            light.type == LightType::Directional ? addSheenLight<true>(light, q, a, m, sheenColor, alpha, radiance)
-                                                 : addSheenLight<false>(light, q, a, m, sheenColor, alpha, radiance);
+            addSheenLight(light, q, a, m, sheenColor, alpha, radiance);
         }
         for (int k = 0; k < 3; ++k)
             for (int i = 0; i < count; ++i) a.radiance[k][i] += radiance[k][i];
@@ -563,17 +561,14 @@ private:
 
     // One light's sheen term E n.l pi D V c where n.l > 0. Not x light.specular: the sheen reads
     // the environment through its irradiance, which leaves out the dominant light drawn apart.
-    template <bool kDirectional>
+    // One function for every light type: a pow per pixel keeps this loop scalar anyway, so the
+    // per-type copies addLight needs in order to vectorise would buy nothing here.
     void addSheenLight(const Light& light, const ShadeQueue& q, const PixelAttributes& a, const SurfaceAtPixels& m,
                        const float (&sheenColor)[3][N], const float* alpha, float (&radiance)[3][N]) const {
         float shadowed[N];
         shadowMask(light, q, shadowed);
         for (int i = 0; i < q.count; ++i) {
-            Incident in;
-            if constexpr (kDirectional)
-                in = {-light.direction, light.intensity};
-            else
-                in = incident(light, a, i);
+            Incident in = incident(light, a, i);
             in.intensity *= shadowed[i];
             const glm::vec3 n(a.normal[0][i], a.normal[1][i], a.normal[2][i]), view(m.view[0][i], m.view[1][i], m.view[2][i]);
             const float nDotL = glm::dot(n, in.toLight);
@@ -777,7 +772,7 @@ private:
     // The environment's light at every pixel (raster/environment_light.h): occlusion x (c_diff E(n)
     // + S(r, roughness) (F0 A + F90 B)), r the view reflected about n, F90 = 1 unless kF90.
     template <bool kF90>
-    void addEnvironment(int count, PixelAttributes& a, const float* occlusion, const SurfaceAtPixels& m) const {
+    void addEnvironment(int count, PixelAttributes& a, const float* occlusion, SurfaceAtPixels& m) const {
         // Two passes, as the material's: the reflections' fetches (a loop GCC vectorises with
         // gathers), then the irradiance, the split-sum table and the sum per pixel.
         float specular[3][N];
@@ -793,6 +788,7 @@ private:
             EnvironmentLight::dfgAt(dfg, m.nDotV[i], m.roughness[i], scaleA, scaleB);
             const glm::vec3 e = glm::max(
                 EnvironmentLight::irradianceAt(*environmentSh_, a.normal[0][i], a.normal[1][i], a.normal[2][i]), glm::vec3(0.0f));
+            m.irradiance[0][i] = e.x, m.irradiance[1][i] = e.y, m.irradiance[2][i] = e.z;
             const float f90 = kF90 ? m.f90[i] : 1.0f;
             a.radiance[0][i] += occlusion[i] * (m.diffuse[0][i] * e.x + specular[0][i] * (m.f0[0][i] * scaleA + f90 * scaleB));
             a.radiance[1][i] += occlusion[i] * (m.diffuse[1][i] * e.y + specular[1][i] * (m.f0[1][i] * scaleA + f90 * scaleB));

@@ -91,4 +91,17 @@ struct WatertightRay {
                    RayHit* hit) const;
 };
 
+/// One triangle offered to a closest-hit or any-hit search, as every traversal does it (the BVH's,
+/// the grid's walk and packets, brute force): a hit within [tMin, best.t] replaces `best` when it
+/// is closer by RayHit's order. Returns whether the ray hit the triangle at all, which ends an
+/// any-hit search (its first hit always replaces `best`, whose triangle is still kNone).
+inline bool offerHit(const WatertightRay& test, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t triangle,
+                     float tMin, RayHit& best) {
+    RayHit candidate;
+    if (!test.intersect(a, b, c, tMin, best.t, &candidate)) return false;
+    candidate.triangle = triangle;
+    if (candidate.closerThan(best.t, best.triangle)) best = candidate;
+    return true;
+}
+
 }  // namespace cuberille::rt

@@ -32,11 +32,7 @@ RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray) {
     RayHit best;
     best.t = ray.tMax;
     for (uint32_t t = 0; t < mesh.triangleCount(); ++t) {
-        RayHit candidate;
-        if (!test.intersect(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), ray.tMin, best.t, &candidate))
-            continue;
-        candidate.triangle = t;
-        if (candidate.closerThan(best.t, best.triangle)) best = candidate;
+        offerHit(test, mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), t, ray.tMin, best);
     }
     if (!best.hit()) best.t = std::numeric_limits<float>::infinity();
     return best;

@@ -63,12 +63,8 @@ RayHit traverse(const Bvh& bvh, const Ray& ray, BoxOf&& boxOf, VertexOf&& vertex
             for (uint32_t i = node.first; i < node.first + node.primitiveCount; ++i) {
                 const uint32_t triangle = bvh.primitiveIndices[i];
                 if (counters) ++counters->trianglesTested;
-                RayHit candidate;
-                if (!triangleTest.intersect(vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), ray.tMin, best.t, &candidate))
-                    continue;
-                candidate.triangle = triangle;
-                if (kAnyHit) return candidate;
-                if (candidate.closerThan(best.t, best.triangle)) best = candidate;
+                if (offerHit(triangleTest, vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), triangle, ray.tMin, best) && kAnyHit)
+                    return best;
             }
         } else {
             const Aabb left = boxOf(node.first), right = boxOf(node.first + 1);

@@ -49,6 +49,23 @@ CellRange cellsOfTriangle(const GridFrame& frame, const glm::vec3& margin, const
     return {frame.cellOf(b.lo - margin), frame.cellOf(b.hi + margin)};
 }
 
+// Mailbox (Wald et al. §2): a triangle listed in several cells is tested once a ray (or a packet
+// slice). Skipping the retest is exact: it could only be rejected again, the best t having shrunk
+// since. A direct-mapped cache of the last N ids; a collision only costs a retest.
+template <int N>
+struct Mailbox {
+    static_assert((N & (N - 1)) == 0, "a power of two");
+    uint32_t slots[N];
+    Mailbox() { std::fill(std::begin(slots), std::end(slots), RayHit::kNone); }
+    /// Whether `triangle` was tested already; marks it tested.
+    bool seen(uint32_t triangle) {
+        uint32_t& slot = slots[triangle & (N - 1)];
+        if (slot == triangle) return true;
+        slot = triangle;
+        return false;
+    }
+};
+
 template <class Body>
 void forEachCell(const CellRange& r, Body&& body) {
     for (int z = r.lo.z; z <= r.hi.z; ++z)
@@ -76,25 +93,18 @@ RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ra
         step[a] = std::signbit(ray.direction[a]) ? -1 : 1;
         inverseDirection[a] = 1.0f / ray.direction[a];  // +-inf for a zero component: that axis never steps
     }
-    // Mailbox (Wald et al. §2): a triangle listed in several cells is tested once a ray. Skipping
-    // the retest is exact: it could only be rejected again, the best t having shrunk since.
-    uint32_t mailbox[16];
-    std::fill(std::begin(mailbox), std::end(mailbox), RayHit::kNone);
+    Mailbox<16> mailbox;
     for (;;) {
         if (counters) ++counters->cellsVisited;
         const size_t c = grid.cellIndex(cell.x, cell.y, cell.z);
         for (uint32_t i = grid.cellStart[c]; i < grid.cellStart[c + 1]; ++i) {
             const uint32_t triangle = grid.triangleRefs[i];
-            if (mailbox[triangle & 15] == triangle) continue;
-            mailbox[triangle & 15] = triangle;
+            if (mailbox.seen(triangle)) continue;
             if (counters) ++counters->trianglesTested;
-            RayHit candidate;
-            if (!triangleTest.intersect(mesh.vertex(triangle, 0), mesh.vertex(triangle, 1), mesh.vertex(triangle, 2), ray.tMin,
-                                        best.t, &candidate))
-                continue;
-            candidate.triangle = triangle;
-            if (kAnyHit) return candidate;
-            if (candidate.closerThan(best.t, best.triangle)) best = candidate;
+            if (offerHit(triangleTest, mesh.vertex(triangle, 0), mesh.vertex(triangle, 1), mesh.vertex(triangle, 2), triangle,
+                         ray.tMin, best) &&
+                kAnyHit)
+                return best;
         }
         // Each face's crossing from the face itself, not accumulated (the header's argument).
         int axis = 0;
@@ -199,8 +209,7 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
             const glm::ivec3 c0 = frame.cellOf(a), c1 = frame.cellOf(b);
             // A triangle listed in several cells of the slice is tested once in it. Across slices
             // it may be tested again: a ray's stretch in one slice says nothing of its next one.
-            uint32_t mailbox[64];
-            std::fill(std::begin(mailbox), std::end(mailbox), RayHit::kNone);
+            Mailbox<64> mailbox;
             glm::ivec3 cell;
             cell[k] = slice;
             for (cell[v] = c0[v]; cell[v] <= c1[v]; ++cell[v])
@@ -209,8 +218,7 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                     const size_t c = grid.cellIndex(cell.x, cell.y, cell.z);
                     for (uint32_t j = grid.cellStart[c]; j < grid.cellStart[c + 1]; ++j) {
                         const uint32_t triangle = grid.triangleRefs[j];
-                        if (mailbox[triangle & 63] == triangle) continue;
-                        mailbox[triangle & 63] = triangle;
+                        if (mailbox.seen(triangle)) continue;
                         const glm::vec3 p0 = mesh.vertex(triangle, 0), p1 = mesh.vertex(triangle, 1), p2 = mesh.vertex(triangle, 2);
                         const glm::vec3 triLo = glm::min(p0, glm::min(p1, p2)), triHi = glm::max(p0, glm::max(p1, p2));
                         if (glm::any(glm::greaterThan(triLo, rectHi)) || glm::any(glm::lessThan(triHi, rectLo))) continue;
@@ -226,15 +234,8 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                         for (; candidates; candidates &= candidates - 1) {
                             const int i = std::countr_zero(candidates);
                             if (counters) ++counters->trianglesTested;
-                            RayHit candidate;
-                            if (!packet[i].test->intersect(p0, p1, p2, rays[i].tMin, hits[i].t, &candidate)) continue;
-                            candidate.triangle = triangle;
-                            if (kAnyHit) {
-                                hits[i] = candidate;
+                            if (offerHit(*packet[i].test, p0, p1, p2, triangle, rays[i].tMin, hits[i]) && kAnyHit)
                                 active &= ~(uint64_t(1) << i);
-                            } else if (candidate.closerThan(hits[i].t, hits[i].triangle)) {
-                                hits[i] = candidate;
-                            }
                         }
                     }
                 }

@@ -34,6 +34,23 @@ void expectSameAsBruteForce(const UniformGrid& grid, const TriangleMeshView& mes
     ASSERT_EQ(anyHit(grid, mesh, ray), anyHitBruteForce(mesh, ray));
 }
 
+// The rays traced as packets (closestHits, anyHits) against brute force, ray by ray: the closest
+// hit's triangle and the bits of t, u and v, and whether anything is hit.
+void expectPacketsMatchBruteForce(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays) {
+    std::vector<RayHit> hits(rays.size());
+    closestHits(grid, mesh, rays, hits);
+    std::vector<uint8_t> occluded(rays.size());
+    anyHits(grid, mesh, rays, occluded);
+    for (size_t i = 0; i < rays.size(); ++i) {
+        ASSERT_EQ(bool(occluded[i]), anyHitBruteForce(mesh, rays[i])) << "any hit, ray " << i << " of " << rays.size();
+        const RayHit expected = closestHitBruteForce(mesh, rays[i]);
+        ASSERT_EQ(hits[i].triangle, expected.triangle) << "ray " << i << " of " << rays.size();
+        ASSERT_EQ(hits[i].t, expected.t);
+        ASSERT_EQ(hits[i].u, expected.u);
+        ASSERT_EQ(hits[i].v, expected.v);
+    }
+}
+
 TEST(UniformGrid, ClosestAndAnyHitEqualBruteForceOnRandomScenes) {
     for (const uint32_t seed : {1u, 2u, 3u}) {
         for (const float lambda : {kGridCellsPerTriangle, 1.0f, 40.0f}) {
@@ -111,20 +128,7 @@ TEST(UniformGrid, PacketsGiveEachRayBruteForcesHit) {
         std::uniform_real_distribution<float> unit(-1.0f, 1.0f), weight(0.0f, 1.0f);
         for (const float lambda : {kGridCellsPerTriangle, 1.0f, 20.0f}) {
             const UniformGrid grid = buildUniformGrid(m, lambda);
-            auto check = [&](const std::vector<Ray>& rays) {
-                std::vector<RayHit> hits(rays.size());
-                closestHits(grid, m, rays, hits);
-                std::vector<uint8_t> occluded(rays.size());
-                anyHits(grid, m, rays, occluded);
-                for (size_t i = 0; i < rays.size(); ++i) {
-                    ASSERT_EQ(bool(occluded[i]), anyHitBruteForce(m, rays[i])) << "any hit, ray " << i << " of " << rays.size();
-                    const RayHit expected = closestHitBruteForce(m, rays[i]);
-                    ASSERT_EQ(hits[i].triangle, expected.triangle) << "ray " << i << " of " << rays.size();
-                    ASSERT_EQ(hits[i].t, expected.t);
-                    ASSERT_EQ(hits[i].u, expected.u);
-                    ASSERT_EQ(hits[i].v, expected.v);
-                }
-            };
+            auto check = [&](const std::vector<Ray>& rays) { expectPacketsMatchBruteForce(grid, m, rays); };
             for (int packet = 0; packet < 30; ++packet) {
                 const int side = packet % 2 ? 8 : 4;
                 // A camera outside the soup looking at a random point in it, a packet of its pixels.
@@ -168,23 +172,10 @@ TEST(UniformGrid, PacketsOfTheLatticesHardRaysGiveBruteForcesHits) {
     std::vector<Ray> rays;
     testing::forEachLatticeRay([&](const Ray& ray) { rays.push_back(ray); });
     for (size_t first = 0; first < rays.size(); first += 16) {
-        const std::span<const Ray> packet(rays.data() + first, std::min<size_t>(16, rays.size() - first));
-        std::vector<RayHit> hits(packet.size());
-        closestHits(grid, m, packet, hits);
-        for (size_t i = 0; i < packet.size(); ++i) {
-            const RayHit expected = closestHitBruteForce(m, packet[i]);
-            ASSERT_EQ(hits[i].triangle, expected.triangle) << "ray " << first + i;
-            if (expected.hit()) ASSERT_EQ(hits[i].t, expected.t);
-        }
+        SCOPED_TRACE("packet from ray " + std::to_string(first));
+        expectPacketsMatchBruteForce(grid, m, std::span<const Ray>(rays.data() + first, std::min<size_t>(16, rays.size() - first)));
     }
-    std::vector<RayHit> all(rays.size());
-    closestHits(grid, m, rays, all);
-    std::vector<uint8_t> occluded(rays.size());
-    anyHits(grid, m, rays, occluded);
-    for (size_t i = 0; i < rays.size(); ++i) {
-        ASSERT_EQ(all[i].triangle, closestHitBruteForce(m, rays[i]).triangle) << "ray " << i;
-        ASSERT_EQ(bool(occluded[i]), anyHitBruteForce(m, rays[i])) << "any hit, ray " << i;
-    }
+    expectPacketsMatchBruteForce(grid, m, rays);
 }
 
 // §3: N_a = d_a cbrt(lambda N / V), cubical cells; an empty mesh has no cells.
