@@ -542,7 +542,7 @@ int main(int argc, char** argv) {
     int frames = 12, width = 1280, height = 720;
     app.add_option("--models", models, "bunny, horse, dragon, 1m, 10m (bumpy spheres)")->capture_default_str();
     app.add_option("--animation", animation, "A skinned glTF (brainstem, cesiumman)")->capture_default_str();
-    app.add_option("--frames", frames, "Animation frames")->capture_default_str();
+    app.add_option("--frames", frames, "Animation frames (at least 2: the first pose is the one refitted from)")->check(CLI::Range(2, 100000))->capture_default_str();
     app.add_option("--shadow-scenes", shadowScenes, "vc (Virtual City), a scan on a ground plane, brainstem")->capture_default_str();
     app.add_option("--map-sizes", sizes, "Shadow map sizes")->capture_default_str();
     app.add_option("--shadows", penumbrae, "hard, soft or both")->capture_default_str();

@@ -123,12 +123,56 @@ RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ra
     return best;
 }
 
-// The packet's slices (closestHits): each ray's state as the slices go by.
-struct PacketRay {
-    std::optional<WatertightRay> test;  // set for every ray of the packet
-    float entry = 0.0f;                 // where it enters the grid's box
-    float inverseK = 0.0f;              // 1 / its direction's major component
+// The packet's rays as the slices go by, in structure-of-arrays form: the per-slice pass over
+// the rays (where each crosses the slice) is a loop the compiler vectorises across them, which
+// the profile showed was most of a packet's time when written a ray at a time.
+struct PacketRays {
+    std::optional<WatertightRay> test[kMaxGridPacketRays];  // set for every ray of the packet
+    float origin[3][kMaxGridPacketRays], direction[3][kMaxGridPacketRays];
+    float entry[kMaxGridPacketRays];     // where it enters the grid's box
+    float inverseK[kMaxGridPacketRays];  // 1 / its direction's major component
+    float bestT[kMaxGridPacketRays];     // hits[i].t, kept here for the vector pass
+    float looking[kMaxGridPacketRays];  // 1 while the ray is active, else 0 (the bit mask's copy; a float, so
+                                        // the vector pass selects on float compares alone, which GCC vectorises)
 };
+
+// Each looking ray's stretch in one slice, between its crossings of the slice's near and far
+// faces (clamped to where it enters the grid and to its best hit so far): its box, grown by the
+// margin, holds every hit the ray can have in this slice (exactness: the header). crosses[i] = 0
+// for a ray not in the slice, whose box means nothing. farT[i]: where the ray leaves the slice.
+struct SliceStretches {
+    float lo[3][kMaxGridPacketRays], hi[3][kMaxGridPacketRays];
+    float farT[kMaxGridPacketRays];
+    int32_t crosses[kMaxGridPacketRays];
+};
+
+// __restrict: without it GCC 12 needs more run-time alias checks than it will emit, and keeps the
+// loop scalar.
+void stretchesInSlice(const PacketRays& __restrict p, int n, int k, float nearFace, float farFace, const glm::vec3& margin,
+                      SliceStretches& __restrict out) {
+    constexpr float kSlack = detail::kEntrySlack;
+    const float* originK = p.origin[k];
+    for (int i = 0; i < n; ++i) {  // vectorised (-fopt-info-vec): no branch, every ray computed, the result selected
+        const float farT = (farFace - originK[i]) * p.inverseK[i];
+        const float nearT = (nearFace - originK[i]) * p.inverseK[i];
+        const float t0 = nearT > p.entry[i] ? nearT : p.entry[i];
+        const float t1 = (farT < p.bestT[i] ? farT : p.bestT[i]) * kSlack;
+        // In the slice unless its stretch is empty (by more than the slack: a ray grazing the
+        // face is kept; keeping a ray more only costs tests).
+        const bool crosses = (p.looking[i] > 0.0f) & (t1 * kSlack >= t0);
+        out.farT[i] = farT;
+        out.crosses[i] = crosses;
+        // Each axis written out (an inner loop, even a constant one, keeps the outer from
+        // vectorising), and the box stored whether or not the ray crosses (selecting an empty
+        // box as well was one condition too many for GCC 12's if-conversion).
+        const auto axis = [&](int a) {
+            const float x0 = p.origin[a][i] + p.direction[a][i] * t0, x1 = p.origin[a][i] + p.direction[a][i] * t1;
+            out.lo[a][i] = (x0 < x1 ? x0 : x1) - margin[a];
+            out.hi[a][i] = (x0 > x1 ? x0 : x1) + margin[a];
+        };
+        axis(0), axis(1), axis(2);
+    }
+}
 
 // closestHits and anyHits: a packet's rays slice by slice (the header). For any hit a ray retires
 // at its first hit, as the walk returns at it.
@@ -163,44 +207,37 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
     }
     const GridFrame frame(grid);
     const glm::vec3 margin = insertionMargin(grid);
-    PacketRay packet[kMaxGridPacketRays];
+    PacketRays packet;
     uint64_t active = 0;  // bit i: ray i is still looking
     int first = step > 0 ? frame.last[k] : 0;  // the first slice any ray enters
     for (int i = 0; i < n; ++i) {
         const Ray& r = rays[i];
-        packet[i].test.emplace(r);
-        packet[i].inverseK = 1.0f / r.direction[k];
-        if (!RayBoxTest(r).hits(grid.bounds.lo, grid.bounds.hi, r.tMin, r.tMax, &packet[i].entry)) continue;
+        packet.test[i].emplace(r);
+        for (int a = 0; a < 3; ++a) packet.origin[a][i] = r.origin[a], packet.direction[a][i] = r.direction[a];
+        packet.inverseK[i] = 1.0f / r.direction[k];
+        packet.bestT[i] = hits[i].t;
+        packet.entry[i] = 0.0f;
+        const bool inGrid = RayBoxTest(r).hits(grid.bounds.lo, grid.bounds.hi, r.tMin, r.tMax, &packet.entry[i]);
+        packet.looking[i] = inGrid ? 1.0f : 0.0f;
+        if (!inGrid) continue;
         active |= uint64_t(1) << i;
-        const int slice = frame.cellOf(r.origin + r.direction * packet[i].entry)[k];
+        const int slice = frame.cellOf(r.origin + r.direction * packet.entry[i])[k];
         first = step > 0 ? std::min(first, slice) : std::max(first, slice);
     }
+    auto retire = [&](int i) { active &= ~(uint64_t(1) << i), packet.looking[i] = 0.0f; };
+    SliceStretches stretch;
     for (int slice = first; active && slice >= 0 && slice <= frame.last[k]; slice += step) {
-        // Each looking ray's stretch in this slice, between its faces' crossings (clamped to where
-        // it is in the grid and not yet past its best hit): its box, grown by the margin, holds
-        // every hit the ray can have in this slice; the boxes' union gives the rectangle of cells.
         const float nearFace = grid.bounds.lo[k] + float(slice + (step > 0 ? 0 : 1)) * grid.cellSize[k];
         const float farFace = grid.bounds.lo[k] + float(slice + (step > 0 ? 1 : 0)) * grid.cellSize[k];
+        stretchesInSlice(packet, n, k, nearFace, farFace, margin, stretch);
+        // The rectangle of cells: the union of the crossing rays' boxes.
         glm::vec3 rectLo(std::numeric_limits<float>::max()), rectHi(std::numeric_limits<float>::lowest());
-        float farT[kMaxGridPacketRays];
-        float stretchLo[3][kMaxGridPacketRays], stretchHi[3][kMaxGridPacketRays];
         uint64_t crossing = 0;
-        for (int axis = 0; axis < 3; ++axis) {  // empty boxes for the rays not crossing: they meet nothing
-            std::fill_n(stretchLo[axis], n, std::numeric_limits<float>::max());
-            std::fill_n(stretchHi[axis], n, std::numeric_limits<float>::lowest());
-        }
-        for (int i = 0; i < n; ++i) {
-            if (!(active >> i & 1)) continue;
-            const Ray& r = rays[i];
-            farT[i] = (farFace - r.origin[k]) * packet[i].inverseK;
-            const float t0 = std::max((nearFace - r.origin[k]) * packet[i].inverseK, packet[i].entry);
-            const float t1 = std::min(farT[i], hits[i].t) * detail::kEntrySlack;
-            if (!(t1 >= t0 / detail::kEntrySlack)) continue;  // not in this slice yet
-            crossing |= uint64_t(1) << i;
-            const glm::vec3 a = r.origin + r.direction * t0, b = r.origin + r.direction * t1;
-            const glm::vec3 boxLo = glm::min(a, b) - margin, boxHi = glm::max(a, b) + margin;
-            for (int axis = 0; axis < 3; ++axis) stretchLo[axis][i] = boxLo[axis], stretchHi[axis][i] = boxHi[axis];
-            rectLo = glm::min(rectLo, boxLo), rectHi = glm::max(rectHi, boxHi);
+        for (int i = 0; i < n; ++i) crossing |= uint64_t(stretch.crosses[i] != 0) << i;
+        for (uint64_t bits = crossing; bits; bits &= bits - 1) {
+            const int i = std::countr_zero(bits);
+            for (int a = 0; a < 3; ++a)
+                rectLo[a] = std::min(rectLo[a], stretch.lo[a][i]), rectHi[a] = std::max(rectHi[a], stretch.hi[a][i]);
         }
         if (crossing) {
             const int firstCrossing = std::countr_zero(crossing), lastCrossing = 63 - std::countl_zero(crossing);
@@ -226,23 +263,26 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                         // meets the triangle's box can hit it in this slice.
                         uint64_t candidates = 0;
                         for (int i = firstCrossing; i <= lastCrossing; ++i) {
-                            const bool overlaps = stretchLo[0][i] <= triHi.x && stretchHi[0][i] >= triLo.x && stretchLo[1][i] <= triHi.y &&
-                                                  stretchHi[1][i] >= triLo.y && stretchLo[2][i] <= triHi.z && stretchHi[2][i] >= triLo.z;
+                            const bool overlaps = stretch.lo[0][i] <= triHi.x && stretch.hi[0][i] >= triLo.x &&
+                                                  stretch.lo[1][i] <= triHi.y && stretch.hi[1][i] >= triLo.y &&
+                                                  stretch.lo[2][i] <= triHi.z && stretch.hi[2][i] >= triLo.z;
                             candidates |= uint64_t(overlaps) << i;
                         }
+                        candidates &= crossing;
                         if (kAnyHit) candidates &= active;  // a ray with a hit is done
                         for (; candidates; candidates &= candidates - 1) {
                             const int i = std::countr_zero(candidates);
                             if (counters) ++counters->trianglesTested;
-                            if (offerHit(*packet[i].test, p0, p1, p2, triangle, rays[i].tMin, hits[i]) && kAnyHit)
-                                active &= ~(uint64_t(1) << i);
+                            if (!offerHit(*packet.test[i], p0, p1, p2, triangle, rays[i].tMin, hits[i])) continue;
+                            packet.bestT[i] = hits[i].t;
+                            if (kAnyHit) retire(i);
                         }
                     }
                 }
         }
         // Retire the rays whose best hit lies before their exit from this slice (as the walk stops).
         for (int i = 0; i < n; ++i)
-            if ((active >> i & 1) && hits[i].t * detail::kEntrySlack < farT[i]) active &= ~(uint64_t(1) << i);
+            if ((active >> i & 1) && hits[i].t * detail::kEntrySlack < stretch.farT[i]) retire(i);
     }
     for (int i = 0; i < n; ++i)
         if (!hits[i].hit()) hits[i].t = std::numeric_limits<float>::infinity();
