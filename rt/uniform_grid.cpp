@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <cstring>
 #include <cmath>
 #include <optional>
 
@@ -174,6 +175,27 @@ void stretchesInSlice(const PacketRays& __restrict p, int n, int k, float nearFa
     }
 }
 
+// Frustum culling (Wald et al. §2), per ray: bit i set when ray i's stretch box in this slice meets
+// the triangle's box [lo, hi] — only such a ray can hit it here. Over the 8-ray words firstWord to
+// lastWord: the box tests a vectorised loop into bytes, each word's eight bytes (0 or 1) gathered
+// into eight bits by one multiplication (bit k of the top byte of w x 0x0102040810204080 is byte
+// k's). Bits of rays not crossing the slice are meaningless; the caller masks them.
+uint64_t raysMeetingBox(const SliceStretches& __restrict s, int firstWord, int lastWord, const glm::vec3& lo, const glm::vec3& hi) {
+    alignas(8) uint8_t meets[kMaxGridPacketRays];
+    const int first = 8 * firstWord, end = 8 * (lastWord + 1);
+    const float loX = lo.x, loY = lo.y, loZ = lo.z, hiX = hi.x, hiY = hi.y, hiZ = hi.z;
+    for (int i = first; i < end; ++i)
+        meets[i] = uint8_t((s.lo[0][i] <= hiX) & (s.hi[0][i] >= loX) & (s.lo[1][i] <= hiY) & (s.hi[1][i] >= loY) &
+                           (s.lo[2][i] <= hiZ) & (s.hi[2][i] >= loZ));
+    uint64_t bits = 0;
+    for (int word = firstWord; word <= lastWord; ++word) {
+        uint64_t bytes;
+        std::memcpy(&bytes, meets + 8 * word, 8);
+        bits |= ((bytes * 0x0102040810204080ull) >> 56) << (8 * word);
+    }
+    return bits;
+}
+
 // closestHits and anyHits: a packet's rays slice by slice (the header). For any hit a ray retires
 // at its first hit, as the walk returns at it.
 template <bool kAnyHit>
@@ -225,7 +247,7 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
         first = step > 0 ? std::min(first, slice) : std::max(first, slice);
     }
     auto retire = [&](int i) { active &= ~(uint64_t(1) << i), packet.looking[i] = 0.0f; };
-    SliceStretches stretch;
+    SliceStretches stretch{};  // zeroed: the cull reads whole 8-ray words, past the packet's last ray too
     for (int slice = first; active && slice >= 0 && slice <= frame.last[k]; slice += step) {
         const float nearFace = grid.bounds.lo[k] + float(slice + (step > 0 ? 0 : 1)) * grid.cellSize[k];
         const float farFace = grid.bounds.lo[k] + float(slice + (step > 0 ? 1 : 0)) * grid.cellSize[k];
@@ -240,7 +262,8 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                 rectLo[a] = std::min(rectLo[a], stretch.lo[a][i]), rectHi[a] = std::max(rectHi[a], stretch.hi[a][i]);
         }
         if (crossing) {
-            const int firstCrossing = std::countr_zero(crossing), lastCrossing = 63 - std::countl_zero(crossing);
+            // The 8-ray words the crossing rays lie in, for the cull below.
+            const int firstWord = std::countr_zero(crossing) / 8, lastWord = (63 - std::countl_zero(crossing)) / 8;
             glm::vec3 a = rectLo, b = rectHi;
             a[k] = b[k] = grid.bounds.lo[k] + (float(slice) + 0.5f) * grid.cellSize[k];
             const glm::ivec3 c0 = frame.cellOf(a), c1 = frame.cellOf(b);
@@ -261,14 +284,7 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                         if (glm::any(glm::greaterThan(triLo, rectHi)) || glm::any(glm::lessThan(triHi, rectLo))) continue;
                         // Frustum culling (Wald et al. §2), per ray: only a ray whose stretch box
                         // meets the triangle's box can hit it in this slice.
-                        uint64_t candidates = 0;
-                        for (int i = firstCrossing; i <= lastCrossing; ++i) {
-                            const bool overlaps = stretch.lo[0][i] <= triHi.x && stretch.hi[0][i] >= triLo.x &&
-                                                  stretch.lo[1][i] <= triHi.y && stretch.hi[1][i] >= triLo.y &&
-                                                  stretch.lo[2][i] <= triHi.z && stretch.hi[2][i] >= triLo.z;
-                            candidates |= uint64_t(overlaps) << i;
-                        }
-                        candidates &= crossing;
+                        uint64_t candidates = raysMeetingBox(stretch, firstWord, lastWord, triLo, triHi) & crossing;
                         if (kAnyHit) candidates &= active;  // a ray with a hit is done
                         for (; candidates; candidates &= candidates - 1) {
                             const int i = std::countr_zero(candidates);
