@@ -196,6 +196,20 @@ uint64_t raysMeetingBox(const SliceStretches& __restrict s, int firstWord, int l
     return bits;
 }
 
+// Whether a macrocell of layer `layer` along axis k under the rectangle [lo, hi] (its u and v
+// extent, mapped to cells as the slices map theirs) lists anything.
+bool anyMacrocellOccupied(const UniformGrid& grid, const GridFrame& frame, int k, int layer, const glm::vec3& lo, const glm::vec3& hi) {
+    constexpr int M = kGridMacrocellCells;
+    const glm::ivec3 c0 = frame.cellOf(lo) / M, c1 = frame.cellOf(hi) / M;
+    const int u = (k + 1) % 3, v = (k + 2) % 3;
+    glm::ivec3 m;
+    m[k] = layer;
+    for (m[v] = c0[v]; m[v] <= c1[v]; ++m[v])
+        for (m[u] = c0[u]; m[u] <= c1[u]; ++m[u])
+            if (grid.macrocellOccupied[grid.macrocellIndex(m.x, m.y, m.z)]) return true;
+    return false;
+}
+
 // closestHits and anyHits: a packet's rays slice by slice (the header). For any hit a ray retires
 // at its first hit, as the walk returns at it.
 template <bool kAnyHit>
@@ -248,19 +262,40 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
     }
     auto retire = [&](int i) { active &= ~(uint64_t(1) << i), packet.looking[i] = 0.0f; };
     SliceStretches stretch{};  // zeroed: the cull reads whole 8-ray words, past the packet's last ray too
-    for (int slice = first; active && slice >= 0 && slice <= frame.last[k]; slice += step) {
-        const float nearFace = grid.bounds.lo[k] + float(slice + (step > 0 ? 0 : 1)) * grid.cellSize[k];
-        const float farFace = grid.bounds.lo[k] + float(slice + (step > 0 ? 1 : 0)) * grid.cellSize[k];
-        stretchesInSlice(packet, n, k, nearFace, farFace, margin, stretch);
-        // The rectangle of cells: the union of the crossing rays' boxes.
-        glm::vec3 rectLo(std::numeric_limits<float>::max()), rectHi(std::numeric_limits<float>::lowest());
-        uint64_t crossing = 0;
+    // The near and far faces of slices `from` to `to` in the direction of travel; the crossing
+    // rays' stretches between them (stretchesInSlice) and the rectangle their boxes' union spans.
+    const auto faceOf = [&](int s) { return grid.bounds.lo[k] + float(s) * grid.cellSize[k]; };
+    glm::vec3 rectLo, rectHi;
+    uint64_t crossing = 0;
+    const auto stretchesAndRectangle = [&](int from, int to) {
+        stretchesInSlice(packet, n, k, faceOf(from + (step > 0 ? 0 : 1)), faceOf(to + (step > 0 ? 1 : 0)), margin, stretch);
+        rectLo = glm::vec3(std::numeric_limits<float>::max()), rectHi = glm::vec3(std::numeric_limits<float>::lowest());
+        crossing = 0;
         for (int i = 0; i < n; ++i) crossing |= uint64_t(stretch.crosses[i] != 0) << i;
         for (uint64_t bits = crossing; bits; bits &= bits - 1) {
             const int i = std::countr_zero(bits);
             for (int a = 0; a < 3; ++a)
                 rectLo[a] = std::min(rectLo[a], stretch.lo[a][i]), rectHi[a] = std::max(rectHi[a], stretch.hi[a][i]);
         }
+    };
+    constexpr int M = kGridMacrocellCells;
+    int macrocellLayerChecked = -1;
+    for (int slice = first; active && slice >= 0 && slice <= frame.last[k]; slice += step) {
+        // Macrocells (§2.4), on entering a layer of them: the slices the packet has left in the
+        // layer as one slab; if no macrocell the slab's rectangle touches is occupied, no ray can
+        // hit anything in it (each slice's rectangle lies in the slab's, whose stretches contain
+        // the slices'), and the packet steps past the layer.
+        if (slice / M != macrocellLayerChecked) {
+            macrocellLayerChecked = slice / M;
+            const int slabEnd = step > 0 ? std::min(slice / M * M + M - 1, frame.last[k]) : slice / M * M;
+            stretchesAndRectangle(slice, slabEnd);
+            if (!crossing || !anyMacrocellOccupied(grid, frame, k, macrocellLayerChecked, rectLo, rectHi)) {
+                if (counters) counters->slicesSkipped += uint64_t(std::abs(slabEnd - slice) + 1);
+                slice = slabEnd;
+                continue;
+            }
+        }
+        stretchesAndRectangle(slice, slice);
         if (crossing) {
             // The 8-ray words the crossing rays lie in, for the cull below.
             const int firstWord = std::countr_zero(crossing) / 8, lastWord = (63 - std::countl_zero(crossing)) / 8;
@@ -326,6 +361,21 @@ glm::ivec3 gridResolution(const Aabb& bounds, size_t triangles, float lambda) {
     return cells;
 }
 
+// Each macrocell's flag from its cells' lists, a macrocell layer per task.
+static void markOccupiedMacrocells(UniformGrid& grid) {
+    constexpr int M = kGridMacrocellCells;
+    grid.macrocells = (grid.cells + (M - 1)) / M;
+    grid.macrocellOccupied.assign(size_t(grid.macrocells.x) * size_t(grid.macrocells.y) * size_t(grid.macrocells.z), 0);
+    tbb::parallel_for(0, grid.macrocells.z, [&](int mz) {
+        for (int z = mz * M; z < std::min((mz + 1) * M, grid.cells.z); ++z)
+            for (int y = 0; y < grid.cells.y; ++y)
+                for (int x = 0; x < grid.cells.x; ++x) {
+                    const size_t c = grid.cellIndex(x, y, z);
+                    if (grid.cellStart[c + 1] > grid.cellStart[c]) grid.macrocellOccupied[grid.macrocellIndex(x / M, y / M, mz)] = 1;
+                }
+    });
+}
+
 UniformGrid buildUniformGrid(const TriangleMeshView& mesh, float lambda) {
     UniformGrid grid;
     const size_t n = mesh.triangleCount();
@@ -359,6 +409,7 @@ UniformGrid buildUniformGrid(const TriangleMeshView& mesh, float lambda) {
     tbb::parallel_for(size_t(0), grid.cellCount(), [&](size_t c) {
         std::sort(grid.triangleRefs.begin() + grid.cellStart[c], grid.triangleRefs.begin() + grid.cellStart[c + 1]);
     });
+    markOccupiedMacrocells(grid);
     return grid;
 }
 

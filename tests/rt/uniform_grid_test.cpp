@@ -178,6 +178,92 @@ TEST(UniformGrid, PacketsOfTheLatticesHardRaysGiveBruteForcesHits) {
     expectPacketsMatchBruteForce(grid, m, rays);
 }
 
+// Macrocells (§2.4): a packet steps over a layer of macrocells its rectangle finds empty. Scenes
+// of small triangles in a few clusters with empty space between (a random soup fills every
+// macrocell, so the other tests rarely skip), camera and shadow packets through the gaps: the
+// packets skip slices, and every ray still gets brute force's hit.
+TEST(UniformGrid, PacketsSkipEmptyMacrocellsAndStillGiveBruteForcesHits) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    OwnedMesh clusters;
+    const glm::vec3 centres[] = {{-0.8f, -0.7f, -0.9f}, {0.7f, 0.8f, 0.6f}, {0.75f, -0.8f, -0.1f}, {-0.6f, 0.7f, 0.85f}};
+    for (const glm::vec3& c : centres) {
+        const OwnedMesh blob = testing::randomSoup(400, uint32_t(rng()), 0.03f);
+        for (size_t i = 0; i < blob.indices.size(); ++i) {
+            clusters.positions.push_back(c + 0.12f * blob.positions[blob.indices[i]]);
+            clusters.indices.push_back(uint32_t(clusters.positions.size() - 1));
+        }
+    }
+    const TriangleMeshView m = clusters.view();
+    const UniformGrid grid = buildUniformGrid(m);
+    GridCounters counters;
+    for (int packet = 0; packet < 40; ++packet) {
+        const glm::vec3 target = centres[packet % 4] + 0.1f * glm::vec3(unit(rng), unit(rng), unit(rng));
+        const glm::vec3 eye = 4.0f * glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)));
+        const glm::vec3 forward = glm::normalize(target - eye);
+        const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(0.3f, 1.0f, 0.1f))), up = glm::cross(right, forward);
+        std::vector<Ray> camera, shadow;
+        for (int y = 0; y < 8; ++y)
+            for (int x = 0; x < 8; ++x) camera.push_back(Ray{eye, forward + 0.01f * (float(x - 4) * right + float(y - 4) * up)});
+        std::vector<RayHit> hits(camera.size());
+        closestHits(grid, m, camera, hits, &counters);
+        // From the camera's hits (or the target) toward a light: across the gaps to the other clusters.
+        const glm::vec3 light = glm::normalize(centres[(packet + 1) % 4] - centres[packet % 4]);
+        for (size_t i = 0; i < camera.size(); ++i)
+            shadow.push_back(Ray{hits[i].hit() ? camera[i].origin + camera[i].direction * hits[i].t : target, light, 1e-4f});
+        std::vector<uint8_t> occluded(shadow.size());
+        anyHits(grid, m, shadow, occluded, &counters);
+        SCOPED_TRACE("packet " + std::to_string(packet));
+        expectPacketsMatchBruteForce(grid, m, camera);
+        expectPacketsMatchBruteForce(grid, m, shadow);
+    }
+    EXPECT_GT(counters.slicesSkipped, 0u);
+}
+
+// The macrocells' two ways to go wrong, each caught here: skipping a slice that is not in an
+// empty macrocell (the wall at every depth within a layer of macrocells, so some wall lies in the
+// first slice after an empty layer), and judging a layer by less than the whole rectangle (the
+// wall is a ring: the packet's middle rays pass through its hole, only its edge rays hit).
+// Cells of size 1 over a 48^3 box (six layers of 6^3 macrocells), a tiny triangle at two corners
+// to fix the box; an 8x8 packet of parallel rays and one from an eye, both along +z.
+TEST(UniformGrid, MacrocellsSkipOnlyEmptySlicesUnderTheWholeRectangle) {
+    for (int wallSlice = 6; wallSlice < 18; ++wallSlice) {
+        OwnedMesh scene;
+        auto triangle = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+            for (const glm::vec3& p : {a, b, c}) {
+                scene.positions.push_back(p);
+                scene.indices.push_back(uint32_t(scene.positions.size() - 1));
+            }
+        };
+        triangle({0, 0, 0}, {0.01f, 0, 0}, {0, 0.01f, 0});
+        triangle({48, 48, 48}, {47.99f, 48, 48}, {48, 47.99f, 48});
+        const float z = float(wallSlice) + 0.5f;
+        for (int y = 2; y < 46; ++y)
+            for (int x = 2; x < 46; ++x) {
+                if (x >= 8 && x < 40 && y >= 8 && y < 40) continue;  // the hole
+                triangle({x, y, z}, {x + 1, y, z}, {x + 1, y + 1, z});
+                triangle({x, y, z}, {x + 1, y + 1, z}, {x, y + 1, z});
+            }
+        const TriangleMeshView m = scene.view();
+        const UniformGrid grid = buildUniformGrid(m, 48.0f * 48.0f * 48.0f / float(m.triangleCount()));
+        ASSERT_EQ(grid.cells, glm::ivec3(48));
+        std::vector<Ray> parallel, fromEye;
+        for (int j = 0; j < 8; ++j)
+            for (int i = 0; i < 8; ++i) {
+                parallel.push_back(Ray{{2.5f + 43.0f * float(i) / 7.0f, 2.5f + 43.0f * float(j) / 7.0f, -1.0f}, {0, 0, 1}});
+                fromEye.push_back(Ray{{24.0f, 24.0f, -10.0f}, {float(i) - 3.5f, float(j) - 3.5f, 3.0f}});
+            }
+        GridCounters counters;
+        std::vector<RayHit> hits(64);
+        closestHits(grid, m, parallel, hits, &counters);
+        EXPECT_GT(counters.slicesSkipped, 0u);
+        EXPECT_TRUE(hits[0].hit());  // an edge ray meets the ring
+        SCOPED_TRACE("wall in slice " + std::to_string(wallSlice));
+        expectPacketsMatchBruteForce(grid, m, parallel);
+        expectPacketsMatchBruteForce(grid, m, fromEye);
+    }
+}
+
 // §3: N_a = d_a cbrt(lambda N / V), cubical cells; an empty mesh has no cells.
 TEST(UniformGrid, ResolutionIsThePapersCubicalCellsAtLambdaPerTriangle) {
     Aabb box;
