@@ -16,6 +16,7 @@
 #include "apps/accuracy_report.h"
 #include "apps/image_error.h"
 #include "apps/image_io.h"
+#include "tests/temp_paths.h"
 
 namespace {
 
@@ -32,8 +33,7 @@ Image flatImage(int width, int height, float value) {
 }
 
 fs::path tempDir(const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() /
-                         ("cuberille-accuracy-" + std::to_string(getpid()) + "-" + name);  // ctest runs tests in parallel processes
+    const fs::path dir = cuberille::testing::uniqueTempPath("accuracy-" + name);
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;

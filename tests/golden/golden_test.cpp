@@ -235,7 +235,7 @@ TEST(Golden, ProceduralGltfThroughItsCamera) {
 // through `render model.cvox` in colour (4 samples, the finest level) and in the LOD view at a
 // pixel error that selects the coarser level.
 fs::path goldenVoxelModel() {
-    const fs::path path = fs::temp_directory_path() / ("cuberille_golden_" + std::to_string(::getpid()) + ".cvox");
+    const fs::path path = cuberille::testing::uniqueTempPath("golden.cvox");
     std::mt19937 rng(31);
     auto tris = icosphere(3, glm::dvec3(0.0), 2.0, randomRotation(rng));
     const auto small = icosphere(2, glm::dvec3(2.6, 0.8, 0.5), 0.9, randomRotation(rng));
