@@ -135,7 +135,7 @@ public:
             else
                 metallicRoughness(q, a, occlusion, counters);
             if (hasEmissive_) addEmissive(q.count, a, counters);
-            if (coated_) underTheCoat(q.count, a);
+            if (coated_) underTheCoat(q.count, a, transmissive_);
             writeOut(q, a.radiance, a.alpha);
             if (transmissive_) writeTransmittance(q, a);
         }
@@ -513,13 +513,10 @@ private:
         counters.transmissionPixels += uint64_t(count);
     }
 
-    void writeTransmittance(ShadeQueue& q, const PixelAttributes& a) const {
-        for (int i = 0; i < q.count; ++i) {
-            // Under a coat, the light through is dimmed by the coat's weight as the material is.
-            const float coat = coated_ ? 1.0f - a.coatWeight[i] : 1.0f;
-            q.transmitRed[i] = a.transmit[0][i] * coat, q.transmitGreen[i] = a.transmit[1][i] * coat,
-            q.transmitBlue[i] = a.transmit[2][i] * coat;
-        }
+    static void writeTransmittance(ShadeQueue& q, const PixelAttributes& a) {
+        std::copy_n(a.transmit[0], q.count, q.transmitRed);
+        std::copy_n(a.transmit[1], q.count, q.transmitGreen);
+        std::copy_n(a.transmit[2], q.count, q.transmitBlue);
     }
 
     // KHR_materials_sheen: the material so far (lights, ambient, environment; emission comes
@@ -649,9 +646,14 @@ private:
     }
 
     // The coated material: the material, emission included, times 1 - w, plus the coat.
-    [[gnu::noinline]] static void underTheCoat(int count, PixelAttributes& a) {
+    // Under a coat, the light passed through (transmissive draws) is dimmed by the coat's weight
+    // as the material is.
+    [[gnu::noinline]] static void underTheCoat(int count, PixelAttributes& a, bool transmissive) {
         for (int k = 0; k < 3; ++k)
             for (int i = 0; i < count; ++i) a.radiance[k][i] = a.radiance[k][i] * (1.0f - a.coatWeight[i]) + a.coatRadiance[k][i];
+        if (transmissive)
+            for (int k = 0; k < 3; ++k)
+                for (int i = 0; i < count; ++i) a.transmit[k][i] *= 1.0f - a.coatWeight[i];
     }
 
     // The BRDF's inputs from metallic and roughness (glTF 2.0 appendix B), with the view and the

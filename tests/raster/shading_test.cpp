@@ -350,17 +350,20 @@ TEST(Sheen, LaysTheReferenceSheenOverTheMaterialAtEveryPixel) {
 // a transmissive quad over an unlit backdrop B gives R + T B, R the material with its diffuse lobe
 // kept at 1 - t (ambient and the sun), T = t c_diff (1 - F(n.v)) x attenuationColor^(d /
 // distance); over nothing (a transparent clear), R with alpha 1 - mean(T). Thin-walled and with a
-// volume, a whole and a half share, and blended at alpha 0.5 (a R + (a T + 1 - a) B). The
-// counter counts exactly the transmissive pixels, and an opaque draw none.
+// volume, a whole and a half share, blended at alpha 0.5 (a R + (a T + 1 - a) B), and under a
+// clear coat of weight w, which dims R and T alike by 1 - w and adds its own light. The counter
+// counts exactly the transmissive pixels, and an opaque draw none.
 TEST(Transmission, ComposesTheReferenceOverWhatIsBehindAtEveryPixel) {
     struct Case {
         float transmission;
         float thickness;  // 0: thin-walled
         float alpha;      // < 1: blended
+        float clearcoat = 0.0f;
     };
     const glm::dvec3 backdrop(0.2, 0.6, 0.9), attenuationColor(0.5, 0.8, 1.0);
     const double attenuationDistance = 1.5;
-    for (const Case k : {Case{1.0f, 0.0f, 1.0f}, Case{0.5f, 0.0f, 1.0f}, Case{1.0f, 2.0f, 1.0f}, Case{1.0f, 0.0f, 0.5f}}) {
+    for (const Case k :
+         {Case{1.0f, 0.0f, 1.0f}, Case{0.5f, 0.0f, 1.0f}, Case{1.0f, 2.0f, 1.0f}, Case{1.0f, 0.0f, 0.5f}, Case{1.0f, 0.0f, 1.0f, 1.0f}}) {
         for (const bool withBackdrop : {true, false}) {
             const Quad quad;
             Quad far;
@@ -376,6 +379,8 @@ TEST(Transmission, ComposesTheReferenceOverWhatIsBehindAtEveryPixel) {
             glass.state.brdf.thickness = k.thickness;
             glass.state.brdf.attenuationColor = glm::vec3(attenuationColor);
             glass.state.brdf.attenuationDistance = float(attenuationDistance);
+            glass.state.brdf.clearcoat = k.clearcoat;
+            glass.state.brdf.clearcoatRoughness = 0.1f;
             glass.state.depthWrite = false;
             if (k.alpha < 1.0f) glass.state.alphaMode = raster::AlphaMode::Blend;
             raster::Pipeline p;
@@ -395,15 +400,21 @@ TEST(Transmission, ComposesTheReferenceOverWhatIsBehindAtEveryPixel) {
                     glm::dvec3 through = t * albedo * (1.0 - fresnel);
                     if (k.thickness > 0.0f)
                         for (int c = 0; c < 3; ++c) through[c] *= std::pow(attenuationColor[c], k.thickness / attenuationDistance);
-                    const glm::dvec3 own = 0.1 * (albedo * (1.0 - t) + 0.04) +
-                                           referenceBrdfOfInputs(albedo * (1.0 - t), glm::dvec3(0.04), 0.16, n, v, kSunTowards, glm::dvec3(2.0));
+                    glm::dvec3 own = 0.1 * (albedo * (1.0 - t) + 0.04) +
+                                     referenceBrdfOfInputs(albedo * (1.0 - t), glm::dvec3(0.04), 0.16, n, v, kSunTowards, glm::dvec3(2.0));
+                    if (k.clearcoat > 0.0f) {
+                        const double w = k.clearcoat * fresnel;
+                        own = own * (1.0 - w) + 0.1 * w +
+                              w * referenceBrdfOfInputs(glm::dvec3(0.0), glm::dvec3(1.0), 0.01, n, v, kSunTowards, glm::dvec3(2.0));
+                        through *= 1.0 - w;
+                    }
                     const glm::dvec3 seen = a * through + (1.0 - a);
                     const glm::dvec3 behind = withBackdrop ? backdrop : glm::dvec3(0.0);
                     const glm::dvec3 expected = a * own + seen * behind;
                     const double alpha = 1.0 - (seen.r + seen.g + seen.b) / 3.0 * (withBackdrop ? 0.0 : 1.0);
                     for (int ch = 0; ch < 3; ++ch)
                         ASSERT_NEAR(at(image, x, y)[ch], expected[ch], 2e-4 * std::max(1.0, expected[ch]))
-                            << "transmission " << t << " thickness " << k.thickness << " alpha " << a
+                            << "transmission " << t << " thickness " << k.thickness << " alpha " << a << " coat " << k.clearcoat
                             << (withBackdrop ? " over the backdrop" : " over nothing") << " at " << x << "," << y;
                     ASSERT_NEAR(at(image, x, y).a, alpha, 1e-6) << x << "," << y;
                 }
