@@ -137,10 +137,11 @@ struct PacketRays {
                                         // the vector pass selects on float compares alone, which GCC vectorises)
 };
 
-// Each looking ray's stretch in one slice, between its crossings of the slice's near and far
-// faces (clamped to where it enters the grid and to its best hit so far): its box, grown by the
-// margin, holds every hit the ray can have in this slice (exactness: the header). crosses[i] = 0
-// for a ray not in the slice, whose box means nothing. farT[i]: where the ray leaves the slice.
+// Each looking ray's stretch in one slice (or in a slab of slices: the macrocells), between its
+// crossings of the slice's near and far faces (clamped to where it enters the grid and to its
+// best hit so far): its box, grown by the margin, holds every hit the ray can have in the slice
+// (exactness: the header). crosses[i] = 0 for a ray not in the slice, whose box means nothing.
+// farT[i]: where the ray leaves the slice.
 struct SliceStretches {
     float lo[3][kMaxGridPacketRays], hi[3][kMaxGridPacketRays];
     float farT[kMaxGridPacketRays];
