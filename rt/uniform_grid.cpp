@@ -74,6 +74,28 @@ void forEachCell(const CellRange& r, Body&& body) {
             for (int x = r.lo.x; x <= r.hi.x; ++x) body(x, y, z);
 }
 
+// The walk's step out of the empty macrocell holding `cell`: false when the walk ends there (the
+// best hit lies before the exit, or the ray leaves the grid), else `cell` becomes the cell past
+// the exit face — on the exit axis the macrocell's neighbour's first cell, on the others the
+// exit point's cell, kept inside the macrocell's range against rounding.
+bool leaveEmptyMacrocell(const UniformGrid& grid, const GridFrame& frame, const Ray& ray, const glm::ivec3& step,
+                         const glm::vec3& inverseDirection, float bestT, glm::ivec3& cell) {
+    constexpr int M = kGridMacrocellCells;
+    const glm::ivec3 first = cell / M * M, last = glm::min(first + (M - 1), frame.last);
+    int axis = 0;
+    float exit = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {  // each face from its cell index, as the cell steps find theirs
+        const float face = grid.bounds.lo[a] + float(step[a] > 0 ? last[a] + 1 : first[a]) * grid.cellSize[a];
+        const float t = (face - ray.origin[a]) * inverseDirection[a];
+        if (t < exit) exit = t, axis = a;
+    }
+    if (bestT * detail::kEntrySlack < exit) return false;
+    const glm::ivec3 at = frame.cellOf(ray.origin + ray.direction * exit);
+    for (int a = 0; a < 3; ++a) cell[a] = std::clamp(at[a], first[a], last[a]);
+    cell[axis] = step[axis] > 0 ? last[axis] + 1 : first[axis] - 1;
+    return cell[axis] >= 0 && cell[axis] <= frame.last[axis];
+}
+
 // The walk (header comment): test each cell's triangles, then stop once the best hit lies
 // before the next cell's entry, else step into the cell whose face the ray crosses first.
 template <bool kAnyHit>
@@ -96,6 +118,15 @@ RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ra
     }
     Mailbox<16> mailbox;
     for (;;) {
+        // Macrocells (§2.4): an empty one is left in one step. No hit lies in it (a hit point's
+        // cell, and with the margin every cell within it, lists the triangle), so the walk goes on
+        // from the cell past the face where the ray leaves it.
+        const glm::ivec3 macrocell = cell / kGridMacrocellCells;
+        if (!grid.macrocellOccupied[grid.macrocellIndex(macrocell.x, macrocell.y, macrocell.z)]) {
+            if (counters) ++counters->macrocellsSkipped;
+            if (!leaveEmptyMacrocell(grid, frame, ray, step, inverseDirection, best.t, cell)) break;
+            continue;
+        }
         if (counters) ++counters->cellsVisited;
         const size_t c = grid.cellIndex(cell.x, cell.y, cell.z);
         for (uint32_t i = grid.cellStart[c]; i < grid.cellStart[c + 1]; ++i) {

@@ -85,10 +85,11 @@ struct GridCounters {
     uint64_t cellsVisited = 0;
     uint64_t trianglesTested = 0;
     uint64_t slicesSkipped = 0;  // packets: slices stepped over in empty macrocells
+    uint64_t macrocellsSkipped = 0;  // single rays: empty macrocells left in one step
 };
 
-/// Closest hit and any hit by the 3D-DDA; exactly closestHitBruteForce's and anyHitBruteForce's
-/// answers (rt/ray_query.h).
+/// Closest hit and any hit by the 3D-DDA, leaving an empty macrocell in one step; exactly
+/// closestHitBruteForce's and anyHitBruteForce's answers (rt/ray_query.h).
 RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
 bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
 

@@ -220,13 +220,14 @@ TEST(UniformGrid, PacketsSkipEmptyMacrocellsAndStillGiveBruteForcesHits) {
     EXPECT_GT(counters.slicesSkipped, 0u);
 }
 
-// The macrocells' two ways to go wrong, each caught here: skipping a slice that is not in an
+// The macrocells' ways to go wrong, each caught here: a packet skipping a slice that is not in an
 // empty macrocell (the wall at every depth within a layer of macrocells, so some wall lies in the
-// first slice after an empty layer), and judging a layer by less than the whole rectangle (the
-// wall is a ring: the packet's middle rays pass through its hole, only its edge rays hit).
+// first slice after an empty layer), a packet judging a layer by less than the whole rectangle
+// (the wall is a ring: the packet's middle rays pass through its hole, only its edge rays hit),
+// and a single ray leaving an empty macrocell into the wrong cell. The same rays one at a time.
 // Cells of size 1 over a 48^3 box (six layers of 6^3 macrocells), a tiny triangle at two corners
 // to fix the box; an 8x8 packet of parallel rays and one from an eye, both along +z.
-TEST(UniformGrid, MacrocellsSkipOnlyEmptySlicesUnderTheWholeRectangle) {
+TEST(UniformGrid, MacrocellsSkipOnlyEmptySpaceForPacketsAndSingleRays) {
     for (int wallSlice = 6; wallSlice < 18; ++wallSlice) {
         OwnedMesh scene;
         auto triangle = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
@@ -261,6 +262,13 @@ TEST(UniformGrid, MacrocellsSkipOnlyEmptySlicesUnderTheWholeRectangle) {
         SCOPED_TRACE("wall in slice " + std::to_string(wallSlice));
         expectPacketsMatchBruteForce(grid, m, parallel);
         expectPacketsMatchBruteForce(grid, m, fromEye);
+        GridCounters walks;
+        for (const std::vector<Ray>* rays : {&parallel, &fromEye})
+            for (const Ray& ray : *rays) {
+                closestHit(grid, m, ray, &walks);
+                expectSameAsBruteForce(grid, m, ray);
+            }
+        EXPECT_GT(walks.macrocellsSkipped, 0u);
     }
 }
 
