@@ -7,7 +7,10 @@
 #include <cstdio>
 #include <fcntl.h>
 #include <fstream>
+#include <limits>
 #include <map>
+#include <optional>
+#include <set>
 #include <spawn.h>
 #include <sstream>
 #include <sys/resource.h>
@@ -15,6 +18,7 @@
 
 #include "apps/accuracy_report.h"
 #include "apps/image_io.h"
+#include "apps/render_options_cli.h"
 #include "raster/limits.h"
 #include "raster/parallel.h"
 #include "scene/input_error.h"
@@ -47,10 +51,35 @@ std::string machineDescription();
 
 // The report in four steps: find what applies to the scene, render the ground truth, render every
 // setting and compare it with the truth, then mark the Pareto front and check the orders theory
-// predicts.
+// predicts. The truth renders first, so each setting is compared with it as it finishes.
 AccuracyReport runAccuracy(const AccuracyOptions& options) {
+    AccuracyPlan plan = planAccuracy(options);
+    const AccuracyOptions& o = plan.report.options;
+    const AccuracyRun& truthRun = plan.runs.back();
+    raster::Image truth, truthAgain;
+    AccuracyRow truthRow = runSetting(o, truthRun.setting, truthRun.id, truthRun.runs, truth, truthAgain);
+    compareWithTruth(truthRow, truthAgain, truth, o.outDir);
+    std::vector<AccuracyRow> rows;
+    for (size_t i = 0; i + 1 < plan.runs.size(); ++i) {
+        const AccuracyRun& run = plan.runs[i];
+        raster::Image first, last;
+        AccuracyRow row = runSetting(o, run.setting, run.id, run.runs, first, last);
+        compareWithTruth(row, first, truth, o.outDir);
+        if (!o.quiet) {
+            std::printf("  %-24s %-10s %9.2f ms  RMSE %.5f\n", run.setting.knob.c_str(), run.setting.value.c_str(),
+                        row.medianMs, row.error.rmse);
+            std::fflush(stdout);  // progress, also when stdout is a file
+        }
+        rows.push_back(std::move(row));
+    }
+    rows.push_back(std::move(truthRow));
+    return finishAccuracy(std::move(plan), std::move(rows));
+}
+
+AccuracyPlan planAccuracy(const AccuracyOptions& options) {
     validate(options);
-    AccuracyReport report;
+    AccuracyPlan plan;
+    AccuracyReport& report = plan.report;
     report.options = options;
     if (report.options.executable.empty()) report.options.executable = fs::read_symlink("/proc/self/exe");
     const AccuracyOptions& o = report.options;
@@ -60,42 +89,130 @@ AccuracyReport runAccuracy(const AccuracyOptions& options) {
     report.machine = machineDescription();
     report.threads = o.threads > 0 ? o.threads : raster::hardwareThreads();
     report.traits = probeScene(o);
-
-    const std::vector<AccuracySetting> sweep = accuracySweep(report.traits, o.soft);
-    const AccuracySetting& truthSetting = sweep.back();
+    plan.sweep = accuracySweep(report.traits, o.soft);
+    std::set<std::vector<std::string>> planned;  // identical command lines run once
+    for (size_t i = 0; i + 1 < plan.sweep.size(); ++i) {
+        const AccuracySetting& s = plan.sweep[i];
+        if (planned.insert(s.args).second) plan.runs.push_back({s, settingId(s), o.frames, false});
+    }
     // The truth runs at least twice: its row compares the last run with the first, so a report
     // whose ground truth is not zero against itself shows it.
-    raster::Image truth, truthAgain;
-    AccuracyRow truthRow = runSetting(o, truthSetting, "ground-truth", std::max(2, o.frames), truth, truthAgain);
+    plan.runs.push_back({plan.sweep.back(), "ground-truth", std::max(2, o.frames), true});
+    return plan;
+}
 
-    std::map<std::vector<std::string>, AccuracyRow> done;  // identical command lines run once
-    for (size_t i = 0; i + 1 < sweep.size(); ++i) {
-        const AccuracySetting& s = sweep[i];
-        auto it = done.find(s.args);
-        AccuracyRow row;
-        if (it == done.end()) {
-            raster::Image first, last;
-            row = runSetting(o, s, settingId(s), o.frames, first, last);
-            compareWithTruth(row, first, truth, o.outDir);
-            done.emplace(s.args, row);
-        } else {
-            row = it->second;  // the same run, listed under this knob too
-            row.setting = s;
+AccuracyRow runAccuracySetting(const AccuracyOptions& options, const AccuracyRun& run) {
+    raster::Image first, last;
+    AccuracyRow row = runSetting(options, run.setting, run.id, run.runs, first, last);
+    if (run.groundTruth) compareWithTruth(row, last, first, options.outDir);
+    return row;
+}
+
+AccuracyReport finishAccuracy(AccuracyPlan plan, std::vector<AccuracyRow> rows) {
+    if (rows.size() != plan.runs.size() || rows.empty())
+        throw std::invalid_argument("finishAccuracy: one row per run of the plan");
+    AccuracyReport& report = plan.report;
+    const AccuracyOptions& o = report.options;
+    const fs::path renders = o.outDir / "renders";
+    std::optional<raster::Image> truth;  // read back only for rows rendered elsewhere
+    std::map<std::vector<std::string>, AccuracyRow> byCommand;
+    for (size_t i = 0; i + 1 < rows.size(); ++i) {
+        AccuracyRow& row = rows[i];
+        if (!row.comparedWithTruth) {
+            if (!truth) truth = readImage(renders / (rows.back().id + ".exr"));
+            compareWithTruth(row, readImage(renders / (row.id + ".exr")), *truth, o.outDir);
         }
-        report.rows.push_back(row);
-        if (!o.quiet)
-            std::printf("  %-24s %-10s %9.2f ms  RMSE %.5f\n", s.knob.c_str(), s.value.c_str(), row.medianMs,
-                        row.error.rmse);
-        if (!o.quiet) std::fflush(stdout);  // progress, also when stdout is a file
+        byCommand.emplace(plan.runs[i].setting.args, row);
     }
-    compareWithTruth(truthRow, truthAgain, truth, o.outDir);
-    report.rows.push_back(truthRow);
-
+    for (size_t i = 0; i + 1 < plan.sweep.size(); ++i) {
+        AccuracyRow row = byCommand.at(plan.sweep[i].args);
+        row.setting = plan.sweep[i];  // the same run, listed under each knob whose command line it is
+        report.rows.push_back(std::move(row));
+    }
+    report.rows.push_back(std::move(rows.back()));
     markParetoFront(report.rows);
     noteKnobsNotSwept(report.traits, report.notes);
     checkMonotone(report.rows, report.notes);
     writeAccuracyReport(report);
-    return report;
+    return std::move(report);
+}
+
+nlohmann::json accuracyRunJson(const AccuracyRun& run) {
+    const AccuracySetting& s = run.setting;
+    return {{"knob", s.knob}, {"value", s.value}, {"order", s.order}, {"args", s.args}, {"isDefault", s.isDefault},
+            {"id", run.id},   {"runs", run.runs}, {"groundTruth", run.groundTruth}};
+}
+
+AccuracyRun accuracyRunFromJson(const nlohmann::json& j) {
+    AccuracyRun run;
+    AccuracySetting& s = run.setting;
+    j.at("knob").get_to(s.knob), j.at("value").get_to(s.value), j.at("order").get_to(s.order);
+    j.at("args").get_to(s.args), j.at("isDefault").get_to(s.isDefault);
+    j.at("id").get_to(run.id), j.at("runs").get_to(run.runs), j.at("groundTruth").get_to(run.groundTruth);
+    return run;
+}
+
+// Every field, so a row rebuilt from its JSON is the row (the error's infinite PSNR as null).
+nlohmann::json accuracyRowJson(const AccuracyRow& r) {
+    const ImageError& e = r.error;
+    nlohmann::json setting = accuracyRunJson({r.setting, r.id, 0, false});
+    return {{"setting", setting},
+            {"commandLine", r.commandLine},
+            {"frameMs", r.frameMs},
+            {"medianMs", r.medianMs},
+            {"minMs", r.minMs},
+            {"maxMs", r.maxMs},
+            {"setupMs", r.setupMs},
+            {"peakMib", r.peakMib},
+            {"deterministic", r.deterministic},
+            {"error", {e.rmse, std::isfinite(e.psnrDb) ? nlohmann::json(e.psnrDb) : nlohmann::json(nullptr), e.maxError,
+                       e.shareOver1, e.shareOver8}},
+            {"worst", {r.worst.x, r.worst.y, r.worst.width, r.worst.height}},
+            {"pareto", r.pareto},
+            {"comparedWithTruth", r.comparedWithTruth}};
+}
+
+AccuracyRow accuracyRowFromJson(const nlohmann::json& j) {
+    AccuracyRow r;
+    const AccuracyRun run = accuracyRunFromJson(j.at("setting"));
+    r.setting = run.setting, r.id = run.id;
+    j.at("commandLine").get_to(r.commandLine), j.at("frameMs").get_to(r.frameMs);
+    j.at("medianMs").get_to(r.medianMs), j.at("minMs").get_to(r.minMs), j.at("maxMs").get_to(r.maxMs);
+    j.at("setupMs").get_to(r.setupMs), j.at("peakMib").get_to(r.peakMib), j.at("deterministic").get_to(r.deterministic);
+    const nlohmann::json& e = j.at("error");
+    r.error = {e.at(0).get<double>(), e.at(1).is_null() ? std::numeric_limits<double>::infinity() : e.at(1).get<double>(),
+               e.at(2).get<double>(), e.at(3).get<double>(), e.at(4).get<double>()};
+    const nlohmann::json& w = j.at("worst");
+    r.worst = {w.at(0).get<int>(), w.at(1).get<int>(), w.at(2).get<int>(), w.at(3).get<int>()};
+    j.at("pareto").get_to(r.pareto), j.at("comparedWithTruth").get_to(r.comparedWithTruth);
+    return r;
+}
+
+CLI::App* addAccuracyCommand(CLI::App& app, AccuracyOptions& o) {
+    CLI::App* a = app.add_subcommand(
+        "accuracy", "Sweep every accuracy knob that applies to a scene against a 256-sample ground truth: time, "
+                    "memory and error per setting, as report.csv, report.json and index.html with plots");
+    a->add_option("scene", o.scene, "A scene as `render` takes it")->required();
+    a->add_option("--out", o.outDir, "Directory for the report, its renders and crops")->required();
+    a->add_option("--width", o.width, "Image width in pixels (the truth renders 16 times as wide)")->capture_default_str();
+    a->add_option("--height", o.height, "Image height in pixels")->capture_default_str();
+    a->add_option("--frames", o.frames, "Runs per setting; time is their median")->capture_default_str();
+    a->add_option("--threads", o.threads, "Worker threads of every run (0 = all cores)")->capture_default_str();
+    a->add_option("--azimuth", o.azimuth, "Camera azimuth for mesh files and voxel models, degrees")->capture_default_str();
+    a->add_option("--elevation", o.elevation, "Camera elevation, degrees")->capture_default_str();
+    a->add_option("--camera-index", o.cameraIndex, "Use the file's N-th camera (glTF)");
+    a->add_option("--time", o.timeSeconds, "glTF: the animation's pose at this time, in seconds")->capture_default_str();
+    a->add_option("--animation", o.animation, "glTF: the animation posed, by name or index (default: the first)");
+    a->add_flag("--soft", o.soft, "Soft shadows in every shadowed setting and the truth");
+    a->add_flag("--quiet", o.quiet, "Print nothing on success");
+    return a;
+}
+
+AccuracyOptions parseAccuracyArguments(const std::vector<std::string>& arguments) {
+    AccuracyOptions o;
+    parseSubcommandArguments("accuracy", arguments, [&](CLI::App& app) { addAccuracyCommand(app, o); });
+    validate(o);
+    return o;
 }
 
 int runAccuracyCommand(const AccuracyOptions& o) {
@@ -346,7 +463,8 @@ RunOutcome runOnce(const AccuracyOptions& o, const std::vector<std::string>& kno
         r.frameMs += j["shadows"].at("totalMs").get<double>();
         r.setupMs += j["shadows"].at("bvhBuildMs").get<double>() + j["shadows"].value("adjacencyMs", 0.0);
     }
-    r.peakMib = p.peakMib;
+    // The run's own peak (its VmHWM): wait4's ru_maxrss would count this process's resident set too.
+    r.peakMib = j.contains("process") ? j["process"].at("peakResidentBytes").get<double>() / (1024.0 * 1024.0) : p.peakMib;
     r.image = readImage(image);
     return r;
 }
@@ -415,6 +533,7 @@ void compareWithTruth(AccuracyRow& row, const raster::Image& image, const raster
     row.worst = worstRegion(image, truth, side);
     const int scale = std::max(1, 160 / row.worst.width);
     writeImageAtomically(outDir / "crops" / (row.id + ".png"), comparisonCrop(image, truth, row.worst, scale));
+    row.comparedWithTruth = true;
 }
 
 // A row is on the front when no other row is at least as fast and at least as accurate, and

@@ -18,6 +18,10 @@
 
 #include "apps/image_error.h"
 
+namespace CLI {
+class App;
+}
+
 namespace cuberille::apps {
 
 struct AccuracyOptions {
@@ -56,6 +60,7 @@ struct AccuracyRow {
     ImageError error;
     PixelRect worst;
     bool pareto = false;      // no other row is both as fast and as accurate, and better in one
+    bool comparedWithTruth = false;  // error and worst filled in (and its crop written)
 };
 
 /// What applies to the scene, found by a small probe render.
@@ -75,7 +80,50 @@ struct AccuracyReport {
 
 /// Runs the sweep and writes report.csv, report.json, index.html, renders/ and crops/ under
 /// options.outDir. Throws scene::InputError for bad options or a scene the probe cannot render.
+/// It is planAccuracy, runAccuracySetting for each of the plan's runs, and finishAccuracy, the
+/// three steps a distributed runner (python/cuberille/dask) takes apart.
 AccuracyReport runAccuracy(const AccuracyOptions& options);
+
+/// One setting's renders: `runs` times `cuberille render` (the ground truth at least twice).
+struct AccuracyRun {
+    AccuracySetting setting;
+    std::string id;  // settingId(), or "ground-truth"
+    int runs = 1;
+    bool groundTruth = false;
+};
+
+/// The sweep laid out before any setting renders: the report's options (the executable found),
+/// machine, threads and the scene's traits (one probe render), the sweep, and the runs it needs —
+/// each distinct command line once, the ground truth last. Creates the output folders.
+struct AccuracyPlan {
+    AccuracyReport report;  // no rows yet
+    std::vector<AccuracySetting> sweep;
+    std::vector<AccuracyRun> runs;
+};
+AccuracyPlan planAccuracy(const AccuracyOptions& options);
+
+/// Renders one run of a plan (`options` as the plan's report holds them) and returns its row:
+/// times, memory, determinism and the command line; its first image is left in renders/ID.exr.
+/// The ground truth's row is also compared with its own first image (it must be zero).
+AccuracyRow runAccuracySetting(const AccuracyOptions& options, const AccuracyRun& run);
+
+/// The report from the rows of the plan's runs, in the plan's order: each setting's image
+/// compared with the ground truth's (read back from renders/), the Pareto front, the orders
+/// theory predicts, and the report's files written.
+AccuracyReport finishAccuracy(AccuracyPlan plan, std::vector<AccuracyRow> rows);
+
+/// Rows and runs as JSON, to carry them between processes (the distributed runner's tasks).
+nlohmann::json accuracyRowJson(const AccuracyRow& row);
+AccuracyRow accuracyRowFromJson(const nlohmann::json& j);
+nlohmann::json accuracyRunJson(const AccuracyRun& run);
+AccuracyRun accuracyRunFromJson(const nlohmann::json& j);
+
+/// Adds the `accuracy` subcommand, whose options fill `o`.
+CLI::App* addAccuracyCommand(CLI::App& app, AccuracyOptions& o);
+
+/// `accuracy`'s arguments (the scene and options, without "accuracy") read by the command's own
+/// parser and checked as the command checks them; throws scene::InputError with its message.
+AccuracyOptions parseAccuracyArguments(const std::vector<std::string>& arguments);
 
 /// The sweep for a scene's traits, ground truth last (exposed for tests).
 std::vector<AccuracySetting> accuracySweep(const SceneTraits& traits, bool soft);

@@ -11,6 +11,7 @@
 #include "apps/process_memory.h"
 #include "apps/progress.h"
 #include "apps/render_command.h"
+#include "apps/render_options_cli.h"
 #include "raster/clock.h"
 #include "raster/pipeline.h"
 #include "raster/resolve.h"
@@ -30,12 +31,6 @@ void validateOutputs(const FlyOptions& o) {
     if (!o.plotPath.empty()) imageFormatFor(o.plotPath);
     requireOutputPath(o.plotPath, "--plot");
     requireOutputPath(o.statsPath, "--stats");
-}
-
-std::filesystem::path framePath(const FlyOptions& o, int frame) {
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%05d.png", frame);
-    return o.outDir / name;
 }
 
 void saveImage(const raster::Pipeline& p, const std::filesystem::path& path) {
@@ -140,13 +135,13 @@ FlyResult runFly(const FlyOptions& o) {
     const auto onFrame = [&](int frame, const lod::FlightFrame& f, const raster::Pipeline& p) {
         progress.update(std::min(frame + 1, o.frames));  // the settling frames after the path count as its last
         r.residentBytes.push_back(residentBytes());
-        if (o.saveEvery > 0 && !f.settling && frame % o.saveEvery == 0) saveImage(p, framePath(o, frame));
+        if (o.saveEvery > 0 && !f.settling && frame % o.saveEvery == 0) saveImage(p, flyFrameFile(o, frame));
     };
     static_cast<render::FlyResult&>(r) = render::fly(o, onFrame, [](const std::string& w) {
         std::fprintf(stderr, "cuberille: warning: %s\n", w.c_str());
     });
     progress.finish();
-    if (!o.outDir.empty()) writeImageAtomically(o.outDir / "final.png", r.finalImage);
+    if (!o.outDir.empty() && o.endsThePath()) writeImageAtomically(o.outDir / "final.png", r.finalImage);
     return r;
 }
 
@@ -187,8 +182,15 @@ std::string flyCsv(const FlyResult& r) {
     return csv.str();
 }
 
-int runFlyCommand(const FlyOptions& o) {
-    const FlyResult r = runFly(o);
+std::filesystem::path flyFrameFile(const FlyOptions& o, int frame) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.png", frame);
+    return o.outDir / name;
+}
+
+int runFlyCommand(const FlyOptions& o) { return finishFlyCommand(o, runFly(o)); }
+
+int finishFlyCommand(const FlyOptions& o, const FlyResult& r) {
     if (!o.statsPath.empty()) {
         AtomicOutputFile out(o.statsPath);
         out.stream() << flyCsv(r);
@@ -209,6 +211,155 @@ int runFlyCommand(const FlyOptions& o) {
     }
     if (!o.quiet) printSummary(o, r);
     return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// A flight taken apart into runs (the distributed runner's tasks)
+
+namespace {
+
+nlohmann::json frameJson(const lod::FlightFrame& f) {
+    const lod::StreamingFrameStats& s = f.streaming;
+    const lod::VoxelFrameStats& v = f.voxel;
+    return {{"index", f.index},
+            {"settling", f.settling},
+            {"ms", {f.frameMs, f.traversalMs, f.ioWaitMs, f.uploadMs, f.rasterMs}},
+            {"streaming",
+             {s.requestedBytes, s.loadedBytes, s.uploadedBytes, s.revivedBytes, s.stagedBytes, s.droppedBytes,
+              s.defragmentations, s.failedBlocks, uint64_t(s.requests)}},
+            {"uploadMs", s.uploadMs},
+            {"residentBytes", s.residentBytes},
+            {"freeListBytes", s.freeListBytes},
+            {"selection", {v.selection.blocksVisited, v.selection.frustumCulled, v.selection.hybridBlocks}},
+            {"drawnPerLevel", v.selection.drawnPerLevel},
+            {"voxel",
+             {v.voxelBlocksDrawn, v.triangleBlocksDrawn, v.occlusionCulled, v.visibilityTests, v.voxelsExpanded,
+              v.facesEmitted, v.hybridTriangles, v.facesBetweenSamples, v.missingBlocks, v.standIns, v.holes,
+              v.coveredPixels}},
+            {"voxelMs", {v.selectMs, v.expandMs}}};
+}
+
+lod::FlightFrame frameFromJson(const nlohmann::json& j) {
+    lod::FlightFrame f;
+    j.at("index").get_to(f.index), j.at("settling").get_to(f.settling);
+    const auto& ms = j.at("ms");
+    f.frameMs = ms.at(0), f.traversalMs = ms.at(1), f.ioWaitMs = ms.at(2), f.uploadMs = ms.at(3), f.rasterMs = ms.at(4);
+    lod::StreamingFrameStats& s = f.streaming;
+    const auto& st = j.at("streaming");
+    s.requestedBytes = st.at(0), s.loadedBytes = st.at(1), s.uploadedBytes = st.at(2), s.revivedBytes = st.at(3);
+    s.stagedBytes = st.at(4), s.droppedBytes = st.at(5), s.defragmentations = st.at(6), s.failedBlocks = st.at(7);
+    s.requests = st.at(8).get<uint32_t>();
+    j.at("uploadMs").get_to(s.uploadMs);
+    for (int k = 0; k < lod::kPoolCount; ++k)
+        s.residentBytes[k] = j.at("residentBytes").at(k), s.freeListBytes[k] = j.at("freeListBytes").at(k);
+    lod::VoxelFrameStats& v = f.voxel;
+    const auto& sel = j.at("selection");
+    v.selection.blocksVisited = sel.at(0), v.selection.frustumCulled = sel.at(1), v.selection.hybridBlocks = sel.at(2);
+    j.at("drawnPerLevel").get_to(v.selection.drawnPerLevel);
+    const auto& vx = j.at("voxel");
+    v.voxelBlocksDrawn = vx.at(0), v.triangleBlocksDrawn = vx.at(1), v.occlusionCulled = vx.at(2);
+    v.visibilityTests = vx.at(3), v.voxelsExpanded = vx.at(4), v.facesEmitted = vx.at(5), v.hybridTriangles = vx.at(6);
+    v.facesBetweenSamples = vx.at(7), v.missingBlocks = vx.at(8), v.standIns = vx.at(9), v.holes = vx.at(10);
+    v.coveredPixels = vx.at(11);
+    v.selectMs = j.at("voxelMs").at(0), v.expandMs = j.at("voxelMs").at(1);
+    return f;
+}
+
+}  // namespace
+
+nlohmann::json flyResultJson(const FlyResult& r) {
+    nlohmann::json frames = nlohmann::json::array();
+    for (const lod::FlightFrame& f : r.frames) frames.push_back(frameJson(f));
+    return {{"frames", frames},
+            {"pathFrames", r.pathFrames},
+            {"openMs", r.openMs},
+            {"timeToFirstImageMs", r.timeToFirstImageMs},
+            {"bytesReadFromDisk", r.bytesReadFromDisk},
+            {"peakHeldBytes", r.peakHeldBytes},
+            {"budgetBytes", r.budgetBytes},
+            {"warnings", r.warnings},
+            {"settled", r.settled},
+            {"residentBytes", r.residentBytes}};
+}
+
+FlyResult flyResultFromJson(const nlohmann::json& j) {
+    FlyResult r;
+    for (const nlohmann::json& f : j.at("frames")) r.frames.push_back(frameFromJson(f));
+    j.at("pathFrames").get_to(r.pathFrames), j.at("openMs").get_to(r.openMs);
+    j.at("timeToFirstImageMs").get_to(r.timeToFirstImageMs), j.at("bytesReadFromDisk").get_to(r.bytesReadFromDisk);
+    j.at("peakHeldBytes").get_to(r.peakHeldBytes), j.at("budgetBytes").get_to(r.budgetBytes);
+    j.at("warnings").get_to(r.warnings), j.at("settled").get_to(r.settled), j.at("residentBytes").get_to(r.residentBytes);
+    return r;
+}
+
+// As one flight reports: the frames in path order, then the last run's settling; the first run's
+// opening and first image; bytes read summed over the runs (each read what it needed itself);
+// the largest held; a failed block's warning once.
+FlyResult joinFlyRuns(std::vector<FlyResult> runs) {
+    FlyResult all;
+    if (runs.empty()) return all;
+    std::sort(runs.begin(), runs.end(), [](const FlyResult& a, const FlyResult& b) {
+        return a.frames.front().index < b.frames.front().index;
+    });
+    all.openMs = runs.front().openMs;
+    all.timeToFirstImageMs = runs.front().timeToFirstImageMs;
+    all.budgetBytes = runs.front().budgetBytes;
+    for (FlyResult& r : runs) {
+        all.frames.insert(all.frames.end(), r.frames.begin(), r.frames.end());
+        all.residentBytes.insert(all.residentBytes.end(), r.residentBytes.begin(), r.residentBytes.end());
+        all.pathFrames += r.pathFrames;
+        all.bytesReadFromDisk += r.bytesReadFromDisk;
+        all.peakHeldBytes = std::max(all.peakHeldBytes, r.peakHeldBytes);
+        for (const std::string& w : r.warnings)
+            if (std::find(all.warnings.begin(), all.warnings.end(), w) == all.warnings.end()) all.warnings.push_back(w);
+    }
+    all.settled = runs.back().settled;
+    return all;
+}
+
+CLI::App* addFlyCommand(CLI::App& app, FlyOptions& o) {
+    CLI::App* fly = app.add_subcommand(
+        "fly", "Fly through a voxel model (.cvox) streamed under a memory budget, recording each frame");
+    fly->add_option("model", o.model, "A .cvox voxel model")->required();
+    fly->add_option("--path", o.path,
+                    "Camera path: orbit (a full turn), zoom (towards the surface) or a keyframe file "
+                    "('px py pz tx ty tz' per line)")
+        ->capture_default_str();
+    fly->add_option("--frames", o.frames, "Frames along the path")->capture_default_str();
+    addFrameOptions(fly, o.width, o.height, o.msaa, o.threads);
+    fly->add_option("--out-dir", o.outDir, "Write final.png (the settled last view) and frames asked for by --save-every");
+    fly->add_option("--save-every", o.saveEvery, "Also write every K-th frame as frame_NNNNN.png (0: none)")
+        ->capture_default_str();
+    fly->add_option("--stats", o.statsPath, "Write one CSV row per frame: times, bytes, pools, blocks per level");
+    fly->add_option("--plot", o.plotPath, "Plot the per-frame statistics as a PNG");
+    fly->add_option("--budget-mib", o.budgetMib, "Memory for resident blocks, all pools together, in MiB")
+        ->capture_default_str();
+    fly->add_option("--upload-limit", o.uploadLimitMib, "MiB made resident per frame at most (0: unlimited)")
+        ->capture_default_str();
+    fly->add_option("--io-throttle", o.ioThrottleMibps, "Simulate a disk this slow, in MiB/s (0: no throttle)")
+        ->capture_default_str();
+    fly->add_option("--refine", o.refine,
+                    "Missing blocks: full (a resident ancestor stands in: always closed) or partial (holes while "
+                    "loading)")
+        ->capture_default_str();
+    fly->add_option("--pixel-error", o.pixelError, "Refine blocks until a voxel's edge projects to at most this many pixels")
+        ->capture_default_str();
+    fly->add_flag("--no-hybrid", o.noHybrid, "Never draw source triangles");
+    fly->add_flag("--no-occlusion", o.noOcclusion, "No occlusion culling");
+    fly->add_option("--settle-frames", o.settleFrames,
+                    "After the path, render its last view until loading settles, at most this many frames (0: stop)")
+        ->capture_default_str();
+    fly->add_option("--azimuth", o.azimuth, "Framing camera azimuth, degrees about +y")->capture_default_str();
+    fly->add_option("--elevation", o.elevation, "Framing camera elevation, degrees")->capture_default_str();
+    fly->add_flag("--quiet", o.quiet, "Print nothing on success");
+    return fly;
+}
+
+FlyOptions parseFlyArguments(const std::vector<std::string>& arguments) {
+    FlyOptions o;
+    parseSubcommandArguments("fly", arguments, [&](CLI::App& app) { addFlyCommand(app, o); });
+    validateOutputs(o);
+    return o;
 }
 
 }  // namespace cuberille::apps

@@ -43,25 +43,6 @@ void addExplainCommand(CLI::App& app, cuberille::apps::ExplainOptions& o) {
     explain->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 
-void addAccuracyCommand(CLI::App& app, cuberille::apps::AccuracyOptions& o) {
-    CLI::App* a = app.add_subcommand(
-        "accuracy", "Sweep every accuracy knob that applies to a scene against a 256-sample ground truth: time, "
-                    "memory and error per setting, as report.csv, report.json and index.html with plots");
-    a->add_option("scene", o.scene, "A scene as `render` takes it")->required();
-    a->add_option("--out", o.outDir, "Directory for the report, its renders and crops")->required();
-    a->add_option("--width", o.width, "Image width in pixels (the truth renders 16 times as wide)")->capture_default_str();
-    a->add_option("--height", o.height, "Image height in pixels")->capture_default_str();
-    a->add_option("--frames", o.frames, "Runs per setting; time is their median")->capture_default_str();
-    a->add_option("--threads", o.threads, "Worker threads of every run (0 = all cores)")->capture_default_str();
-    a->add_option("--azimuth", o.azimuth, "Camera azimuth for mesh files and voxel models, degrees")->capture_default_str();
-    a->add_option("--elevation", o.elevation, "Camera elevation, degrees")->capture_default_str();
-    a->add_option("--camera-index", o.cameraIndex, "Use the file's N-th camera (glTF)");
-    a->add_option("--time", o.timeSeconds, "glTF: the animation's pose at this time, in seconds")->capture_default_str();
-    a->add_option("--animation", o.animation, "glTF: the animation posed, by name or index (default: the first)");
-    a->add_flag("--soft", o.soft, "Soft shadows in every shadowed setting and the truth");
-    a->add_flag("--quiet", o.quiet, "Print nothing on success");
-}
-
 void addPackCommand(CLI::App& app, cuberille::apps::PackOptions& o) {
     CLI::App* pack = app.add_subcommand(
         "pack", "Convert a mesh to a geometry stream (.cgs): LZ4-compressed chunks the voxelizer reads in parallel");
@@ -116,43 +97,6 @@ void addIsosurfaceCommand(CLI::App& app, cuberille::apps::IsosurfaceCommandOptio
 void addInfoCommand(CLI::App& app, cuberille::apps::InfoOptions& o) {
     CLI::App* info = app.add_subcommand("info", "Describe a geometry stream (.cgs) or voxel model (.cvox), checking all of it");
     info->add_option("file", o.file, "A .cgs or .cvox file")->required();
-}
-
-void addFlyCommand(CLI::App& app, cuberille::apps::FlyOptions& o) {
-    CLI::App* fly = app.add_subcommand(
-        "fly", "Fly through a voxel model (.cvox) streamed under a memory budget, recording each frame");
-    fly->add_option("model", o.model, "A .cvox voxel model")->required();
-    fly->add_option("--path", o.path,
-                    "Camera path: orbit (a full turn), zoom (towards the surface) or a keyframe file "
-                    "('px py pz tx ty tz' per line)")
-        ->capture_default_str();
-    fly->add_option("--frames", o.frames, "Frames along the path")->capture_default_str();
-    cuberille::apps::addFrameOptions(fly, o.width, o.height, o.msaa, o.threads);
-    fly->add_option("--out-dir", o.outDir, "Write final.png (the settled last view) and frames asked for by --save-every");
-    fly->add_option("--save-every", o.saveEvery, "Also write every K-th frame as frame_NNNNN.png (0: none)")
-        ->capture_default_str();
-    fly->add_option("--stats", o.statsPath, "Write one CSV row per frame: times, bytes, pools, blocks per level");
-    fly->add_option("--plot", o.plotPath, "Plot the per-frame statistics as a PNG");
-    fly->add_option("--budget-mib", o.budgetMib, "Memory for resident blocks, all pools together, in MiB")
-        ->capture_default_str();
-    fly->add_option("--upload-limit", o.uploadLimitMib, "MiB made resident per frame at most (0: unlimited)")
-        ->capture_default_str();
-    fly->add_option("--io-throttle", o.ioThrottleMibps, "Simulate a disk this slow, in MiB/s (0: no throttle)")
-        ->capture_default_str();
-    fly->add_option("--refine", o.refine,
-                    "Missing blocks: full (a resident ancestor stands in: always closed) or partial (holes while "
-                    "loading)")
-        ->capture_default_str();
-    fly->add_option("--pixel-error", o.pixelError, "Refine blocks until a voxel's edge projects to at most this many pixels")
-        ->capture_default_str();
-    fly->add_flag("--no-hybrid", o.noHybrid, "Never draw source triangles");
-    fly->add_flag("--no-occlusion", o.noOcclusion, "No occlusion culling");
-    fly->add_option("--settle-frames", o.settleFrames,
-                    "After the path, render its last view until loading settles, at most this many frames (0: stop)")
-        ->capture_default_str();
-    fly->add_option("--azimuth", o.azimuth, "Framing camera azimuth, degrees about +y")->capture_default_str();
-    fly->add_option("--elevation", o.elevation, "Framing camera elevation, degrees")->capture_default_str();
-    fly->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 
 // Typos: the name among `names` nearest to `typed` by edit distance (Levenshtein), or "" when
@@ -235,11 +179,11 @@ int main(int argc, char** argv) {
     cuberille::apps::InfoOptions infoOptions;
     addInfoCommand(app, infoOptions);
     cuberille::apps::FlyOptions flyOptions;
-    addFlyCommand(app, flyOptions);
+    cuberille::apps::addFlyCommand(app, flyOptions);
     cuberille::apps::ExplainOptions explainOptions;
     addExplainCommand(app, explainOptions);
     cuberille::apps::AccuracyOptions accuracyOptions;
-    addAccuracyCommand(app, accuracyOptions);
+    cuberille::apps::addAccuracyCommand(app, accuracyOptions);
 
     if (reportUnknownSubcommand(app, argc, argv)) return kExitBadInput;
     try {

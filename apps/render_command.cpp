@@ -5,6 +5,7 @@
 
 #include "apps/atomic_file.h"
 #include "apps/image_io.h"
+#include "apps/process_memory.h"
 #include "apps/progress.h"
 #include "raster/clock.h"
 #include "scene/file_names.h"
@@ -246,7 +247,10 @@ nlohmann::json renderFrameRun(const render::LoadedScene& scene, const RenderOpti
 }
 
 void writeRenderStats(const RenderOptions& o, const nlohmann::json& frames) {
-    writeJsonAtomically(o.statsPath, isSequence(o) ? nlohmann::json{{"frames", frames}} : frames.at(0));
+    nlohmann::json stats = isSequence(o) ? nlohmann::json{{"frames", frames}} : frames.at(0);
+    // The process that wrote the file, at the end of its work: what `accuracy` reports as a run's memory.
+    stats["process"] = {{"peakResidentBytes", peakResidentBytes()}};
+    writeJsonAtomically(o.statsPath, stats);
 }
 
 void checkRenderCommand(const RenderOptions& o) {

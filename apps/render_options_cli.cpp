@@ -162,18 +162,23 @@ void applyRenderNames(const RenderNames& names, RenderOptions& o) {
     }
 }
 
-RenderOptions parseRenderArguments(const std::vector<std::string>& arguments) {
+void parseSubcommandArguments(const std::string& name, const std::vector<std::string>& arguments,
+                              const std::function<void(CLI::App&)>& addCommand) {
     CLI::App app;
-    RenderOptions o;
-    RenderNames names;
-    addRenderCommand(app, o, names);
+    addCommand(app);
     std::vector<std::string> reversed{arguments.rbegin(), arguments.rend()};  // CLI11 takes them last first
-    reversed.push_back("render");
+    reversed.push_back(name);
     try {
         app.parse(reversed);
     } catch (const CLI::ParseError& e) {
         throw scene::InputError(e.what());
     }
+}
+
+RenderOptions parseRenderArguments(const std::vector<std::string>& arguments) {
+    RenderOptions o;
+    RenderNames names;
+    parseSubcommandArguments("render", arguments, [&](CLI::App& app) { addRenderCommand(app, o, names); });
     applyRenderNames(names, o);
     return o;
 }

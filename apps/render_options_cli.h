@@ -3,6 +3,7 @@
 // `cuberille batch` (apps/batch_command.h), so a job line takes exactly the options `render` does,
 // with the same checks and messages.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,13 @@
 #include "apps/render_command.h"
 
 namespace cuberille::apps {
+
+/// A subcommand's arguments as a command line gives them (without the subcommand's name), read by
+/// the parser `addCommand` adds to an empty app, as the tool reads its own command line; a parse
+/// error throws scene::InputError with CLI11's message. How a program that drives the tool's work,
+/// such as the distributed runner (python/cuberille/dask), reads the command it was given.
+void parseSubcommandArguments(const std::string& name, const std::vector<std::string>& arguments,
+                              const std::function<void(CLI::App&)>& addCommand);
 
 /// The frame's size, samples and the worker threads, as every rendering command takes them.
 void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int& threads);

@@ -4,7 +4,8 @@
     PYTHONPATH=build/release/python /usr/bin/python3 bench/dask_scaling.py --cli build/release/apps/cuberille \\
         [--model ../shared/data/gltf/DamagedHelmet/DamagedHelmet.glb] [--workers 1,2] [--runs 3]
 
-For each kind of work (a turntable, an animation, a batch of views) it times, in the same run:
+For each kind of work (a turntable, an animation, a batch of views, an accuracy sweep, a flight
+through the model voxelized at --voxel-resolution) it times, in the same run:
 the tool on one machine (its whole process), and cuberille.dask on a LocalCluster of each worker
 count (the work only: the cluster is started before the clock and kept, as a user's cluster is).
 Prints the median of --runs and the speed-up against 1 worker; docs/scale-out.md holds the table.
@@ -32,6 +33,8 @@ def main():
     parser.add_argument("--workers", default="1,2")
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--frames", type=int, default=24)
+    parser.add_argument("--voxel-resolution", type=int, default=1024)
+    parser.add_argument("--kinds", default="turntable,animation,batch,accuracy,fly")
     args = parser.parse_args()
 
     from distributed import Client, LocalCluster
@@ -49,16 +52,34 @@ def main():
                             for i in range(args.frames)))
     (work / "batch").mkdir()
 
+    # The accuracy sweep at its default size (320x180) with one run a setting: 22 settings on the
+    # helmet, each a `cuberille render` process.
+    sweep = [args.model, "--frames", "1"]
+    # The flight: four times the frames of the other kinds along an orbit, 1 sample, no settling
+    # (every run draws only its frames of the path).
+    model = work / "model.cvox"
+    if "fly" in args.kinds:
+        subprocess.run([args.cli, "voxelize", args.model, "--resolution", str(args.voxel_resolution), "-o", str(model),
+                        "--quiet"], check=True)
+    flight = [str(model), "--frames", str(4 * args.frames), "--width", "640", "--height", "480", "--msaa", "1",
+              "--settle-frames", "0", "--quiet"]
+
     def tool(kind):
         out = work / "tool"
         out.mkdir(exist_ok=True)
-        command = [args.cli, "batch", str(jobs), "--quiet"] if kind == "batch" else \
-            [args.cli, "render", *kinds[kind], "--out", str(out / "f.png"), "--quiet"]
+        if kind == "batch":
+            command = [args.cli, "batch", str(jobs), "--quiet"]
+        elif kind == "accuracy":
+            command = [args.cli, "accuracy", *sweep, "--out", str(out / "report"), "--quiet"]
+        elif kind == "fly":
+            command = [args.cli, "fly", *flight]
+        else:
+            command = [args.cli, "render", *kinds[kind], "--out", str(out / "f.png"), "--quiet"]
         t0 = time.perf_counter()
         subprocess.run(command, check=True)
         return time.perf_counter() - t0
 
-    rows = {kind: {"tool": statistics.median(tool(kind) for _ in range(args.runs))} for kind in (*kinds, "batch")}
+    rows = {kind: {"tool": statistics.median(tool(kind) for _ in range(args.runs))} for kind in args.kinds.split(",")}
     for workers in [int(w) for w in args.workers.split(",")]:
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
                 Client(cluster) as client:
@@ -71,6 +92,10 @@ def main():
                     t0 = time.perf_counter()
                     if kind == "batch":
                         cuberille.dask.batch(jobs, client)
+                    elif kind == "accuracy":
+                        cuberille.dask.accuracy([*sweep, "--out", str(out / "report")], client, executable=args.cli)
+                    elif kind == "fly":
+                        cuberille.dask.fly(flight, client)
                     else:
                         cuberille.dask.render([*kinds[kind], "--out", str(out / "f.png")], client)
                     times.append(time.perf_counter() - t0)
@@ -84,7 +109,9 @@ def main():
                 client.gather(client.map(_nothing, range(1000), pure=False))
                 task_overhead_ms = time.perf_counter() - t0  # seconds for 1000 tasks: ms a task
     counts = [int(w) for w in args.workers.split(",")]
-    print(f"{args.frames} frames a kind, 640x480, 4 samples; median of {args.runs}; {os.cpu_count()} cores")
+    print(f"{args.frames} frames a kind, 640x480, 4 samples (the accuracy sweep: 320x180, one run a setting; the "
+          f"flight: {4 * args.frames} frames at 1 sample of the model voxelized at {args.voxel_resolution}); "
+          f"median of {args.runs}; {os.cpu_count()} cores")
     print(f"{'work':<10} {'tool (s)':>9} " + " ".join(f"{f'{w} worker(s) (s)':>16}" for w in counts) +
           " " + " ".join(f"{f'speed-up x{w}':>12}" for w in counts[1:]))
     for kind, r in rows.items():

@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <pybind11/functional.h>
@@ -13,7 +14,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "apps/accuracy_command.h"
 #include "apps/batch_command.h"
+#include "apps/fly_command.h"
 #include "apps/png_file.h"
 #include "apps/render_command.h"
 #include "apps/render_options_cli.h"
@@ -190,6 +193,96 @@ private:
     apps::RenderOptions o_;
 };
 
+// A `cuberille accuracy` command line read by the tool's own parser, and the command's three steps
+// taken apart (apps/accuracy_command.h) for the distributed runner: plan() here (one probe render),
+// run() for each of the plan's runs wherever it is sent, finish() here with every run's row. Runs
+// and rows travel as JSON text. `executable` is the cuberille program every run starts, a path
+// that must name it on every machine that runs one; `threadsIfUnset` stands for --threads 0.
+class PyAccuracyCommand {
+public:
+    static PyAccuracyCommand fromArguments(const std::vector<std::string>& arguments) {
+        PyAccuracyCommand c;
+        c.o_ = apps::parseAccuracyArguments(arguments);
+        return c;
+    }
+
+    std::vector<std::string> plan(const std::string& executable, int threadsIfUnset) {
+        {
+            py::gil_scoped_release release;
+            plan_ = apps::planAccuracy(options(executable, threadsIfUnset));
+        }
+        std::vector<std::string> runs;
+        for (const apps::AccuracyRun& r : plan_->runs) runs.push_back(apps::accuracyRunJson(r).dump());
+        return runs;
+    }
+
+    std::string run(const std::string& runJson, const std::string& executable, int threadsIfUnset) const {
+        const apps::AccuracyRun run = apps::accuracyRunFromJson(nlohmann::json::parse(runJson));
+        const apps::AccuracyOptions o = options(executable, threadsIfUnset);
+        py::gil_scoped_release release;
+        return apps::accuracyRowJson(apps::runAccuracySetting(o, run)).dump();
+    }
+
+    size_t finish(const std::vector<std::string>& rowsJson, const std::string& machine) {
+        if (!plan_) throw std::logic_error("AccuracyCommand.finish: plan() first");
+        std::vector<apps::AccuracyRow> rows;
+        for (const std::string& r : rowsJson) rows.push_back(apps::accuracyRowFromJson(nlohmann::json::parse(r)));
+        apps::AccuracyPlan plan = std::move(*plan_);
+        plan_.reset();
+        if (!machine.empty()) plan.report.machine = machine;
+        py::gil_scoped_release release;
+        return apps::finishAccuracy(std::move(plan), std::move(rows)).rows.size();
+    }
+
+    const apps::AccuracyOptions& options() const { return o_; }
+
+private:
+    apps::AccuracyOptions options(const std::string& executable, int threadsIfUnset) const {
+        apps::AccuracyOptions o = o_;
+        o.executable = executable;
+        if (o.threads == 0) o.threads = threadsIfUnset;
+        return o;
+    }
+
+    apps::AccuracyOptions o_;
+    std::optional<apps::AccuracyPlan> plan_;
+};
+
+// A `cuberille fly` command line read by the tool's own parser, flown in runs of its path's frames
+// (render::FlySettings::firstFrame) for the distributed runner: run() flies frames [first, first +
+// count) from a cold start and writes them (final.png by the run that ends the path), returning
+// its result as JSON text; finish() joins every run's result as one flight and writes --stats and
+// --plot and prints the summary, as the command does.
+class PyFlyCommand {
+public:
+    static PyFlyCommand fromArguments(const std::vector<std::string>& arguments) {
+        PyFlyCommand c;
+        c.o_ = apps::parseFlyArguments(arguments);
+        return c;
+    }
+
+    std::string run(int first, int count, int threadsIfUnset) const {
+        apps::FlyOptions o = o_;
+        o.firstFrame = first, o.runFrames = count, o.quiet = true;
+        if (o.threads == 0) o.threads = threadsIfUnset;
+        if (!o.outDir.empty()) std::filesystem::create_directories(o.outDir);
+        py::gil_scoped_release release;
+        return apps::flyResultJson(apps::runFly(o)).dump();
+    }
+
+    int finish(const std::vector<std::string>& runs) const {
+        std::vector<apps::FlyResult> results;
+        for (const std::string& r : runs) results.push_back(apps::flyResultFromJson(nlohmann::json::parse(r)));
+        py::gil_scoped_release release;
+        return apps::finishFlyCommand(o_, apps::joinFlyRuns(std::move(results)));
+    }
+
+    const apps::FlyOptions& options() const { return o_; }
+
+private:
+    apps::FlyOptions o_;
+};
+
 // A flight through a streamed voxel model (render/fly.h): every frame's statistics as a dict, and
 // the settled last view as uint8 sRGB RGBA.
 py::dict fly(const std::string& model, const std::string& path, int frames, int width, int height, int msaa, int threads,
@@ -275,6 +368,31 @@ PYBIND11_MODULE(_cuberille, m) {
         .def_property_readonly("detail", [](const PyRenderCommand& c) { return c.options().detail; })
         .def_property_readonly("up_axis", [](const PyRenderCommand& c) { return std::string(c.options().zUp ? "z" : "y"); })
         .def_property_readonly("stats", [](const PyRenderCommand& c) { return c.options().statsPath.string(); });
+    py::class_<PyAccuracyCommand>(m, "AccuracyCommand")
+        .def_static("from_arguments", &PyAccuracyCommand::fromArguments, py::arg("arguments"),
+                    "`cuberille accuracy`'s arguments (the scene and options), checked as the command checks them")
+        .def("plan", &PyAccuracyCommand::plan, py::arg("executable"), py::arg("threads_if_unset") = 0,
+             "Probes the scene and lays out the sweep: its runs as JSON text, the ground truth last")
+        .def("run", &PyAccuracyCommand::run, py::arg("run"), py::arg("executable"), py::arg("threads_if_unset") = 0,
+             "Renders one run of the plan here; its row as JSON text")
+        .def("finish", &PyAccuracyCommand::finish, py::arg("rows"), py::arg("machine") = "",
+             "Compares every row with the ground truth and writes the report; the number of rows")
+        .def_property_readonly("out_dir", [](const PyAccuracyCommand& c) { return c.options().outDir.string(); })
+        .def_property_readonly("quiet", [](const PyAccuracyCommand& c) { return c.options().quiet; });
+    py::class_<PyFlyCommand>(m, "FlyCommand")
+        .def_static("from_arguments", &PyFlyCommand::fromArguments, py::arg("arguments"),
+                    "`cuberille fly`'s arguments (the model and options), checked as the command checks them")
+        .def("run", &PyFlyCommand::run, py::arg("first"), py::arg("count"), py::arg("threads_if_unset") = 0,
+             "Flies the path's frames [first, first + count) from a cold start and writes them; the result as JSON text")
+        .def("finish", &PyFlyCommand::finish, py::arg("runs"),
+             "Joins the runs' results as one flight; writes --stats and --plot and prints the summary")
+        .def("frame_file", [](const PyFlyCommand& c, int frame) { return apps::flyFrameFile(c.options(), frame).string(); })
+        .def_property_readonly("frames", [](const PyFlyCommand& c) { return c.options().frames; })
+        .def_property_readonly("save_every", [](const PyFlyCommand& c) { return c.options().saveEvery; })
+        .def_property_readonly("out_dir", [](const PyFlyCommand& c) { return c.options().outDir.string(); })
+        .def_property_readonly("stats", [](const PyFlyCommand& c) { return c.options().statsPath.string(); })
+        .def_property_readonly("plot", [](const PyFlyCommand& c) { return c.options().plotPath.string(); })
+        .def_property_readonly("quiet", [](const PyFlyCommand& c) { return c.options().quiet; });
     m.def("fly", &fly, py::arg("model"), py::arg("path") = "orbit", py::arg("frames") = 120, py::arg("width") = 1280,
           py::arg("height") = 720, py::arg("msaa") = 4, py::arg("threads") = 0, py::arg("budget_mib") = 1024.0,
           py::arg("upload_limit_mib") = 0.0, py::arg("refine") = "full", py::arg("pixel_error") = 1.0f,

@@ -31,6 +31,9 @@ void validate(const FlySettings& o) {
     if (o.refine != "full" && o.refine != "partial") throw InputError("--refine: '" + o.refine + "' is not full or partial");
     if (!(o.pixelError >= 0.0f && std::isfinite(o.pixelError))) throw InputError("--pixel-error: must be 0 or more");
     if (o.settleFrames < 0) throw InputError("--settle-frames: must be 0 or more");
+    if (o.firstFrame < 0 || o.runFrames < 0 || o.firstFrame >= o.frames || o.lastFrame() > o.frames)
+        throw InputError("a run of frames " + std::to_string(o.firstFrame) + " + " + std::to_string(o.runFrames) +
+                         " outside the path's " + std::to_string(o.frames));
     if (o.path != "orbit" && o.path != "zoom" && !std::filesystem::exists(o.path))
         throw InputError("--path: '" + o.path + "' is not orbit, zoom or an existing keyframe file");
 }
@@ -77,14 +80,14 @@ FlyResult fly(const FlySettings& o, const FlightFrameSink& onFrame, const scene:
     raster::FramebufferDesc fb;
     fb.widthPixels = o.width, fb.heightPixels = o.height, fb.samples = o.msaa, fb.clearColor = scene.background;
     lod::Flight flight(scene, blocks, fb, ro);
-    for (int i = 0; i < o.frames; ++i) {
+    for (int i = o.firstFrame; i < o.lastFrame(); ++i) {
         const float t = o.frames > 1 ? float(i) / float(o.frames - 1) : 0.0f;
         r.frames.push_back(flight.frame(path.at(t, lens)));
-        if (i == 0) r.timeToFirstImageMs = raster::nowMs() - start;
+        if (i == o.firstFrame) r.timeToFirstImageMs = raster::nowMs() - start;
         if (onFrame) onFrame(i, r.frames.back(), flight.pipeline());
     }
-    r.pathFrames = o.frames;
-    if (o.settleFrames > 0) {
+    r.pathFrames = o.lastFrame() - o.firstFrame;
+    if (o.settleFrames > 0 && o.endsThePath()) {
         int index = o.frames;
         const auto afterFrame = [&](const lod::FlightFrame& f) {
             if (onFrame) onFrame(index, f, flight.pipeline());
@@ -93,6 +96,8 @@ FlyResult fly(const FlySettings& o, const FlightFrameSink& onFrame, const scene:
         for (lod::FlightFrame& f : flight.settle(path.at(1.0f, lens), o.settleFrames, afterFrame)) r.frames.push_back(std::move(f));
         r.settled = blocks.settled();
     }
+    // Numbered as in the whole flight, whichever run draws them (the flight counts from its first).
+    for (lod::FlightFrame& f : r.frames) f.index += o.firstFrame;
     for (const lod::FlightFrame& f : r.frames) r.peakHeldBytes = std::max(r.peakHeldBytes, heldBytes(f.streaming));
     r.bytesReadFromDisk = blocks.bytesReadFromDisk();
     raster::resolveColor(flight.pipeline().framebuffer(), r.finalImage);

@@ -29,11 +29,18 @@ struct FlySettings {
     bool noOcclusion = false, noHybrid = false;
     int settleFrames = 1000;  // after the path, its last view until loading settles (0: not at all)
     float azimuth = 30.0f, elevation = 20.0f;
+    /// A run of the path (how the distributed runner splits a flight): its frames [firstFrame,
+    /// firstFrame + runFrames) of `frames`, numbered as in the whole flight and flown from a cold
+    /// start — the model opened, nothing resident, no occlusion history — and settled only by the
+    /// run that ends the path. runFrames 0: to the path's end.
+    int firstFrame = 0, runFrames = 0;
+    int lastFrame() const { return runFrames > 0 ? firstFrame + runFrames : frames; }  // one past
+    bool endsThePath() const { return lastFrame() == frames; }
 };
 
 struct FlyResult {
-    std::vector<lod::FlightFrame> frames;  // the path's, then the settling ones
-    int pathFrames = 0;
+    std::vector<lod::FlightFrame> frames;  // the path's (the run's), then the settling ones
+    int pathFrames = 0;                    // of them on the path
     double openMs = 0.0;               // opening the model and reading its root
     double timeToFirstImageMs = 0.0;   // from the start to the first frame's image
     uint64_t bytesReadFromDisk = 0;

@@ -149,3 +149,80 @@ def test_the_command_line_gives_the_tools_files_and_exit_codes(examples, cli, tm
                                  "--msaa", "3", "--out", str(tmp_path / "y.png")], capture_output=True, text=True)
     assert bad_option.returncode == 2 and bad_option.stderr == run_cli(cli, "render", examples / "torus.ply", "--msaa",
                                                                        "3", "--out", tmp_path / "y.png").stderr
+
+
+def report_rows(folder, drop_folder):
+    """report.csv's rows without the columns that are times or memory, the report's folder in
+    each command line replaced, so two runs' rows compare."""
+    import csv
+
+    with open(folder / "report.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    timed = ("median_ms", "min_ms", "max_ms", "setup_ms", "peak_mib", "pareto")
+    return [{k: v.replace(str(drop_folder), "OUT") for k, v in row.items() if k not in timed} for row in rows]
+
+
+def test_an_accuracy_sweep_writes_the_report_the_cli_writes(examples, cli, client, tmp_path):
+    """Every row's error against the ground truth, its command line and its comparison crop are the
+    tool's (the renders are the same pixels; an EXR also holds the time it was written); a command
+    line several knobs share is rendered once."""
+    arguments = [examples / "knot.obj", "--width", "40", "--height", "30", "--frames", "1", "--threads", "1"]
+    assert run_cli(cli, "accuracy", *arguments, "--out", tmp_path / "cli", "--quiet").returncode == 0
+    report = cuberille.dask.accuracy([*arguments, "--out", tmp_path / "dask", "--quiet"], client, executable=cli)
+    expected = report_rows(tmp_path / "cli", tmp_path / "cli")
+    assert report.rows == len(expected) and 1 < report.tasks < report.rows
+    assert report_rows(tmp_path / "dask", tmp_path / "dask") == expected
+    assert files_of(tmp_path / "dask" / "crops") == files_of(tmp_path / "cli" / "crops")
+    assert sorted(os.listdir(tmp_path / "dask" / "renders")) == sorted(os.listdir(tmp_path / "cli" / "renders"))
+    machine = json.loads((tmp_path / "dask" / "report.json").read_text())["machine"]
+    assert machine.startswith("Dask cluster of 2 worker processes")
+
+
+def test_an_accuracy_sweep_refuses_what_the_tool_refuses_with_its_message(examples, cli, tmp_path):
+    # --threads given: left at 0 (all cores), a worker's runs take its share of its machine's cores,
+    # and the probe's command line in the message says so
+    for arguments in ([examples / "missing.ply", "--out", tmp_path / "r", "--threads", "1"],
+                      [examples / "knot.obj", "--frames", "0", "--out", tmp_path / "r"]):
+        tool = run_cli(cli, "accuracy", *arguments)
+        ours = subprocess.run([sys.executable, "-m", "cuberille.dask", "accuracy", *map(str, arguments), "--workers", "1",
+                               "--cuberille", cli], capture_output=True, text=True)
+        assert (ours.returncode, ours.stderr) == (tool.returncode, tool.stderr) == (2, tool.stderr)
+    nowhere = subprocess.run([sys.executable, "-m", "cuberille.dask", "accuracy", str(examples / "knot.obj"), "--out",
+                              str(tmp_path / "r"), "--workers", "1", "--cuberille", str(tmp_path / "no-such-program")],
+                             capture_output=True, text=True)
+    assert nowhere.returncode == 2 and "cannot find the cuberille program" in nowhere.stderr
+
+
+def test_a_flight_in_runs_writes_the_tools_files_and_settles_on_its_final_image(examples, cli, client, tmp_path):
+    """Runs of 3 frames, each from a cold start: the frames --save-every asks for are there under
+    the tool's names (what a frame shows while blocks load depends on when reads finish, on one
+    machine as on many), the settled final image is the tool's bit for bit, and the CSV has the
+    tool's columns and one row per frame of the path in order, then the last run's settling."""
+    import csv
+
+    model = tmp_path / "torus.cvox"
+    assert run_cli(cli, "voxelize", examples / "torus.ply", "--resolution", "128", "-o", model, "--quiet").returncode == 0
+    arguments = [model, "--frames", "8", "--width", "96", "--height", "72", "--msaa", "1", "--budget-mib", "4",
+                 "--save-every", "2"]
+    assert run_cli(cli, "fly", *arguments, "--out-dir", tmp_path / "cli", "--stats", tmp_path / "cli.csv",
+                   "--quiet").returncode == 0
+    report = cuberille.dask.fly([*arguments, "--out-dir", tmp_path / "dask", "--stats", tmp_path / "dask.csv",
+                                 "--plot", tmp_path / "dask-plot.png", "--quiet"], client, frames_per_task=3)
+    assert report.tasks == 3 and report.frames >= 8
+    assert sorted(os.listdir(tmp_path / "dask")) == sorted(os.listdir(tmp_path / "cli")) == \
+        ["final.png", "frame_00000.png", "frame_00002.png", "frame_00004.png", "frame_00006.png"]
+    assert (tmp_path / "dask" / "final.png").read_bytes() == (tmp_path / "cli" / "final.png").read_bytes()
+    with open(tmp_path / "cli.csv", newline="") as f:
+        tool = list(csv.DictReader(f))
+    with open(tmp_path / "dask.csv", newline="") as f:
+        ours = list(csv.DictReader(f))
+    assert list(ours[0].keys())[:30] == list(tool[0].keys())[:30]
+    path = [int(r["frame"]) for r in ours if r["settling"] == "0"]
+    assert path == list(range(8))
+    assert [int(r["frame"]) for r in ours] == list(range(len(ours)))
+    assert (tmp_path / "dask-plot.png").stat().st_size > 0
+
+    bad = subprocess.run([sys.executable, "-m", "cuberille.dask", "fly", str(examples / "torus.ply"), "--workers", "1"],
+                         capture_output=True, text=True)
+    tool_bad = run_cli(cli, "fly", examples / "torus.ply")
+    assert (bad.returncode, bad.stderr) == (tool_bad.returncode, tool_bad.stderr) == (2, tool_bad.stderr)

@@ -148,6 +148,60 @@ TEST_F(AccuracyReportOnEdges, WritesCsvJsonAndHtmlWithEveryRow) {
     EXPECT_TRUE(report_->rows.back().pareto);
 }
 
+// What a distributed runner does (python/cuberille/dask): plan, each run rendered on its own and
+// its row sent back as JSON, then the report finished from rows whose images it reads back. Each
+// row's error, worst region and image are those of the report made in one process.
+TEST_F(AccuracyReportOnEdges, RunsTakenApartAndSentAsJsonGiveTheSameReport) {
+    AccuracyOptions o = report_->options;
+    o.outDir = *dir_ / "apart";
+    AccuracyPlan plan = planAccuracy(o);
+    std::vector<AccuracyRow> rows;
+    for (const AccuracyRun& run : plan.runs) {
+        const AccuracyRun sent = accuracyRunFromJson(nlohmann::json::parse(accuracyRunJson(run).dump()));
+        EXPECT_EQ(sent.setting.args, run.setting.args);
+        AccuracyRow row = runAccuracySetting(plan.report.options, sent);
+        EXPECT_EQ(row.comparedWithTruth, run.groundTruth) << run.id;  // the others are compared by finishAccuracy
+        rows.push_back(accuracyRowFromJson(nlohmann::json::parse(accuracyRowJson(row).dump())));
+        EXPECT_EQ(rows.back().frameMs, row.frameMs);
+        EXPECT_EQ(rows.back().commandLine, row.commandLine);
+    }
+    const AccuracyReport apart = finishAccuracy(std::move(plan), std::move(rows));
+    ASSERT_EQ(apart.rows.size(), report_->rows.size());
+    for (size_t i = 0; i < apart.rows.size(); ++i) {
+        const AccuracyRow &a = apart.rows[i], &b = report_->rows[i];
+        EXPECT_EQ(a.id, b.id);
+        EXPECT_EQ(a.setting.knob, b.setting.knob);
+        EXPECT_EQ(a.setting.value, b.setting.value);
+        EXPECT_EQ(a.error.rmse, b.error.rmse) << a.id;
+        EXPECT_EQ(a.error.maxError, b.error.maxError) << a.id;
+        EXPECT_EQ(a.error.shareOver1, b.error.shareOver1) << a.id;
+        EXPECT_EQ(a.worst.x, b.worst.x) << a.id;
+        EXPECT_EQ(a.worst.y, b.worst.y) << a.id;
+        EXPECT_EQ(readImage(o.outDir / "renders" / (a.id + ".exr")).rgba,
+                  readImage(*dir_ / "report" / "renders" / (b.id + ".exr")).rgba)
+            << a.id;
+    }
+    EXPECT_TRUE(fs::exists(o.outDir / "report.csv"));
+    EXPECT_EQ(apart.rows.back().error.rmse, 0.0);
+}
+
+// A row's memory is its run's own peak: not wait4's ru_maxrss, which on Linux carries the resident
+// set of the process that spawned the run (this test's, grown by 512 MiB first).
+TEST_F(AccuracyReportOnEdges, PeakMemoryIsTheRunsOwnNotThatOfTheProcessThatSpawnedIt) {
+    constexpr size_t kParentBytes = size_t(512) << 20;
+    std::vector<char> held(kParentBytes);
+    for (size_t i = 0; i < held.size(); i += 4096) held[i] = char(i);  // resident, not only reserved
+    AccuracyRun run;
+    run.setting.args = {"--msaa", "1"};
+    run.id = "memory-of-one-run";
+    const AccuracyRow row = runAccuracySetting(report_->options, run);
+    const nlohmann::json stats = nlohmann::json::parse(std::ifstream(report_->options.outDir / "logs" / (run.id + ".json")));
+    EXPECT_EQ(row.peakMib, stats.at("process").at("peakResidentBytes").get<double>() / (1024.0 * 1024.0));
+    EXPECT_GT(row.peakMib, 1.0);
+    EXPECT_LT(row.peakMib, double(kParentBytes >> 20));  // a 48x32 render of 13 triangles
+    EXPECT_EQ(held[4096], char(4096));
+}
+
 TEST(AccuracySweep, CoversTheKnobsThatApplyAroundTheBalancedPreset) {
     SceneTraits all;
     all.threeD = all.textured = all.shadowed = true;

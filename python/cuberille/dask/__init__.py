@@ -6,8 +6,11 @@
     with LocalCluster(n_workers=2, threads_per_worker=1) as cluster, Client(cluster) as client:
         cuberille.dask.render(["model.glb", "--turntable", "36", "--out", "frames/f.png"], client)
         cuberille.dask.batch("jobs.jsonl", client)
+        cuberille.dask.accuracy(["model.glb", "--out", "report"], client)
+        cuberille.dask.fly(["model.cvox", "--frames", "600", "--out-dir", "flight", "--save-every", "1"], client)
 
-`python3 -m cuberille.dask render|batch ...` is the command line over these (docs/scale-out.md).
+`python3 -m cuberille.dask render|batch|accuracy|fly ...` is the command line over these
+(docs/scale-out.md).
 
 How the work is split, and why the files are the same as the tool's:
 - A command is read by the tool's own parser (cuberille._cuberille.RenderCommand), here and again
@@ -17,6 +20,15 @@ How the work is split, and why the files are the same as the tool's:
   a run's first frame builds the hierarchies the later frames of the run refit.
 - Each worker process loads a scene once and keeps it for every later task that names it with the
   same --detail and --up-axis (`_scene`).
+- An accuracy sweep is planned here (the tool's probe render and sweep), each setting's renders —
+  `cuberille render` processes, as the tool runs them — are a task, and the report is finished here
+  from the rows the tasks send back (apps/accuracy_command.h: planAccuracy, runAccuracySetting,
+  finishAccuracy), comparing each setting's image with the ground truth's as the tool does.
+- A flight (`fly`) is cut into contiguous runs of its path's frames, one task each; a run is flown
+  from a cold start (the model opened, nothing resident, no occlusion history: what that costs is
+  in docs/scale-out.md), its frames numbered and saved as in the whole flight; the run that ends
+  the path settles and writes final.png; the client joins the runs' statistics into the tool's
+  CSV, plot and summary (apps/fly_command.h).
 - Every file is written under a temporary name and renamed (apps/atomic_file.h), so a task retried
   after its worker died rewrites whole files; the temporary files a killed worker left are removed
   once every task has finished (`_remove_leftovers`). Outputs go where the command names them: the
@@ -27,13 +39,14 @@ import glob
 import json
 import math
 import os
+import shutil
 import sys
 import time
 
 from .. import Scene, _cuberille
 from .._cuberille import InputError
 
-__all__ = ["BatchReport", "RenderReport", "batch", "render"]
+__all__ = ["AccuracyReport", "BatchReport", "FlyReport", "RenderReport", "accuracy", "batch", "fly", "render"]
 
 
 class RenderReport:
@@ -53,6 +66,24 @@ class BatchReport:
         self.jobs, self.failures, self.scene_loads, self.seconds, self.warnings = jobs, failures, scene_loads, seconds, warnings
 
 
+class AccuracyReport:
+    """What accuracy() did: the report's folder, the rows it holds, the settings rendered as tasks
+    (a command line several knobs share renders once), the workers and the wall time."""
+
+    def __init__(self, folder, rows, tasks, workers, seconds):
+        self.folder, self.rows, self.tasks, self.workers, self.seconds = folder, rows, tasks, workers, seconds
+
+
+class FlyReport:
+    """What fly() did: the images written (saved frames, then final.png), the frames flown (the
+    path's and the last run's settling ones), what the runs read from disk together, the tasks,
+    workers and wall time, and the blocks that could not be read."""
+
+    def __init__(self, files, frames, bytes_read, tasks, workers, seconds, warnings):
+        self.files, self.frames, self.bytes_read, self.tasks = files, frames, bytes_read, tasks
+        self.workers, self.seconds, self.warnings = workers, seconds, warnings
+
+
 def render(arguments, client, *, frames_per_task=None, progress=None):
     """Runs `cuberille render ARGUMENTS` (the scene and options, as on the command line) on the
     client's cluster. Raises InputError as the tool refuses: a bad option before any task, a bad
@@ -63,25 +94,11 @@ def render(arguments, client, *, frames_per_task=None, progress=None):
     command = _cuberille.RenderCommand.from_arguments(arguments)
     count = command.frame_count
     workers = _worker_count(client)
-    per_task = frames_per_task or _items_per_task(count, workers)
-    runs = [(first, min(per_task, count - first)) for first in range(0, count, per_task)]
+    runs = _runs_of(count, frames_per_task or _items_per_task(count, workers))
     threads = _threads_per_worker(client)
     futures = [client.submit(_render_run, arguments, first, n, threads, pure=False, key=f"cuberille-render-{first}-{_stamp()}")
                for first, n in runs]
-    results, done = {}, 0
-    from distributed import as_completed
-
-    try:
-        for future in as_completed(futures):
-            result = future.result()
-            if "error" in result:
-                raise InputError(result["error"])
-            results[result["first"]] = result
-            done += result["count"]
-            if progress:
-                progress(done, count)
-    finally:
-        client.cancel(futures)
+    results = {r["first"]: r for _, r in _gather(client, futures, count, progress, lambda r: r["count"])}
     files = [command.frame_file(i) for i in range(count)]
     _remove_leftovers(files)
     frame_stats = [s for first, _ in runs for s in results[first]["stats"]]
@@ -134,6 +151,65 @@ def batch(jobs_path, client, *, jobs_per_task=None, progress=None):
     return BatchReport(len(numbered), sorted(failures), loads, time.perf_counter() - started, _unique(warnings))
 
 
+def accuracy(arguments, client, *, executable=None, progress=None):
+    """Runs `cuberille accuracy ARGUMENTS` (the scene and options, as on the command line) on the
+    client's cluster, writing the report the tool writes. Each setting's runs are one task; the
+    ground truth, the longest, is handed out first. `executable` is the cuberille program the
+    runs start (by default $CUBERILLE_BINARY, else `cuberille` on PATH): a path that names it on
+    every worker, as the scene and --out must. Times are each worker's: a worker sharing its
+    machine with others measures with their load beside it (docs/scale-out.md). Raises InputError
+    as the tool refuses. `progress`, if given, is called with (settings done, settings in all)."""
+    started = time.perf_counter()
+    arguments = [os.fspath(a) for a in arguments]
+    command = _cuberille.AccuracyCommand.from_arguments(arguments)
+    program = _cuberille_program(executable)
+    threads = _threads_per_worker(client)
+    runs = command.plan(program, threads)
+    truth = len(runs) - 1
+    futures = {client.submit(_accuracy_run, arguments, runs[i], program, threads, pure=False,
+                             priority=1 if i == truth else 0, key=f"cuberille-accuracy-{i}-{_stamp()}"): i
+               for i in [truth, *range(truth)]}
+    rows = [None] * len(runs)
+    for future, result in _gather(client, list(futures), len(runs), progress):
+        rows[futures[future]] = result["row"]
+    count = command.finish(rows, _cluster_description(client))
+    return AccuracyReport(command.out_dir, count, len(runs), _worker_count(client), time.perf_counter() - started)
+
+
+def fly(arguments, client, *, frames_per_task=None, progress=None):
+    """Runs `cuberille fly ARGUMENTS` (the model and options, as on the command line) on the
+    client's cluster: the path's frames in contiguous runs (`frames_per_task`; by default four
+    runs a worker), each flown from a cold start on a worker, which writes the frames --save-every
+    asks for; the run that ends the path settles and writes final.png; --stats, --plot and the
+    summary are written here from every run's frames, as the tool writes them. The settled final
+    image is the tool's bit for bit; a frame drawn while blocks are still loading depends on when
+    reads finish, on one machine as on many (docs/streaming.md). Raises InputError as the tool
+    refuses. `progress`, if given, is called with (frames done, frames in all)."""
+    started = time.perf_counter()
+    arguments = [os.fspath(a) for a in arguments]
+    command = _cuberille.FlyCommand.from_arguments(arguments)
+    count = command.frames
+    workers = _worker_count(client)
+    runs = _runs_of(count, frames_per_task or _items_per_task(count, workers))
+    threads = _threads_per_worker(client)
+    futures = [client.submit(_fly_run, arguments, first, n, threads, pure=False, key=f"cuberille-fly-{first}-{_stamp()}")
+               for first, n in runs]
+    results = {r["first"]: r["run"] for _, r in _gather(client, futures, count, progress, lambda r: r["count"])}
+    files = []
+    if command.out_dir:
+        if command.save_every > 0:
+            files = [command.frame_file(i) for i in range(0, count, command.save_every)]
+        files.append(os.path.join(command.out_dir, "final.png"))
+    _remove_leftovers(files)
+    ordered = [results[first] for first, _ in runs]
+    command.finish(ordered)
+    _remove_leftovers([f for f in (command.stats, command.plot) if f])
+    flown = [json.loads(r) for r in ordered]
+    warnings = _unique(w for r in flown for w in r["warnings"])
+    return FlyReport(files, sum(len(r["frames"]) for r in flown), sum(r["bytesReadFromDisk"] for r in flown), len(runs),
+                     workers, time.perf_counter() - started, warnings)
+
+
 # What runs on the workers: module-level functions, so Dask sends them by name and each worker
 # process keeps this module's scene cache between tasks.
 
@@ -178,6 +254,22 @@ def _batch_job(line, threads):
         return {"error": str(e), "loaded": False, "warnings": [], "files": []}
 
 
+def _fly_run(arguments, first, count, threads):
+    try:
+        command = _cuberille.FlyCommand.from_arguments(arguments)
+        return {"first": first, "count": count, "run": command.run(first, count, threads)}
+    except InputError as e:
+        return {"error": str(e)}
+
+
+def _accuracy_run(arguments, run, executable, threads):
+    try:
+        command = _cuberille.AccuracyCommand.from_arguments(arguments)
+        return {"row": command.run(run, executable, threads)}
+    except InputError as e:  # a render the tool calls bad input (exit 2): its message, not a retry
+        return {"error": str(e)}
+
+
 # Details.
 
 def _worker_count(client):
@@ -195,6 +287,55 @@ def _threads_per_worker(client):
         per_host[host] = per_host.get(host, 0) + 1
     shares = [(cores[a] or 1) // per_host[a.rsplit(":", 1)[0]] for a in cores]
     return max(1, min(shares, default=os.cpu_count() or 1))
+
+
+def _cuberille_program(executable):
+    """The cuberille program an accuracy run starts: the one given, $CUBERILLE_BINARY, or
+    `cuberille` on PATH; absolute, so a worker started in another folder finds it too."""
+    program = executable or os.environ.get("CUBERILLE_BINARY") or shutil.which("cuberille")
+    if not program or not os.access(program, os.X_OK):
+        raise InputError("accuracy: cannot find the cuberille program " + (f"'{program}' " if program else "") +
+                         "(give its path with --cuberille, set CUBERILLE_BINARY, or put it on PATH)")
+    return os.path.abspath(program)
+
+
+def _cluster_description(client):
+    """The report's machine line for a sweep run on a cluster: its worker processes and machines."""
+    cores = client.run(os.cpu_count)
+    hosts = {}
+    for address, count in cores.items():
+        host = address.rsplit(":", 1)[0]
+        hosts.setdefault(host, [0, count])[0] += 1
+    machines = ", ".join(f"{host} ({workers} worker{'s' if workers != 1 else ''}, {count} cores)"
+                         for host, (workers, count) in sorted(hosts.items()))
+    return f"Dask cluster of {len(cores)} worker processes: {machines}"
+
+
+def _runs_of(count, per_task):
+    """Frames 0..count-1 as contiguous (first, count) runs of per_task frames."""
+    return [(first, min(per_task, count - first)) for first in range(0, count, per_task)]
+
+
+def _gather(client, futures, total, progress, done_by=lambda result: 1):
+    """(future, result) of each task as it finishes. A result that is the tool's refusal of bad
+    input ({"error": message}) raises InputError with it; the tasks not finished are cancelled
+    then, and on any other failure. `progress`, if given, hears (done, total), each result adding
+    done_by(result)."""
+    from distributed import as_completed
+
+    finished, done = [], 0
+    try:
+        for future in as_completed(futures):
+            result = future.result()
+            if "error" in result:
+                raise InputError(result["error"])
+            finished.append((future, result))
+            done += done_by(result)
+            if progress:
+                progress(done, total)
+    finally:
+        client.cancel(futures)
+    return finished
 
 
 def _items_per_task(items, workers):

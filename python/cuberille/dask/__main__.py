@@ -1,10 +1,13 @@
-"""python3 -m cuberille.dask render|batch ...: the tool's commands on a Dask cluster.
+"""python3 -m cuberille.dask render|batch|accuracy|fly ...: the tool's commands on a Dask cluster.
 
     python3 -m cuberille.dask render SCENE [cuberille render's options] [--scheduler tcp://host:8786]
     python3 -m cuberille.dask batch JOBS.jsonl [--quiet] [--scheduler ...]
+    python3 -m cuberille.dask accuracy SCENE --out DIR [cuberille accuracy's options] [--scheduler ...]
+    python3 -m cuberille.dask fly MODEL.cvox [cuberille fly's options] [--scheduler ...]
 
-The files written are the ones `cuberille render` and `cuberille batch` write for the same
-options; exit codes as the tool's (0 done, 1 a failure while working, 2 bad input). With no
+The files written are the ones `cuberille render`, `cuberille batch`, `cuberille accuracy` and
+`cuberille fly` write for the same options (an accuracy report's times and machine are the
+cluster's; a flight's frames drawn while blocks load depend on when reads finish); exit codes as the tool's (0 done, 1 a failure while working, 2 bad input). With no
 --scheduler, a LocalCluster on this machine (--workers processes, one task at a time each).
 """
 
@@ -19,12 +22,19 @@ commands:
   render SCENE [OPTIONS]   `cuberille render` with any of its options (cuberille render --help);
                            --turntable and --animate frames run as tasks of contiguous frames
   batch JOBS.jsonl         `cuberille batch`: tasks of consecutive job lines
+  accuracy SCENE --out DIR [OPTIONS]
+                           `cuberille accuracy` with any of its options: each setting's runs
+                           are a task; the report is written here
+  fly MODEL.cvox [OPTIONS] `cuberille fly` with any of its options: runs of the path's frames,
+                           each flown from a cold start; CSV, plot and summary written here
 
 options of every command:
   --scheduler ADDRESS      a running Dask scheduler (tcp://host:8786); default: a LocalCluster here
   --workers N              the LocalCluster's worker processes (default: this machine's cores)
-  --frames-per-task N      frames (render) or job lines (batch) in one task (default: a quarter
-                           of a worker's share)
+  --frames-per-task N      frames (render, fly) or job lines (batch) in one task (default: a
+                           quarter of a worker's share)
+  --cuberille PATH         accuracy: the cuberille program its runs start, a path every worker
+                           sees (default: $CUBERILLE_BINARY, else cuberille on PATH)
   --quiet                  print only failures
 """
 
@@ -34,9 +44,9 @@ def main(argv):
         print(USAGE, end="")
         return 0 if argv else 2
     command, rest = argv[0], argv[1:]
-    if command not in ("render", "batch"):
-        sys.stderr.write(f"cuberille.dask: unknown command '{command}' (render or batch; fly, accuracy and voxelize "
-                         "are not distributed yet)\n")
+    if command not in ("render", "batch", "accuracy", "fly"):
+        sys.stderr.write(f"cuberille.dask: unknown command '{command}' (render, batch, accuracy or fly; voxelize "
+                         "is not distributed yet)\n")
         return 2
     if "-h" in rest or "--help" in rest:
         print(USAGE, end="")
@@ -46,7 +56,7 @@ def main(argv):
     except ValueError as e:
         sys.stderr.write(f"cuberille.dask: {e}\n")
         return 2
-    quiet = own["quiet"] or (command == "render" and "--quiet" in rest)
+    quiet = own["quiet"] or (command in ("render", "accuracy", "fly") and "--quiet" in rest)
 
     import cuberille.dask as cd
     from cuberille import InputError
@@ -67,6 +77,22 @@ def main(argv):
                     print(f"wrote {first}" + (f" .. {last} ({len(report.files)} frames" if len(report.files) > 1 else " (1 frame")
                           + f", {report.tasks} task{'s' if report.tasks != 1 else ''} on {report.workers} "
                           f"worker{'s' if report.workers != 1 else ''}); {report.seconds:.2f} s")
+                return 0
+            if command == "accuracy":
+                report = cd.accuracy(rest, client, executable=own["cuberille"],
+                                     progress=None if quiet else cd._print_progress("settings"))
+                if not quiet:
+                    print(f"wrote {report.rows} settings to {report.folder} (index.html, report.csv, report.json); "
+                          f"{report.tasks} tasks on {report.workers} worker{'s' if report.workers != 1 else ''}, "
+                          f"{report.seconds:.2f} s")
+                return 0
+            if command == "fly":
+                report = cd.fly(rest, client, frames_per_task=own["frames_per_task"],
+                                progress=None if quiet else cd._print_progress("frames"))
+                _print_warnings(report.warnings, quiet)
+                if not quiet:
+                    print(f"  {report.tasks} run{'s' if report.tasks != 1 else ''} on {report.workers} "
+                          f"worker{'s' if report.workers != 1 else ''}, each from a cold start; {report.seconds:.2f} s")
                 return 0
             jobs = [a for a in rest if a != "--quiet"]
             if len(jobs) != 1 or jobs[0].startswith("-"):
@@ -91,18 +117,18 @@ def main(argv):
 
 def _own_options(arguments):
     """This runner's options taken out of the arguments; the rest are the tool command's."""
-    own = {"scheduler": None, "workers": os.cpu_count() or 1, "frames_per_task": None, "quiet": False}
+    own = {"scheduler": None, "workers": os.cpu_count() or 1, "frames_per_task": None, "quiet": False, "cuberille": None}
     rest, i = [], 0
     while i < len(arguments):
         a = arguments[i]
         name, _, inline = a.partition("=")
-        if name in ("--scheduler", "--workers", "--frames-per-task"):
+        if name in ("--scheduler", "--workers", "--frames-per-task", "--cuberille"):
             value = inline if inline else (arguments[i + 1] if i + 1 < len(arguments) else None)
             if value is None:
                 raise ValueError(f"{name}: a value is required")
             i += 1 if inline else 2
-            if name == "--scheduler":
-                own["scheduler"] = value
+            if name in ("--scheduler", "--cuberille"):
+                own[name[2:]] = value
             else:
                 try:
                     number = int(value)
