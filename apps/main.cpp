@@ -53,30 +53,6 @@ void addPackCommand(CLI::App& app, cuberille::apps::PackOptions& o) {
     pack->add_flag("--quiet", o.quiet, "Print nothing on success");
 }
 
-void addVoxelizeCommand(CLI::App& app, cuberille::apps::VoxelizeCommandOptions& o) {
-    CLI::App* v = app.add_subcommand(
-        "voxelize", "Voxelize a mesh's surface with the adaptive octree rasterizer into a voxel model (.cvox)");
-    v->add_option("mesh", o.input, "A .cgs, .ply, .ply.gz, .obj, .gltf or .glb file")->required();
-    v->add_option("-o,--out", o.out, "Output voxel model, .cvox")->required();
-    v->add_option("--resolution", o.resolution, "Voxels along the longest side: a power of two from 2 to 65536")
-        ->capture_default_str();
-    v->add_option("--separability", o.separability,
-                  "conservative (every voxel the surface touches), 26 or 6 (thinner, still separating inside "
-                  "from outside for 26- or 6-connected paths)")
-        ->capture_default_str();
-    v->add_option("--export-voxels", o.exportVoxels,
-                  "Also write the voxels as text: '# cuberille voxels R ox oy oz extent', then 'i j k' per voxel");
-    v->add_flag("--no-source-triangles", o.noSourceTriangles,
-                "Do not keep the source triangles clipped per block (smaller file; no hybrid rendering)");
-    v->add_option("--levels", o.levels, "LOD levels to write (each halves the resolution); 0: down to one 64^3 block")
-        ->capture_default_str();
-    v->add_option("--simplify", o.simplify, "Simplification: parallel or serial (streaming); identical output")
-        ->capture_default_str();
-    v->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
-    v->add_option("--stats", o.statsPath, "Write counts, timings and peak memory as JSON");
-    v->add_flag("--quiet", o.quiet, "Print nothing on success");
-}
-
 void addIsosurfaceCommand(CLI::App& app, cuberille::apps::IsosurfaceCommandOptions& o) {
     CLI::App* iso = app.add_subcommand(
         "isosurface", "Surface voxels of a raw volume's iso-surface into a voxel model (.cvox)");
@@ -173,7 +149,7 @@ int main(int argc, char** argv) {
     cuberille::apps::PackOptions packOptions;
     addPackCommand(app, packOptions);
     cuberille::apps::VoxelizeCommandOptions voxelizeOptions;
-    addVoxelizeCommand(app, voxelizeOptions);
+    cuberille::apps::addVoxelizeCommand(app, voxelizeOptions);
     cuberille::apps::IsosurfaceCommandOptions isosurfaceOptions;
     addIsosurfaceCommand(app, isosurfaceOptions);
     cuberille::apps::InfoOptions infoOptions;

@@ -4,16 +4,19 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <memory>
 
 #include <nlohmann/json.hpp>
 
 #include "raster/clock.h"
 #include "apps/atomic_file.h"
+#include "apps/render_options_cli.h"
 #include "raster/parallel.h"
 #include "scene/file_names.h"
 #include "scene/input_error.h"
 #include "scene/ply_loader.h"
 #include "voxel/cvox_file.h"
+#include "voxel/partial_voxelization_file.h"
 #include "voxel/voxel_export.h"
 
 namespace cuberille::apps {
@@ -127,7 +130,15 @@ int runPackCommand(const PackOptions& o) {
     return 0;
 }
 
-int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
+namespace {
+
+// What every form of `voxelize` checks and sets up before any work.
+struct VoxelizeSettings {
+    voxel::VoxelizeOptions voxelize;
+    lod::PyramidOptions pyramid;
+};
+
+VoxelizeSettings voxelizeSettings(const VoxelizeCommandOptions& o) {
     requireKind(o.out, scene::FileKind::VoxelModel, ".cvox", "the voxel model");
     requireOutputPath(o.out, "-o");
     requireOutputPath(o.exportVoxels, "--export-voxels");
@@ -135,36 +146,39 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
     if (!voxel::isValidResolution(o.resolution))
         throw scene::InputError("--resolution " + std::to_string(o.resolution) + ": expected a power of two from " +
                                 std::to_string(voxel::kMinResolution) + " to " + std::to_string(voxel::kMaxResolution));
-    voxel::VoxelizeOptions vo;
-    vo.resolution = o.resolution;
-    vo.separability = parseSeparability(o.separability);
-    vo.keepSourceTriangles = !o.noSourceTriangles;
-    vo.progress = terminalProgress("voxelize", "chunks", o.quiet);
-    lod::PyramidOptions po;
-    po.method = parseSimplify(o.simplify);
-    po.maxLevels = o.levels;
-    raster::ThreadLimit threadLimit(o.threads);
+    VoxelizeSettings v;
+    v.voxelize.resolution = o.resolution;
+    v.voxelize.separability = parseSeparability(o.separability);
+    v.voxelize.keepSourceTriangles = !o.noSourceTriangles;
+    v.pyramid.method = parseSimplify(o.simplify);
+    v.pyramid.maxLevels = o.levels;
+    return v;
+}
 
-    const double t0 = raster::nowMs();
-    const std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr);
+std::unique_ptr<voxel::MeshView> openVoxelizeInput(const VoxelizeCommandOptions& o) {
+    std::unique_ptr<voxel::MeshView> view = voxel::openMeshView(o.input, warnToStderr);
     requireTriangles(*view, o.input, "voxelize");
-    const double openMs = raster::nowMs() - t0;
-    voxel::VoxelizeStats s;
-    voxel::VoxelModel model = voxel::voxelizeMesh(*view, vo, &s);
+    return view;
+}
+
+// The voxelized model's LOD pyramid and files, the summary and --stats: the last steps of
+// `voxelize`, on one machine or after merging a distributed voxelization's parts.
+int finishVoxelize(const VoxelizeCommandOptions& o, const VoxelizeSettings& v, voxel::VoxelModel model,
+                   const voxel::VoxelizeStats& s, double openMs, double startMs) {
     if (model.voxelCount() == 0)
         throw scene::InputError(o.input.string() + ": no voxels: its " + std::to_string(s.triangles) +
                                 " triangles have no area at " + std::to_string(o.resolution) + "^3");
     lod::PyramidStats ps;
-    lod::buildLodPyramid(model, po, &ps);
+    lod::buildLodPyramid(model, v.pyramid, &ps);
     double writeMs = 0;
     writeModelFiles(model, o.out, o.exportVoxels, writeMs);
-    const double totalMs = raster::nowMs() - t0;
+    const double totalMs = raster::nowMs() - startMs;
 
     if (!o.quiet)
         std::printf("voxelized %s at %u^3 (%s): %llu triangles -> %llu voxels in %llu blocks, %.0f ms "
                     "(open %.0f, rasterize %.0f, merge %.0f, emit %.0f, simplify %.0f, write %.0f); %u LOD levels, "
                     "%zu blocks in all -> %s\n",
-                    o.input.string().c_str(), o.resolution, voxel::separabilityName(vo.separability),
+                    o.input.string().c_str(), o.resolution, voxel::separabilityName(v.voxelize.separability),
                     (unsigned long long)s.triangles, (unsigned long long)s.voxels, (unsigned long long)s.blocks, totalMs,
                     openMs, s.rasterizeMs, s.mergeMs, s.emitMs, ps.simplifyMs, writeMs, ps.levels, model.blocks.size(),
                     o.out.string().c_str());
@@ -173,7 +187,7 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
         writeJsonAtomically(o.statsPath,
                   {{"input", o.input.string()},
                    {"resolution", o.resolution},
-                   {"separability", voxel::separabilityName(vo.separability)},
+                   {"separability", voxel::separabilityName(v.voxelize.separability)},
                    {"threads", raster::hardwareThreads()},
                    {"treesBuilt", s.threads},
                    {"chunks", s.chunks},
@@ -200,6 +214,59 @@ int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
                      {"totalMs", totalMs}}}});
     }
     return 0;
+}
+
+}  // namespace
+
+int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
+    VoxelizeSettings v = voxelizeSettings(o);
+    v.voxelize.progress = terminalProgress("voxelize", "chunks", o.quiet);
+    raster::ThreadLimit threadLimit(o.threads);
+    const double t0 = raster::nowMs();
+    const std::unique_ptr<voxel::MeshView> view = openVoxelizeInput(o);
+    const double openMs = raster::nowMs() - t0;
+    voxel::VoxelizeStats s;
+    voxel::VoxelModel model = voxel::voxelizeMesh(*view, v.voxelize, &s);
+    return finishVoxelize(o, v, std::move(model), s, openMs, t0);
+}
+
+size_t voxelizeChunkCount(const VoxelizeCommandOptions& o) {
+    voxelizeSettings(o);
+    return openVoxelizeInput(o)->chunkCount();
+}
+
+void voxelizeChunkRun(const VoxelizeCommandOptions& o, size_t firstChunk, size_t chunkCount, const std::filesystem::path& part) {
+    const VoxelizeSettings v = voxelizeSettings(o);
+    raster::ThreadLimit threadLimit(o.threads);
+    const std::unique_ptr<voxel::MeshView> view = openVoxelizeInput(o);
+    if (firstChunk > view->chunkCount() || chunkCount > view->chunkCount() - firstChunk)
+        throw scene::InputError(o.input.string() + ": chunks " + std::to_string(firstChunk) + " + " +
+                                std::to_string(chunkCount) + " outside its " + std::to_string(view->chunkCount()));
+    const voxel::PartialVoxelization p = voxel::voxelizeChunks(*view, v.voxelize, firstChunk, chunkCount);
+    AtomicOutputFile out(part);
+    voxel::writePartialVoxelization(p, out.stream());
+    out.commit();
+}
+
+int finishVoxelizeFromParts(const VoxelizeCommandOptions& o, const std::vector<std::filesystem::path>& parts) {
+    const VoxelizeSettings v = voxelizeSettings(o);
+    raster::ThreadLimit threadLimit(o.threads);
+    const double t0 = raster::nowMs();
+    const std::unique_ptr<voxel::MeshView> view = openVoxelizeInput(o);
+    const double openMs = raster::nowMs() - t0;
+    std::vector<voxel::PartialVoxelization> read;
+    for (const std::filesystem::path& p : parts) read.push_back(voxel::readPartialVoxelization(p));
+    uint64_t covered = 0;
+    for (const voxel::PartialVoxelization& p : read) covered += p.chunkCount;
+    if (covered != view->chunkCount())
+        throw scene::InputError(o.input.string() + ": the parts hold " + std::to_string(covered) + " of its " +
+                                std::to_string(view->chunkCount()) + " chunks");
+    const double m0 = raster::nowMs();
+    voxel::VoxelizeStats s;
+    voxel::VoxelModel model = voxel::mergePartialVoxelizations(std::move(read), &s);
+    s.mergeMs = raster::nowMs() - m0;
+    for (size_t i = 0; i < view->chunkCount(); ++i) s.triangles += view->chunkInfo(i).triangleCount;
+    return finishVoxelize(o, v, std::move(model), s, openMs, t0);
 }
 
 int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {
@@ -291,6 +358,37 @@ int runInfoCommand(const InfoOptions& o) {
         return 0;
     }
     throw scene::InputError(o.file.string() + ": info reads .cgs and .cvox files");
+}
+
+CLI::App* addVoxelizeCommand(CLI::App& app, VoxelizeCommandOptions& o) {
+    CLI::App* v = app.add_subcommand(
+        "voxelize", "Voxelize a mesh's surface with the adaptive octree rasterizer into a voxel model (.cvox)");
+    v->add_option("mesh", o.input, "A .cgs, .ply, .ply.gz, .obj, .gltf or .glb file")->required();
+    v->add_option("-o,--out", o.out, "Output voxel model, .cvox")->required();
+    v->add_option("--resolution", o.resolution, "Voxels along the longest side: a power of two from 2 to 65536")
+        ->capture_default_str();
+    v->add_option("--separability", o.separability,
+                  "conservative (every voxel the surface touches), 26 or 6 (thinner, still separating inside "
+                  "from outside for 26- or 6-connected paths)")
+        ->capture_default_str();
+    v->add_option("--export-voxels", o.exportVoxels,
+                  "Also write the voxels as text: '# cuberille voxels R ox oy oz extent', then 'i j k' per voxel");
+    v->add_flag("--no-source-triangles", o.noSourceTriangles,
+                "Do not keep the source triangles clipped per block (smaller file; no hybrid rendering)");
+    v->add_option("--levels", o.levels, "LOD levels to write (each halves the resolution); 0: down to one 64^3 block")
+        ->capture_default_str();
+    v->add_option("--simplify", o.simplify, "Simplification: parallel or serial (streaming); identical output")
+        ->capture_default_str();
+    v->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    v->add_option("--stats", o.statsPath, "Write counts, timings and peak memory as JSON");
+    v->add_flag("--quiet", o.quiet, "Print nothing on success");
+    return v;
+}
+
+VoxelizeCommandOptions parseVoxelizeArguments(const std::vector<std::string>& arguments) {
+    VoxelizeCommandOptions o;
+    parseSubcommandArguments("voxelize", arguments, [&](CLI::App& app) { addVoxelizeCommand(app, o); });
+    return o;
 }
 
 }  // namespace cuberille::apps

@@ -6,11 +6,16 @@
 #include <array>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "lod/lod_pyramid.h"
 #include "voxel/geometry_stream.h"
 #include "voxel/isosurface.h"
 #include "voxel/octree_voxelizer.h"
+
+namespace CLI {
+class App;
+}
 
 namespace cuberille::apps {
 
@@ -55,6 +60,21 @@ struct InfoOptions {
 /// working std::runtime_error (exit 1).
 int runPackCommand(const PackOptions& options);
 int runVoxelizeCommand(const VoxelizeCommandOptions& options);
+
+/// `voxelize` taken apart (python/cuberille/dask): the input's chunk count; one run of chunks
+/// voxelized into a partial voxelization file (voxel/partial_voxelization_file.h, written
+/// atomically); and the command's last steps from every part — merged (the single-machine model bit
+/// for bit), its LOD pyramid, the .cvox, the summary and --stats. Each checks the options as the
+/// command does and throws scene::InputError with its messages.
+size_t voxelizeChunkCount(const VoxelizeCommandOptions& options);
+void voxelizeChunkRun(const VoxelizeCommandOptions& options, size_t firstChunk, size_t chunkCount,
+                      const std::filesystem::path& part);
+int finishVoxelizeFromParts(const VoxelizeCommandOptions& options, const std::vector<std::filesystem::path>& parts);
+
+/// Adds the `voxelize` subcommand, whose options fill `o`.
+CLI::App* addVoxelizeCommand(CLI::App& app, VoxelizeCommandOptions& o);
+/// `voxelize`'s arguments (the mesh and options, without "voxelize") read by its own parser.
+VoxelizeCommandOptions parseVoxelizeArguments(const std::vector<std::string>& arguments);
 int runIsosurfaceCommand(const IsosurfaceCommandOptions& options);
 /// `cuberille info FILE`: what a .cgs or .cvox holds (reading and checking all of it).
 int runInfoCommand(const InfoOptions& options);

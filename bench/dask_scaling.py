@@ -5,7 +5,8 @@
         [--model ../shared/data/gltf/DamagedHelmet/DamagedHelmet.glb] [--workers 1,2] [--runs 3]
 
 For each kind of work (a turntable, an animation, a batch of views, an accuracy sweep, a flight
-through the model voxelized at --voxel-resolution) it times, in the same run:
+through the model voxelized at --voxel-resolution, a voxelization of --mesh packed as a geometry
+stream) it times, in the same run:
 the tool on one machine (its whole process), and cuberille.dask on a LocalCluster of each worker
 count (the work only: the cluster is started before the clock and kept, as a user's cluster is).
 Prints the median of --runs and the speed-up against 1 worker; docs/scale-out.md holds the table.
@@ -34,7 +35,9 @@ def main():
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--frames", type=int, default=24)
     parser.add_argument("--voxel-resolution", type=int, default=1024)
-    parser.add_argument("--kinds", default="turntable,animation,batch,accuracy,fly")
+    parser.add_argument("--mesh", default=str(REPOSITORY.parent / "shared/data/scans/stanford-dragon/dragon_vrip.binary.ply.gz"))
+    parser.add_argument("--mesh-resolution", type=int, default=2048)
+    parser.add_argument("--kinds", default="turntable,animation,batch,accuracy,fly,voxelize")
     args = parser.parse_args()
 
     from distributed import Client, LocalCluster
@@ -64,6 +67,12 @@ def main():
     flight = [str(model), "--frames", str(4 * args.frames), "--width", "640", "--height", "480", "--msaa", "1",
               "--settle-frames", "0", "--quiet"]
 
+    # The voxelization: the mesh packed once (chunks of 16,384 triangles), then voxelized.
+    stream = work / "mesh.cgs"
+    if "voxelize" in args.kinds:
+        subprocess.run([args.cli, "pack", args.mesh, "-o", str(stream), "--quiet"], check=True)
+    voxelization = [str(stream), "--resolution", str(args.mesh_resolution), "--quiet"]
+
     def tool(kind):
         out = work / "tool"
         out.mkdir(exist_ok=True)
@@ -73,6 +82,8 @@ def main():
             command = [args.cli, "accuracy", *sweep, "--out", str(out / "report"), "--quiet"]
         elif kind == "fly":
             command = [args.cli, "fly", *flight]
+        elif kind == "voxelize":
+            command = [args.cli, "voxelize", *voxelization, "-o", str(out / "m.cvox")]
         else:
             command = [args.cli, "render", *kinds[kind], "--out", str(out / "f.png"), "--quiet"]
         t0 = time.perf_counter()
@@ -96,6 +107,8 @@ def main():
                         cuberille.dask.accuracy([*sweep, "--out", str(out / "report")], client, executable=args.cli)
                     elif kind == "fly":
                         cuberille.dask.fly(flight, client)
+                    elif kind == "voxelize":
+                        cuberille.dask.voxelize([*voxelization, "-o", str(out / "m.cvox")], client)
                     else:
                         cuberille.dask.render([*kinds[kind], "--out", str(out / "f.png")], client)
                     times.append(time.perf_counter() - t0)
@@ -110,7 +123,8 @@ def main():
                 task_overhead_ms = time.perf_counter() - t0  # seconds for 1000 tasks: ms a task
     counts = [int(w) for w in args.workers.split(",")]
     print(f"{args.frames} frames a kind, 640x480, 4 samples (the accuracy sweep: 320x180, one run a setting; the "
-          f"flight: {4 * args.frames} frames at 1 sample of the model voxelized at {args.voxel_resolution}); "
+          f"flight: {4 * args.frames} frames at 1 sample of the model voxelized at {args.voxel_resolution}; the "
+          f"voxelization: {Path(args.mesh).name} at {args.mesh_resolution}); "
           f"median of {args.runs}; {os.cpu_count()} cores")
     print(f"{'work':<10} {'tool (s)':>9} " + " ".join(f"{f'{w} worker(s) (s)':>16}" for w in counts) +
           " " + " ".join(f"{f'speed-up x{w}':>12}" for w in counts[1:]))

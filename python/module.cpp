@@ -20,6 +20,7 @@
 #include "apps/png_file.h"
 #include "apps/render_command.h"
 #include "apps/render_options_cli.h"
+#include "apps/voxel_commands.h"
 #include "render/display_image.h"
 #include "render/fly.h"
 #include "render/renderer.h"
@@ -283,6 +284,39 @@ private:
     apps::FlyOptions o_;
 };
 
+// A `cuberille voxelize` command line read by the tool's own parser, taken apart for the
+// distributed runner (apps/voxel_commands.h): run() voxelizes a run of the input's chunks into a
+// part file, finish() merges every part (the single-machine model bit for bit) and writes what the
+// command writes.
+class PyVoxelizeCommand {
+public:
+    static PyVoxelizeCommand fromArguments(const std::vector<std::string>& arguments) {
+        PyVoxelizeCommand c;
+        c.o_ = apps::parseVoxelizeArguments(arguments);
+        return c;
+    }
+    size_t chunkCount() const {
+        py::gil_scoped_release release;
+        return apps::voxelizeChunkCount(o_);
+    }
+    void run(size_t first, size_t count, const std::string& part, int threadsIfUnset) const {
+        apps::VoxelizeCommandOptions o = o_;
+        o.quiet = true;
+        if (o.threads == 0) o.threads = threadsIfUnset;
+        py::gil_scoped_release release;
+        apps::voxelizeChunkRun(o, first, count, part);
+    }
+    int finish(const std::vector<std::string>& parts) const {
+        const std::vector<std::filesystem::path> paths(parts.begin(), parts.end());
+        py::gil_scoped_release release;
+        return apps::finishVoxelizeFromParts(o_, paths);
+    }
+    const apps::VoxelizeCommandOptions& options() const { return o_; }
+
+private:
+    apps::VoxelizeCommandOptions o_;
+};
+
 // A flight through a streamed voxel model (render/fly.h): every frame's statistics as a dict, and
 // the settled last view as uint8 sRGB RGBA.
 py::dict fly(const std::string& model, const std::string& path, int frames, int width, int height, int msaa, int threads,
@@ -393,6 +427,18 @@ PYBIND11_MODULE(_cuberille, m) {
         .def_property_readonly("stats", [](const PyFlyCommand& c) { return c.options().statsPath.string(); })
         .def_property_readonly("plot", [](const PyFlyCommand& c) { return c.options().plotPath.string(); })
         .def_property_readonly("quiet", [](const PyFlyCommand& c) { return c.options().quiet; });
+    py::class_<PyVoxelizeCommand>(m, "VoxelizeCommand")
+        .def_static("from_arguments", &PyVoxelizeCommand::fromArguments, py::arg("arguments"),
+                    "`cuberille voxelize`'s arguments (the mesh and options), read by the command's own parser")
+        .def("chunk_count", &PyVoxelizeCommand::chunkCount, "The input's chunks (checks the options and opens it)")
+        .def("run", &PyVoxelizeCommand::run, py::arg("first"), py::arg("count"), py::arg("part"),
+             py::arg("threads_if_unset") = 0, "Voxelizes chunks [first, first + count) into the part file")
+        .def("finish", &PyVoxelizeCommand::finish, py::arg("parts"),
+             "Merges the parts and writes the .cvox, --export-voxels and --stats; prints the summary")
+        .def_property_readonly("out", [](const PyVoxelizeCommand& c) { return c.options().out.string(); })
+        .def_property_readonly("stats", [](const PyVoxelizeCommand& c) { return c.options().statsPath.string(); })
+        .def_property_readonly("export_voxels", [](const PyVoxelizeCommand& c) { return c.options().exportVoxels.string(); })
+        .def_property_readonly("quiet", [](const PyVoxelizeCommand& c) { return c.options().quiet; });
     m.def("fly", &fly, py::arg("model"), py::arg("path") = "orbit", py::arg("frames") = 120, py::arg("width") = 1280,
           py::arg("height") = 720, py::arg("msaa") = 4, py::arg("threads") = 0, py::arg("budget_mib") = 1024.0,
           py::arg("upload_limit_mib") = 0.0, py::arg("refine") = "full", py::arg("pixel_error") = 1.0f,

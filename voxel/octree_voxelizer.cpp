@@ -227,45 +227,139 @@ private:
     uint64_t leafPieces_ = 0, exactTests_ = 0;
 };
 
-/// Gathers the kept voxels into blocks straight from the per-thread trees, without merging them
-/// first (Chajdas merges the trees, section 3.1.1; here the merge happens per block, in parallel):
-/// each tree's top levels are walked once to list its block subtrees; subtrees of the same block
-/// are grouped (Morton order of the block, then tree order); each block is then filled on its own
-/// task by reading its subtrees' leaves in Morton order and summing the leaves they share.
-/// Integer sums make the result the same as a merged tree's, for any thread count.
+/// A block's voxels from its merged leaf sums: the voxels the separability keeps, with their
+/// normals and colours, and its source triangles in key order. The last step of voxelizeMesh and of
+/// mergePartialVoxelizations alike. `touched` counts the conservative voxels.
+void finishBlock(const BlockPartial& p, Separability separability, bool withColors, uint32_t blockSize, VoxelBlock& b,
+                 uint64_t& touched) {
+    b.coord = p.coord;
+    b.tightMin = glm::uvec3(blockSize);
+    for (size_t i = 0; i < p.leaves.size(); ++i) {
+        const LeafSums& s = p.leaves[i];
+        if (s.weight == 0) continue;  // reached only by pieces the exact test turned away
+        ++touched;
+        const bool keep = separability == Separability::Conservative ||
+                          (separability == Separability::Six && (s.targets & kMetCrosshair)) ||
+                          (separability == Separability::TwentySix && s.targets != 0);
+        if (!keep) continue;
+        const glm::uvec3 local = positionOfMorton(p.leafMorton[i]);
+        const glm::dvec3 n(double(s.normal[0]), double(s.normal[1]), double(s.normal[2]));
+        const double len = glm::length(n);
+        b.voxels.push_back(packVoxel(local.x, local.y, local.z, s.faceMask));
+        b.normals.push_back(packNormal1010102(len > 0.0 ? glm::vec3(n / len) : glm::vec3(0.0f)));
+        if (withColors) {
+            const LeafColorSums& c = p.colors[i];
+            const double w = double(s.weight);
+            b.colors.push_back(packSrgba8(glm::vec3(double(c.rgb[0]) / w, double(c.rgb[1]) / w, double(c.rgb[2]) / w)));
+        } else {
+            b.colors.push_back(0xFFFFFFFFu);
+        }
+        b.tightMin = glm::min(b.tightMin, local);
+        b.tightMax = glm::max(b.tightMax, local);
+    }
+    b.triangles = p.triangles;
+    if (b.voxels.empty()) b.tightMin = glm::uvec3(0);
+}
+
+/// Adds leaf `j` of `from` into `into`'s last leaf (the same voxel).
+void addLeaf(BlockPartial& into, const BlockPartial& from, size_t j, bool withColors) {
+    LeafSums& s = into.leaves.back();
+    const LeafSums& o = from.leaves[j];
+    for (int k = 0; k < 3; ++k) s.normal[k] += o.normal[k];
+    s.weight += o.weight;
+    s.faceMask |= o.faceMask;
+    s.targets |= o.targets;
+    if (withColors)
+        for (int k = 0; k < 3; ++k) into.colors.back().rgb[k] += from.colors[j].rgb[k];
+}
+
+/// The partials of one block from several parts, as one: each part's leaves ascend, so they are
+/// walked together, the voxels they share summed; the triangles in key order.
+BlockPartial sumBlockPartials(const std::vector<const BlockPartial*>& partials, bool withColors) {
+    BlockPartial sum;
+    sum.coord = partials[0]->coord;
+    std::vector<size_t> at(partials.size(), 0);
+    for (;;) {
+        uint32_t next = UINT32_MAX;
+        for (size_t k = 0; k < partials.size(); ++k)
+            if (at[k] < partials[k]->leafMorton.size()) next = std::min(next, partials[k]->leafMorton[at[k]]);
+        if (next == UINT32_MAX) break;
+        bool started = false;
+        for (size_t k = 0; k < partials.size(); ++k) {
+            const BlockPartial& q = *partials[k];
+            if (at[k] >= q.leafMorton.size() || q.leafMorton[at[k]] != next) continue;
+            if (!started) {
+                sum.leafMorton.push_back(next);
+                sum.leaves.push_back(q.leaves[at[k]]);
+                if (withColors) sum.colors.push_back(q.colors[at[k]]);
+                started = true;
+            } else {
+                addLeaf(sum, q, at[k], withColors);
+            }
+            ++at[k];
+        }
+    }
+    std::vector<std::pair<uint64_t, const SourceTriangle*>> triangles;
+    for (const BlockPartial* q : partials)
+        for (size_t i = 0; i < q->triangles.size(); ++i) triangles.push_back({q->triangleKeys[i], &q->triangles[i]});
+    std::sort(triangles.begin(), triangles.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [key, t] : triangles) sum.triangleKeys.push_back(key), sum.triangles.push_back(*t);
+    return sum;
+}
+
+/// Finished blocks into the model, in order, leaving out those with nothing to draw; counted.
+void keepFinishedBlocks(std::vector<VoxelBlock>& blocks, const std::vector<uint64_t>& touched, VoxelModel& model,
+                        VoxelizeStats& stats) {
+    for (size_t i = 0; i < blocks.size(); ++i) {
+        stats.conservativeVoxels += touched[i];
+        if (blocks[i].voxels.empty() && blocks[i].triangles.empty()) continue;
+        stats.voxels += blocks[i].voxels.size();
+        stats.sourceTriangles += blocks[i].triangles.size();
+        model.blocks.push_back(std::move(blocks[i]));
+    }
+}
+
+/// Gathers blocks straight from the per-thread trees, without merging them first (Chajdas merges
+/// the trees, section 3.1.1; here the merge happens per block, in parallel): each tree's top levels
+/// are walked once to list its block subtrees; subtrees of the same block are grouped (Morton order
+/// of the block, then tree order); each block's leaves are then read on its own task in Morton
+/// order, the leaves the trees share summed (a BlockPartial). Integer sums make the result the same
+/// as a merged tree's, for any thread count — and for any split of the chunks among processes,
+/// which is what lets partial voxelizations merge (mergePartialVoxelizations).
 class BlockEmitter {
 public:
-    BlockEmitter(std::vector<const VoxelOctree*> trees, const VoxelizeOptions& options,
-                 std::vector<BlockTriangleBuckets*> triangles, VoxelModel& model, VoxelizeStats& stats)
-        : trees_(std::move(trees)), options_(options), triangles_(std::move(triangles)), model_(model), stats_(stats),
-          leafDepth_(trees_[0]->leafDepth()), blockDepth_(std::max(0, leafDepth_ - log2OfPowerOfTwo(kBlockSize))),
-          withColors_(trees_[0]->withColors()) {}
-
-    void run() {
-        std::vector<SubtreeRef> subtrees;
+    BlockEmitter(std::vector<const VoxelOctree*> trees, std::vector<BlockTriangleBuckets*> triangles)
+        : trees_(std::move(trees)), triangles_(std::move(triangles)), leafDepth_(trees_[0]->leafDepth()),
+          blockDepth_(std::max(0, leafDepth_ - log2OfPowerOfTwo(kBlockSize))), withColors_(trees_[0]->withColors()) {
+        std::vector<SubtreeRef>& subtrees = subtrees_;
         for (uint32_t t = 0; t < trees_.size(); ++t) listBlocks(t, VoxelOctree::root(), 0, glm::uvec3(0), subtrees);
         std::sort(subtrees.begin(), subtrees.end(), [](const SubtreeRef& a, const SubtreeRef& b) {
             return a.morton != b.morton ? a.morton < b.morton : a.tree < b.tree;
         });
-        std::vector<std::pair<size_t, size_t>> groups;  // [first, last) of each block's subtrees
         for (size_t i = 0; i < subtrees.size();) {
             size_t j = i + 1;
             while (j < subtrees.size() && subtrees[j].morton == subtrees[i].morton) ++j;
-            groups.push_back({i, j});
+            groups_.push_back({i, j});
             i = j;
         }
-        std::vector<VoxelBlock> blocks(groups.size());
-        std::vector<uint64_t> touched(groups.size(), 0);  // conservative voxels per block
-        raster::parallelFor(groups.size(), [&](size_t g) {
-            fillBlock(&subtrees[groups[g].first], groups[g].second - groups[g].first, blocks[g], touched[g]);
+    }
+
+    /// The whole model's blocks, in Morton order (each block's partial made and finished on one
+    /// task, then dropped: the peak holds one partial per thread).
+    void emit(const VoxelizeOptions& options, VoxelModel& model, VoxelizeStats& stats) {
+        std::vector<VoxelBlock> blocks(groups_.size());
+        std::vector<uint64_t> touched(groups_.size(), 0);  // conservative voxels per block
+        raster::parallelFor(groups_.size(), [&](size_t g) {
+            finishBlock(partialOf(g), options.separability, withColors_, model.blockSize, blocks[g], touched[g]);
         });
-        for (size_t i = 0; i < blocks.size(); ++i) {
-            stats_.conservativeVoxels += touched[i];
-            if (blocks[i].voxels.empty() && blocks[i].triangles.empty()) continue;
-            stats_.voxels += blocks[i].voxels.size();
-            stats_.sourceTriangles += blocks[i].triangles.size();
-            model_.blocks.push_back(std::move(blocks[i]));
-        }
+        keepFinishedBlocks(blocks, touched, model, stats);
+    }
+
+    /// Every block's partial, in Morton order.
+    std::vector<BlockPartial> partials() {
+        std::vector<BlockPartial> out(groups_.size());
+        raster::parallelFor(groups_.size(), [&](size_t g) { out[g] = partialOf(g); });
+        return out;
     }
 
 private:
@@ -278,7 +372,6 @@ private:
     struct LeafRef {
         uint32_t localMorton;
         uint32_t tree, leaf;
-        glm::uvec3 local;
     };
 
     void listBlocks(uint32_t t, uint32_t node, int depth, const glm::uvec3& cell, std::vector<SubtreeRef>& out) const {
@@ -291,9 +384,11 @@ private:
                 listBlocks(t, c, depth + 1, cell * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1), out);
     }
 
-    void fillBlock(const SubtreeRef* subtrees, size_t count, VoxelBlock& b, uint64_t& touched) const {
-        b.coord = subtrees[0].cell;
-        b.tightMin = glm::uvec3(model_.blockSize);
+    BlockPartial partialOf(size_t g) const {
+        const SubtreeRef* subtrees = &subtrees_[groups_[g].first];
+        const size_t count = groups_[g].second - groups_[g].first;
+        BlockPartial p;
+        p.coord = subtrees[0].cell;
         std::vector<LeafRef> leaves;
         for (size_t s = 0; s < count; ++s) gather(subtrees[s].tree, subtrees[s].node, blockDepth_, glm::uvec3(0), leaves);
         // Each tree's leaves came in Morton order; with several trees, order them all (tree order
@@ -303,6 +398,7 @@ private:
                 return x.localMorton != y.localMorton ? x.localMorton < y.localMorton : x.tree < y.tree;
             });
         for (size_t i = 0; i < leaves.size();) {
+            p.leafMorton.push_back(leaves[i].localMorton);
             LeafSums sums = trees_[leaves[i].tree]->leaf(leaves[i].leaf);
             LeafColorSums colors = withColors_ ? trees_[leaves[i].tree]->leafColor(leaves[i].leaf) : LeafColorSums{};
             size_t j = i + 1;
@@ -315,17 +411,19 @@ private:
                 if (withColors_)
                     for (int k = 0; k < 3; ++k) colors.rgb[k] += trees_[leaves[j].tree]->leafColor(leaves[j].leaf).rgb[k];
             }
-            emitVoxel(sums, colors, leaves[i].local, b, touched);
+            p.leaves.push_back(sums);
+            if (withColors_) p.colors.push_back(colors);
             i = j;
         }
-        gatherTriangles(subtrees[0].morton, b);
-        if (b.voxels.empty()) b.tightMin = glm::uvec3(0);
+        gatherTriangles(subtrees[0].morton, p);
+        return p;
     }
 
-    /// Every thread's fan triangles for the block, in source triangle order. Each bucket is
-    /// emptied as it is used (its own block's entry only, so blocks filled in parallel never touch
-    /// the same entry, and the maps are not restructured), so the peak holds them once.
-    void gatherTriangles(uint64_t morton, VoxelBlock& b) const {
+    /// Every thread's fan triangles for the block, in source triangle order (their keys kept, so
+    /// partials of one block from other chunks merge into the same order). Each bucket is emptied
+    /// as it is used (its own block's entry only, so blocks filled in parallel never touch the same
+    /// entry, and the maps are not restructured), so the peak holds them once.
+    void gatherTriangles(uint64_t morton, BlockPartial& p) const {
         std::vector<uint64_t> keys;
         std::vector<SourceTriangle> found;
         for (BlockTriangleBuckets* buckets : triangles_) {
@@ -339,13 +437,14 @@ private:
         std::vector<uint32_t> order(keys.size());
         std::iota(order.begin(), order.end(), 0u);
         std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return keys[x] < keys[y]; });
-        b.triangles.reserve(order.size());
-        for (uint32_t i : order) b.triangles.push_back(found[i]);
+        p.triangleKeys.reserve(order.size());
+        p.triangles.reserve(order.size());
+        for (uint32_t i : order) p.triangleKeys.push_back(keys[i]), p.triangles.push_back(found[i]);
     }
 
     void gather(uint32_t t, uint32_t node, int depth, const glm::uvec3& local, std::vector<LeafRef>& out) const {
         if (depth == leafDepth_) {
-            out.push_back({uint32_t(mortonOf(local)), t, node, local});
+            out.push_back({uint32_t(mortonOf(local)), t, node});
             return;
         }
         for (int octant = 0; octant < 8; ++octant)
@@ -353,35 +452,12 @@ private:
                 gather(t, c, depth + 1, local * 2u + glm::uvec3(octant & 1, octant >> 1 & 1, octant >> 2 & 1), out);
     }
 
-    void emitVoxel(const LeafSums& s, const LeafColorSums& c, const glm::uvec3& local, VoxelBlock& b,
-                   uint64_t& touched) const {
-        if (s.weight == 0) return;  // reached only by pieces the exact test turned away
-        ++touched;
-        const bool keep = options_.separability == Separability::Conservative ||
-                          (options_.separability == Separability::Six && (s.targets & kMetCrosshair)) ||
-                          (options_.separability == Separability::TwentySix && s.targets != 0);
-        if (!keep) return;
-        const glm::dvec3 n(double(s.normal[0]), double(s.normal[1]), double(s.normal[2]));
-        const double len = glm::length(n);
-        b.voxels.push_back(packVoxel(local.x, local.y, local.z, s.faceMask));
-        b.normals.push_back(packNormal1010102(len > 0.0 ? glm::vec3(n / len) : glm::vec3(0.0f)));
-        if (withColors_) {
-            const double w = double(s.weight);
-            b.colors.push_back(packSrgba8(glm::vec3(double(c.rgb[0]) / w, double(c.rgb[1]) / w, double(c.rgb[2]) / w)));
-        } else {
-            b.colors.push_back(0xFFFFFFFFu);
-        }
-        b.tightMin = glm::min(b.tightMin, local);
-        b.tightMax = glm::max(b.tightMax, local);
-    }
-
     std::vector<const VoxelOctree*> trees_;
-    const VoxelizeOptions& options_;
     std::vector<BlockTriangleBuckets*> triangles_;
-    VoxelModel& model_;
-    VoxelizeStats& stats_;
     int leafDepth_, blockDepth_;
     bool withColors_;
+    std::vector<SubtreeRef> subtrees_;
+    std::vector<std::pair<size_t, size_t>> groups_;  // [first, last) of each block's subtrees
 };
 
 }  // namespace
@@ -393,31 +469,43 @@ VoxelGrid gridFor(const MeshView& mesh, uint32_t resolution) {
     return VoxelGrid::fitting(glm::dvec3(lo), glm::dvec3(hi), resolution);
 }
 
-VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, VoxelizeStats* statsOut) {
+namespace {
+
+/// What voxelizeMesh and voxelizeChunks share: the model's header (grid, block size, separability,
+/// colours) and the per-thread trees of chunks [first, first + count), with their statistics.
+struct BuiltTrees {
+    tbb::enumerable_thread_specific<std::unique_ptr<TreeBuilder>> builders;
+    std::vector<TreeBuilder*> trees;
+};
+
+VoxelModel modelHeader(const MeshView& mesh, const VoxelizeOptions& options) {
     if (!isValidResolution(options.resolution))
         throw std::invalid_argument("resolution " + std::to_string(options.resolution) +
                                     " is not a power of two from 2 to 65536");
-    VoxelizeStats stats;
     VoxelModel model;
     model.grid = options.grid ? *options.grid : gridFor(mesh, options.resolution);
     model.grid.resolution = options.resolution;
     model.blockSize = std::min(kBlockSize, options.resolution);
     model.separability = options.separability;
     model.hasColors = mesh.hasColors();
+    return model;
+}
 
+void buildTrees(const MeshView& mesh, const VoxelizeOptions& options, const VoxelModel& model, size_t first, size_t count,
+                BuiltTrees& built, VoxelizeStats& stats) {
     // Each chunk's first triangle's index in the whole mesh: the sort key that makes source
-    // triangles come out in one order whatever thread read which chunk.
+    // triangles come out in one order whatever thread (or process) read which chunk.
     std::vector<uint64_t> firstTriangle(mesh.chunkCount() + 1, 0);
     for (size_t i = 0; i < mesh.chunkCount(); ++i) firstTriangle[i + 1] = firstTriangle[i] + mesh.chunkInfo(i).triangleCount;
-    stats.chunks = mesh.chunkCount();
-    stats.triangles = firstTriangle.back();
+    stats.chunks = count;
+    stats.triangles = firstTriangle[first + count] - firstTriangle[first];
 
-    tbb::enumerable_thread_specific<std::unique_ptr<TreeBuilder>> builders;
     std::atomic<size_t> done{0};
     std::mutex progressMutex;
     double t0 = raster::nowMs();
-    raster::parallelFor(mesh.chunkCount(), [&](size_t chunk) {
-        std::unique_ptr<TreeBuilder>& b = builders.local();
+    raster::parallelFor(count, [&](size_t i) {
+        const size_t chunk = first + i;
+        std::unique_ptr<TreeBuilder>& b = built.builders.local();
         if (!b) b = std::make_unique<TreeBuilder>(model.grid, options, model.hasColors);
         const double r0 = raster::nowMs();
         const GeometryChunk c = mesh.readChunk(chunk);
@@ -426,35 +514,107 @@ VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, Vo
         const size_t n = ++done;
         if (options.progress) {
             std::lock_guard<std::mutex> lock(progressMutex);
-            options.progress(n, mesh.chunkCount());
+            options.progress(n, count);
         }
     });
     stats.rasterizeMs = raster::nowMs() - t0;
 
     t0 = raster::nowMs();
-    std::vector<TreeBuilder*> trees;
-    for (auto& b : builders)
-        if (b) trees.push_back(b.get());
-    stats.threads = int(trees.size());
-    std::vector<BlockTriangleBuckets*> triangles;
-    for (TreeBuilder* b : trees) {
+    for (auto& b : built.builders)
+        if (b) built.trees.push_back(b.get());
+    stats.threads = int(built.trees.size());
+    for (TreeBuilder* b : built.trees) {
         stats.octreeBytes += b->tree().reservedBytes();
         stats.leafPieces += b->leafPieces();
         stats.exactTests += b->exactTests();
         stats.readMs += b->readMs;
-        triangles.push_back(&b->blockTriangles());
     }
     // The trees are merged block by block while emitting (BlockEmitter), not here.
     stats.mergeMs = raster::nowMs() - t0;
+}
 
-    t0 = raster::nowMs();
-    if (!trees.empty()) {
-        std::vector<const VoxelOctree*> octrees;
-        for (TreeBuilder* b : trees) octrees.push_back(&b->tree());
-        BlockEmitter(std::move(octrees), options, std::move(triangles), model, stats).run();
-    }
+BlockEmitter emitterOf(const BuiltTrees& built) {
+    std::vector<const VoxelOctree*> octrees;
+    std::vector<BlockTriangleBuckets*> triangles;
+    for (TreeBuilder* b : built.trees) octrees.push_back(&b->tree()), triangles.push_back(&b->blockTriangles());
+    return BlockEmitter(std::move(octrees), std::move(triangles));
+}
+
+}  // namespace
+
+VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, VoxelizeStats* statsOut) {
+    VoxelizeStats stats;
+    VoxelModel model = modelHeader(mesh, options);
+    BuiltTrees built;
+    buildTrees(mesh, options, model, 0, mesh.chunkCount(), built, stats);
+    const double t0 = raster::nowMs();
+    if (!built.trees.empty()) emitterOf(built).emit(options, model, stats);
     stats.blocks = model.blocks.size();
     stats.emitMs = raster::nowMs() - t0;
+    if (statsOut) *statsOut = stats;
+    return model;
+}
+
+PartialVoxelization voxelizeChunks(const MeshView& mesh, const VoxelizeOptions& options, size_t firstChunk,
+                                   size_t chunkCount, VoxelizeStats* statsOut) {
+    if (firstChunk > mesh.chunkCount() || chunkCount > mesh.chunkCount() - firstChunk)
+        throw std::invalid_argument("voxelizeChunks: chunks outside the mesh's " + std::to_string(mesh.chunkCount()));
+    VoxelizeStats stats;
+    PartialVoxelization part;
+    part.header = modelHeader(mesh, options);
+    part.firstChunk = firstChunk, part.chunkCount = chunkCount;
+    BuiltTrees built;
+    buildTrees(mesh, options, part.header, firstChunk, chunkCount, built, stats);
+    const double t0 = raster::nowMs();
+    if (!built.trees.empty()) part.blocks = emitterOf(built).partials();
+    stats.emitMs = raster::nowMs() - t0;
+    if (statsOut) *statsOut = stats;
+    return part;
+}
+
+VoxelModel mergePartialVoxelizations(std::vector<PartialVoxelization> parts, VoxelizeStats* statsOut) {
+    if (parts.empty()) throw std::invalid_argument("mergePartialVoxelizations: no parts");
+    // Parts in chunk order, each block's partials in part order: the order one process's trees give.
+    std::sort(parts.begin(), parts.end(), [](const PartialVoxelization& a, const PartialVoxelization& b) {
+        return a.firstChunk < b.firstChunk;
+    });
+    VoxelModel model = parts[0].header;
+    const bool withColors = model.hasColors;
+    struct Ref {
+        uint64_t morton;
+        uint32_t part, block;
+    };
+    std::vector<Ref> refs;
+    for (uint32_t p = 0; p < parts.size(); ++p) {
+        const VoxelModel& h = parts[p].header;
+        if (h.grid.resolution != model.grid.resolution || h.grid.origin != model.grid.origin ||
+            h.grid.extent != model.grid.extent || h.separability != model.separability || h.hasColors != withColors)
+            throw std::invalid_argument("mergePartialVoxelizations: parts of different voxelizations");
+        for (uint32_t b = 0; b < parts[p].blocks.size(); ++b) refs.push_back({mortonOf(parts[p].blocks[b].coord), p, b});
+    }
+    std::sort(refs.begin(), refs.end(), [](const Ref& a, const Ref& b) { return a.morton != b.morton ? a.morton < b.morton : a.part < b.part; });
+    std::vector<std::pair<size_t, size_t>> groups;
+    for (size_t i = 0; i < refs.size();) {
+        size_t j = i + 1;
+        while (j < refs.size() && refs[j].morton == refs[i].morton) ++j;
+        groups.push_back({i, j});
+        i = j;
+    }
+    std::vector<VoxelBlock> blocks(groups.size());
+    std::vector<uint64_t> touched(groups.size(), 0);
+    raster::parallelFor(groups.size(), [&](size_t g) {
+        std::vector<const BlockPartial*> partials;
+        for (size_t k = groups[g].first; k < groups[g].second; ++k) partials.push_back(&parts[refs[k].part].blocks[refs[k].block]);
+        if (partials.size() == 1)
+            finishBlock(*partials[0], model.separability, withColors, model.blockSize, blocks[g], touched[g]);
+        else
+            finishBlock(sumBlockPartials(partials, withColors), model.separability, withColors, model.blockSize, blocks[g],
+                        touched[g]);
+    });
+    VoxelizeStats stats;
+    for (const PartialVoxelization& p : parts) stats.chunks += p.chunkCount;
+    keepFinishedBlocks(blocks, touched, model, stats);
+    stats.blocks = model.blocks.size();
     if (statsOut) *statsOut = stats;
     return model;
 }

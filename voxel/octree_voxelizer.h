@@ -20,6 +20,7 @@
 
 #include "voxel/mesh_view.h"
 #include "voxel/voxel_model.h"
+#include "voxel/voxel_octree.h"
 
 namespace cuberille::voxel {
 
@@ -56,6 +57,37 @@ struct VoxelizeStats {
 /// Throws std::invalid_argument for a resolution that is not a power of two in range, and
 /// scene::InputError for bad chunk data.
 VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, VoxelizeStats* stats = nullptr);
+
+/// One block's share of a voxelization from some of the mesh's chunks: the leaf sums of the voxels
+/// those chunks' triangles touch (integer, before the separability's choice; ascending Morton code
+/// within the block), and its source-triangle pieces with their order keys (source triangle index
+/// << 8 | fan index, ascending). The partials of one block from any split of the chunks sum to the
+/// whole mesh's leaf sums, and their keys interleave into its triangle order.
+struct BlockPartial {
+    glm::uvec3 coord{0};               // in blocks, at the finest level
+    std::vector<uint32_t> leafMorton;  // each leaf's position in the block, as its Morton code
+    std::vector<LeafSums> leaves;
+    std::vector<LeafColorSums> colors;  // one per leaf, for a mesh with colours; else empty
+    std::vector<uint64_t> triangleKeys;
+    std::vector<SourceTriangle> triangles;
+};
+
+/// What voxelizing chunks [firstChunk, firstChunk + chunkCount) of a mesh gives: the model's header
+/// (grid from the whole mesh's bounds, block size, separability, colours; no blocks) and the partial
+/// blocks, in Morton order. A distributed voxelization's unit of work (python/cuberille/dask).
+struct PartialVoxelization {
+    VoxelModel header;
+    uint64_t firstChunk = 0, chunkCount = 0;
+    std::vector<BlockPartial> blocks;
+};
+PartialVoxelization voxelizeChunks(const MeshView& mesh, const VoxelizeOptions& options, size_t firstChunk,
+                                   size_t chunkCount, VoxelizeStats* stats = nullptr);
+
+/// The partial voxelizations of every chunk of a mesh, merged: voxelizeMesh's model bit for bit,
+/// whatever the split (VoxelizeChunks tests). Each block's partials are summed, the separability
+/// applied and the triangles put in key order, exactly as voxelizeMesh finishes a block from its
+/// threads' trees. Throws std::invalid_argument for parts of different voxelizations.
+VoxelModel mergePartialVoxelizations(std::vector<PartialVoxelization> parts, VoxelizeStats* stats = nullptr);
 
 /// The grid voxelizeMesh uses for a view: the view's bounds, uniformly scaled.
 VoxelGrid gridFor(const MeshView& mesh, uint32_t resolution);

@@ -8,8 +8,9 @@
         cuberille.dask.batch("jobs.jsonl", client)
         cuberille.dask.accuracy(["model.glb", "--out", "report"], client)
         cuberille.dask.fly(["model.cvox", "--frames", "600", "--out-dir", "flight", "--save-every", "1"], client)
+        cuberille.dask.voxelize(["scan.cgs", "--resolution", "4096", "-o", "scan.cvox"], client)
 
-`python3 -m cuberille.dask render|batch|accuracy|fly ...` is the command line over these
+`python3 -m cuberille.dask render|batch|accuracy|fly|voxelize ...` is the command line over these
 (docs/scale-out.md).
 
 How the work is split, and why the files are the same as the tool's:
@@ -29,6 +30,11 @@ How the work is split, and why the files are the same as the tool's:
   in docs/scale-out.md), its frames numbered and saved as in the whole flight; the run that ends
   the path settles and writes final.png; the client joins the runs' statistics into the tool's
   CSV, plot and summary (apps/fly_command.h).
+- A voxelization (`voxelize`) is cut into runs of the input's chunks (a .cgs: each worker reads
+  only its chunks); each run's partial voxelization (every touched voxel's integer sums and its
+  blocks' source triangles with their order keys) is written to a part file beside the output;
+  the client merges the parts (integer sums: any split gives the single-machine model bit for bit),
+  builds the LOD pyramid and writes the .cvox (apps/voxel_commands.h).
 - Every file is written under a temporary name and renamed (apps/atomic_file.h), so a task retried
   after its worker died rewrites whole files; the temporary files a killed worker left are removed
   once every task has finished (`_remove_leftovers`). Outputs go where the command names them: the
@@ -46,7 +52,8 @@ import time
 from .. import Scene, _cuberille
 from .._cuberille import InputError
 
-__all__ = ["AccuracyReport", "BatchReport", "FlyReport", "RenderReport", "accuracy", "batch", "fly", "render"]
+__all__ = ["AccuracyReport", "BatchReport", "FlyReport", "RenderReport", "VoxelizeReport", "accuracy", "batch", "fly",
+           "render", "voxelize"]
 
 
 class RenderReport:
@@ -82,6 +89,13 @@ class FlyReport:
     def __init__(self, files, frames, bytes_read, tasks, workers, seconds, warnings):
         self.files, self.frames, self.bytes_read, self.tasks = files, frames, bytes_read, tasks
         self.workers, self.seconds, self.warnings = workers, seconds, warnings
+
+
+class VoxelizeReport:
+    """What voxelize() did: the model written, the input's chunks, the tasks, workers and wall time."""
+
+    def __init__(self, out, chunks, tasks, workers, seconds):
+        self.out, self.chunks, self.tasks, self.workers, self.seconds = out, chunks, tasks, workers, seconds
 
 
 def render(arguments, client, *, frames_per_task=None, progress=None):
@@ -210,6 +224,36 @@ def fly(arguments, client, *, frames_per_task=None, progress=None):
                      workers, time.perf_counter() - started, warnings)
 
 
+def voxelize(arguments, client, *, chunks_per_task=None, progress=None):
+    """Runs `cuberille voxelize ARGUMENTS` (the mesh and options, as on the command line) on the
+    client's cluster: the input's chunks in runs (`chunks_per_task`; by default four runs a
+    worker), each voxelized on a worker into a part file in a folder beside the output; then here
+    the parts merged into the model `cuberille voxelize` writes, bit for bit, its LOD pyramid built
+    and its files written. The merge and the pyramid hold the finest level in this process, as the
+    tool does (docs/scale-out.md). Raises InputError as the tool refuses. `progress`, if given, is
+    called with (chunks done, chunks in all)."""
+    started = time.perf_counter()
+    arguments = [os.fspath(a) for a in arguments]
+    command = _cuberille.VoxelizeCommand.from_arguments(arguments)
+    chunks = command.chunk_count()
+    workers = _worker_count(client)
+    runs = _runs_of(chunks, chunks_per_task or _items_per_task(chunks, workers))
+    threads = _threads_per_worker(client)
+    folder, name = os.path.split(os.path.abspath(command.out))
+    parts_folder = os.path.join(folder, f".{name}.parts-{_stamp()}")
+    os.makedirs(parts_folder)
+    parts = [os.path.join(parts_folder, f"chunks-{first:09d}.cvxp") for first, _ in runs]
+    try:
+        futures = [client.submit(_voxelize_run, arguments, first, n, part, threads, pure=False,
+                                 key=f"cuberille-voxelize-{first}-{_stamp()}") for (first, n), part in zip(runs, parts)]
+        _gather(client, futures, chunks, progress, lambda r: r["count"])
+        command.finish(parts)
+    finally:
+        shutil.rmtree(parts_folder, ignore_errors=True)
+    _remove_leftovers([f for f in (command.out, command.stats, command.export_voxels) if f])
+    return VoxelizeReport(command.out, chunks, len(runs), workers, time.perf_counter() - started)
+
+
 # What runs on the workers: module-level functions, so Dask sends them by name and each worker
 # process keeps this module's scene cache between tasks.
 
@@ -258,6 +302,14 @@ def _fly_run(arguments, first, count, threads):
     try:
         command = _cuberille.FlyCommand.from_arguments(arguments)
         return {"first": first, "count": count, "run": command.run(first, count, threads)}
+    except InputError as e:
+        return {"error": str(e)}
+
+
+def _voxelize_run(arguments, first, count, part, threads):
+    try:
+        _cuberille.VoxelizeCommand.from_arguments(arguments).run(first, count, part, threads)
+        return {"first": first, "count": count}
     except InputError as e:
         return {"error": str(e)}
 

@@ -1,12 +1,13 @@
-"""python3 -m cuberille.dask render|batch|accuracy|fly ...: the tool's commands on a Dask cluster.
+"""python3 -m cuberille.dask render|batch|accuracy|fly|voxelize ...: the tool's commands on a Dask cluster.
 
     python3 -m cuberille.dask render SCENE [cuberille render's options] [--scheduler tcp://host:8786]
     python3 -m cuberille.dask batch JOBS.jsonl [--quiet] [--scheduler ...]
     python3 -m cuberille.dask accuracy SCENE --out DIR [cuberille accuracy's options] [--scheduler ...]
     python3 -m cuberille.dask fly MODEL.cvox [cuberille fly's options] [--scheduler ...]
+    python3 -m cuberille.dask voxelize MESH -o MODEL.cvox [cuberille voxelize's options] [--scheduler ...]
 
 The files written are the ones `cuberille render`, `cuberille batch`, `cuberille accuracy` and
-`cuberille fly` write for the same options (an accuracy report's times and machine are the
+`cuberille fly` and `cuberille voxelize` write for the same options (an accuracy report's times and machine are the
 cluster's; a flight's frames drawn while blocks load depend on when reads finish); exit codes as the tool's (0 done, 1 a failure while working, 2 bad input). With no
 --scheduler, a LocalCluster on this machine (--workers processes, one task at a time each).
 """
@@ -27,12 +28,15 @@ commands:
                            are a task; the report is written here
   fly MODEL.cvox [OPTIONS] `cuberille fly` with any of its options: runs of the path's frames,
                            each flown from a cold start; CSV, plot and summary written here
+  voxelize MESH -o OUT.cvox [OPTIONS]
+                           `cuberille voxelize` with any of its options: runs of the input's
+                           chunks voxelized on the workers, merged and written here
 
 options of every command:
   --scheduler ADDRESS      a running Dask scheduler (tcp://host:8786); default: a LocalCluster here
   --workers N              the LocalCluster's worker processes (default: this machine's cores)
-  --frames-per-task N      frames (render, fly) or job lines (batch) in one task (default: a
-                           quarter of a worker's share)
+  --frames-per-task N      frames (render, fly), job lines (batch) or chunks (voxelize) in one
+                           task (default: a quarter of a worker's share)
   --cuberille PATH         accuracy: the cuberille program its runs start, a path every worker
                            sees (default: $CUBERILLE_BINARY, else cuberille on PATH)
   --quiet                  print only failures
@@ -44,9 +48,8 @@ def main(argv):
         print(USAGE, end="")
         return 0 if argv else 2
     command, rest = argv[0], argv[1:]
-    if command not in ("render", "batch", "accuracy", "fly"):
-        sys.stderr.write(f"cuberille.dask: unknown command '{command}' (render, batch, accuracy or fly; voxelize "
-                         "is not distributed yet)\n")
+    if command not in ("render", "batch", "accuracy", "fly", "voxelize"):
+        sys.stderr.write(f"cuberille.dask: unknown command '{command}' (render, batch, accuracy, fly or voxelize)\n")
         return 2
     if "-h" in rest or "--help" in rest:
         print(USAGE, end="")
@@ -56,7 +59,7 @@ def main(argv):
     except ValueError as e:
         sys.stderr.write(f"cuberille.dask: {e}\n")
         return 2
-    quiet = own["quiet"] or (command in ("render", "accuracy", "fly") and "--quiet" in rest)
+    quiet = own["quiet"] or (command in ("render", "accuracy", "fly", "voxelize") and "--quiet" in rest)
 
     import cuberille.dask as cd
     from cuberille import InputError
@@ -93,6 +96,13 @@ def main(argv):
                 if not quiet:
                     print(f"  {report.tasks} run{'s' if report.tasks != 1 else ''} on {report.workers} "
                           f"worker{'s' if report.workers != 1 else ''}, each from a cold start; {report.seconds:.2f} s")
+                return 0
+            if command == "voxelize":
+                report = cd.voxelize(rest, client, chunks_per_task=own["frames_per_task"],
+                                     progress=None if quiet else cd._print_progress("chunks"))
+                if not quiet:
+                    print(f"  {report.chunks} chunks in {report.tasks} task{'s' if report.tasks != 1 else ''} on "
+                          f"{report.workers} worker{'s' if report.workers != 1 else ''}; {report.seconds:.2f} s")
                 return 0
             jobs = [a for a in rest if a != "--quiet"]
             if len(jobs) != 1 or jobs[0].startswith("-"):

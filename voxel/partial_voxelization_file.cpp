@@ -1,0 +1,142 @@
+#include "voxel/partial_voxelization_file.h"
+
+#include <sys/mman.h>
+
+#include <cerrno>
+#include <cstring>
+#include <string>
+
+#include "voxel/binary_io.h"
+
+namespace cuberille::voxel {
+namespace {
+
+constexpr char kMagic[4] = {'C', 'V', 'X', 'P'};
+constexpr uint32_t kVersion = 1;
+static_assert(sizeof(SourceTriangle) == 60, "source triangles are written as their 60 bytes");
+
+void putBlock(ByteWriter& w, const BlockPartial& b, bool withColors) {
+    w.putArray(&b.coord.x, 3);
+    w.put(uint64_t(b.leaves.size()));
+    w.putArray(b.leafMorton.data(), b.leafMorton.size());
+    for (const LeafSums& s : b.leaves) {  // field by field: the struct's padding is not data
+        w.putArray(s.normal, 3);
+        w.put(s.weight);
+        w.put(s.faceMask);
+        w.put(s.targets);
+    }
+    if (withColors)
+        for (const LeafColorSums& c : b.colors) w.putArray(c.rgb, 3);
+    w.put(uint64_t(b.triangles.size()));
+    w.putArray(b.triangleKeys.data(), b.triangleKeys.size());
+    w.putArray(b.triangles.data(), b.triangles.size());
+}
+
+BlockPartial getBlock(ByteReader& r, bool withColors) {
+    BlockPartial b;
+    r.getArray(&b.coord.x, 3, "block coordinates");
+    const uint64_t leaves = r.get<uint64_t>("leaf count");
+    if (leaves > r.remaining() / 4) r.fail("leaf count", std::to_string(leaves) + " leaves do not fit in the file");
+    b.leafMorton.resize(leaves);
+    r.getArray(b.leafMorton.data(), leaves, "leaf positions");
+    b.leaves.resize(leaves);
+    for (LeafSums& s : b.leaves) {
+        r.getArray(s.normal, 3, "leaf normal sums");
+        s.weight = r.get<int64_t>("leaf weight");
+        s.faceMask = r.get<uint8_t>("leaf faces");
+        s.targets = r.get<uint8_t>("leaf targets");
+    }
+    if (withColors) {
+        b.colors.resize(leaves);
+        for (LeafColorSums& c : b.colors) r.getArray(c.rgb, 3, "leaf colour sums");
+    }
+    const uint64_t triangles = r.get<uint64_t>("triangle count");
+    if (triangles > r.remaining() / 68) r.fail("triangle count", std::to_string(triangles) + " triangles do not fit in the file");
+    b.triangleKeys.resize(triangles);
+    r.getArray(b.triangleKeys.data(), triangles, "triangle keys");
+    b.triangles.resize(triangles);
+    r.getArray(b.triangles.data(), triangles, "source triangles");
+    return b;
+}
+
+/// A whole file mapped read-only for the reader's lifetime.
+class MappedFile {
+public:
+    explicit MappedFile(const std::filesystem::path& path) {
+        const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        if (fd < 0) throw scene::InputError(path.string() + ": cannot open file: " + std::strerror(errno));
+        const off_t size = ::lseek(fd, 0, SEEK_END);
+        size_ = size > 0 ? size_t(size) : 0;
+        if (size_ > 0) data_ = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd, 0);
+        ::close(fd);
+        if (data_ == MAP_FAILED) throw scene::InputError(path.string() + ": cannot map file: " + std::strerror(errno));
+    }
+    ~MappedFile() {
+        if (data_ && data_ != MAP_FAILED) ::munmap(data_, size_);
+    }
+    MappedFile(const MappedFile&) = delete;
+    MappedFile& operator=(const MappedFile&) = delete;
+    std::string_view bytes() const { return data_ ? std::string_view(static_cast<const char*>(data_), size_) : std::string_view(); }
+
+private:
+    void* data_ = nullptr;
+    size_t size_ = 0;
+};
+
+}  // namespace
+
+void writePartialVoxelization(const PartialVoxelization& part, std::ostream& out) {
+    ByteWriter w;
+    const VoxelModel& h = part.header;
+    w.putArray(kMagic, 4);
+    w.put(kVersion);
+    w.put(h.grid.resolution);
+    w.putArray(&h.grid.origin.x, 3);
+    w.put(h.grid.extent);
+    w.put(h.blockSize);
+    w.put(uint32_t(h.separability));
+    w.put(uint8_t(h.hasColors));
+    w.put(part.firstChunk);
+    w.put(part.chunkCount);
+    w.put(uint64_t(part.blocks.size()));
+    // A block at a time to the stream: a part of a large model is hundreds of MiB, not to be
+    // built whole in memory first.
+    for (const BlockPartial& b : part.blocks) {
+        putBlock(w, b, h.hasColors);
+        out.write(w.bytes().data(), std::streamsize(w.size()));
+        w.bytes().clear();
+    }
+    out.write(w.bytes().data(), std::streamsize(w.size()));
+}
+
+PartialVoxelization readPartialVoxelization(const std::filesystem::path& path) {
+    // Mapped, not read into a buffer: a part is hundreds of MiB, and a buffer costs its zeroing
+    // and a copy (most of the merge's time, measured on the dragon at 2048^3: 463 MiB of parts).
+    const MappedFile file(path);
+    ByteReader r(file.bytes(), path.string());
+    char magic[4];
+    r.getArray(magic, 4, "magic");
+    if (std::string_view(magic, 4) != std::string_view(kMagic, 4)) r.fail("magic", "not a partial voxelization (CVXP)");
+    if (r.get<uint32_t>("version") != kVersion) r.fail("version", "written by another version");
+    PartialVoxelization part;
+    VoxelModel& h = part.header;
+    h.grid.resolution = r.get<uint32_t>("resolution");
+    r.getArray(&h.grid.origin.x, 3, "origin");
+    h.grid.extent = r.get<double>("extent");
+    h.blockSize = r.get<uint32_t>("block size");
+    const uint32_t separability = r.get<uint32_t>("separability");
+    if (separability != 0 && separability != 6 && separability != 26)
+        r.fail("separability", "unknown value " + std::to_string(separability));
+    h.separability = Separability(separability);
+    h.hasColors = r.get<uint8_t>("colours") != 0;
+    part.firstChunk = r.get<uint64_t>("first chunk");
+    part.chunkCount = r.get<uint64_t>("chunk count");
+    const uint64_t blocks = r.get<uint64_t>("block count");
+    if (blocks > r.remaining() / 28) r.fail("block count", std::to_string(blocks) + " blocks do not fit in the file");
+    part.blocks.reserve(blocks);
+    for (uint64_t i = 0; i < blocks; ++i) part.blocks.push_back(getBlock(r, h.hasColors));
+    if (r.remaining() != 0) r.fail("end", std::to_string(r.remaining()) + " bytes after the last block");
+    return part;
+}
+
+}  // namespace cuberille::voxel
