@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -256,11 +257,18 @@ int finishVoxelizeFromParts(const VoxelizeCommandOptions& o, const std::vector<s
     const double openMs = raster::nowMs() - t0;
     std::vector<voxel::PartialVoxelization> read;
     for (const std::filesystem::path& p : parts) read.push_back(voxel::readPartialVoxelization(p));
-    uint64_t covered = 0;
-    for (const voxel::PartialVoxelization& p : read) covered += p.chunkCount;
-    if (covered != view->chunkCount())
-        throw scene::InputError(o.input.string() + ": the parts hold " + std::to_string(covered) + " of its " +
-                                std::to_string(view->chunkCount()) + " chunks");
+    // The parts must hold every chunk once: their runs, in order, tile [0, chunk count).
+    std::vector<std::pair<uint64_t, uint64_t>> runs;
+    for (const voxel::PartialVoxelization& p : read) runs.push_back({p.firstChunk, p.chunkCount});
+    std::sort(runs.begin(), runs.end());
+    uint64_t next = 0;
+    for (const auto& [first, count] : runs) {
+        if (first != next) break;
+        next = first + count;
+    }
+    if (next != view->chunkCount() || runs.empty() || runs.back().first + runs.back().second != next)
+        throw scene::InputError(o.input.string() + ": the parts do not hold each of its " +
+                                std::to_string(view->chunkCount()) + " chunks once");
     const double m0 = raster::nowMs();
     voxel::VoxelizeStats s;
     voxel::VoxelModel model = voxel::mergePartialVoxelizations(std::move(read), &s);

@@ -15,6 +15,7 @@
 
 #include "lod/lod_pyramid.h"
 #include "voxel/cvox_file.h"
+#include "voxel/partial_voxelization_file.h"
 #include "voxel/geometry_stream.h"
 #include "voxel/mesh_view.h"
 #include "voxel/octree_voxelizer.h"
@@ -204,6 +205,15 @@ int main(int argc, char** argv) {
         const std::string name = "tet" + std::to_string(resolution) + ".cvox";
         if (resolution == 128) put(dir, "fuzz_cvox", name, out.str());
         put(dir, "fuzz_cvox_blocks", name, out.str());
+    }
+    // A partial voxelization of the tetrahedron: its chunks at 16^3 (one block), and at 128^3.
+    for (const int resolution : {16, 128}) {
+        voxel::VoxelizeOptions o;
+        o.resolution = resolution;
+        const auto mesh = tetrahedron();
+        std::ostringstream out;
+        voxel::writePartialVoxelization(voxel::voxelizeChunks(*mesh, o, 0, mesh->chunkCount()), out);
+        put(dir, "fuzz_partial_voxelization", "tet" + std::to_string(resolution) + ".cvxp", out.str());
     }
     fs::remove(fs::temp_directory_path() / "cuberille-seed-tet.obj");
     return 0;

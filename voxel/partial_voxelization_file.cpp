@@ -2,11 +2,14 @@
 
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <string>
 
 #include "voxel/binary_io.h"
+#include "voxel/morton.h"
 
 namespace cuberille::voxel {
 namespace {
@@ -32,13 +35,23 @@ void putBlock(ByteWriter& w, const BlockPartial& b, bool withColors) {
     w.putArray(b.triangles.data(), b.triangles.size());
 }
 
-BlockPartial getBlock(ByteReader& r, bool withColors) {
+// What the merge relies on is checked here: a block inside the grid, leaves inside the block in
+// ascending order, triangle keys ascending.
+BlockPartial getBlock(ByteReader& r, const VoxelModel& header) {
+    const bool withColors = header.hasColors;
+    const uint32_t blocksPerSide = header.grid.resolution / header.blockSize;
+    const uint32_t leavesPerBlock = header.blockSize * header.blockSize * header.blockSize;
     BlockPartial b;
     r.getArray(&b.coord.x, 3, "block coordinates");
+    if (b.coord.x >= blocksPerSide || b.coord.y >= blocksPerSide || b.coord.z >= blocksPerSide)
+        r.fail("block coordinates", "outside the grid's " + std::to_string(blocksPerSide) + " blocks a side");
     const uint64_t leaves = r.get<uint64_t>("leaf count");
     if (leaves > r.remaining() / 4) r.fail("leaf count", std::to_string(leaves) + " leaves do not fit in the file");
     b.leafMorton.resize(leaves);
     r.getArray(b.leafMorton.data(), leaves, "leaf positions");
+    for (size_t i = 0; i < leaves; ++i)
+        if (b.leafMorton[i] >= leavesPerBlock || (i > 0 && b.leafMorton[i] <= b.leafMorton[i - 1]))
+            r.fail("leaf positions", "leaf " + std::to_string(i) + " outside the block or out of order");
     b.leaves.resize(leaves);
     for (LeafSums& s : b.leaves) {
         r.getArray(s.normal, 3, "leaf normal sums");
@@ -54,6 +67,8 @@ BlockPartial getBlock(ByteReader& r, bool withColors) {
     if (triangles > r.remaining() / 68) r.fail("triangle count", std::to_string(triangles) + " triangles do not fit in the file");
     b.triangleKeys.resize(triangles);
     r.getArray(b.triangleKeys.data(), triangles, "triangle keys");
+    for (size_t i = 1; i < triangles; ++i)
+        if (b.triangleKeys[i] <= b.triangleKeys[i - 1]) r.fail("triangle keys", "out of order at " + std::to_string(i));
     b.triangles.resize(triangles);
     r.getArray(b.triangles.data(), triangles, "source triangles");
     return b;
@@ -123,7 +138,12 @@ PartialVoxelization readPartialVoxelization(const std::filesystem::path& path) {
     h.grid.resolution = r.get<uint32_t>("resolution");
     r.getArray(&h.grid.origin.x, 3, "origin");
     h.grid.extent = r.get<double>("extent");
+    if (!isValidResolution(h.grid.resolution)) r.fail("resolution", std::to_string(h.grid.resolution) + " is not a valid resolution");
+    if (!(h.grid.extent > 0.0) || !std::isfinite(h.grid.extent) || !std::isfinite(h.grid.origin.x) ||
+        !std::isfinite(h.grid.origin.y) || !std::isfinite(h.grid.origin.z))
+        r.fail("grid", "not a finite grid");
     h.blockSize = r.get<uint32_t>("block size");
+    if (h.blockSize != std::min(kBlockSize, h.grid.resolution)) r.fail("block size", "not the resolution's");
     const uint32_t separability = r.get<uint32_t>("separability");
     if (separability != 0 && separability != 6 && separability != 26)
         r.fail("separability", "unknown value " + std::to_string(separability));
@@ -134,7 +154,11 @@ PartialVoxelization readPartialVoxelization(const std::filesystem::path& path) {
     const uint64_t blocks = r.get<uint64_t>("block count");
     if (blocks > r.remaining() / 28) r.fail("block count", std::to_string(blocks) + " blocks do not fit in the file");
     part.blocks.reserve(blocks);
-    for (uint64_t i = 0; i < blocks; ++i) part.blocks.push_back(getBlock(r, h.hasColors));
+    for (uint64_t i = 0; i < blocks; ++i) {
+        part.blocks.push_back(getBlock(r, h));
+        if (i > 0 && mortonOf(part.blocks[i].coord) <= mortonOf(part.blocks[i - 1].coord))
+            r.fail("block coordinates", "block " + std::to_string(i) + " out of order");
+    }
     if (r.remaining() != 0) r.fail("end", std::to_string(r.remaining()) + " bytes after the last block");
     return part;
 }

@@ -14,8 +14,8 @@
 (docs/scale-out.md).
 
 How the work is split, and why the files are the same as the tool's:
-- A command is read by the tool's own parser (cuberille._cuberille.RenderCommand), here and again
-  on each worker, so it takes the same options and refuses bad ones with the same messages.
+- A command is read by the tool's own parser (cuberille._cuberille.RenderCommand, AccuracyCommand,
+  FlyCommand, VoxelizeCommand), here and again on each worker, so it takes the same options and refuses bad ones with the same messages.
 - A sequence (--turntable, --animate) is cut into contiguous runs of frames, one task each. A
   frame's image never depends on the frames before it (render/loaded_scene.h), only the work does:
   a run's first frame builds the hierarchies the later frames of the run refit.
