@@ -13,7 +13,6 @@
 #include <set>
 #include <spawn.h>
 #include <sstream>
-#include <sys/resource.h>
 #include <sys/wait.h>
 
 #include "apps/accuracy_report.h"
@@ -394,13 +393,9 @@ std::vector<std::string> renderArgs(const AccuracyOptions& o, const std::vector<
     return a;
 }
 
-struct ProcessResult {
-    int exitCode = -1;
-    double peakMib = 0;
-};
-
-// Runs argv as a child with stdout and stderr to `log`; its peak resident set from wait4.
-ProcessResult runProcess(const std::vector<std::string>& argv, const fs::path& log) {
+// Runs argv as a child with stdout and stderr to `log`; its exit code. (Not its memory: on Linux
+// wait4's ru_maxrss counts this process's resident set at the spawn too; a run reports its own.)
+int runProcess(const std::vector<std::string>& argv, const fs::path& log) {
     std::vector<char*> cargv;
     for (const std::string& s : argv) cargv.push_back(const_cast<char*>(s.c_str()));
     cargv.push_back(nullptr);
@@ -413,12 +408,8 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const fs::path& l
     posix_spawn_file_actions_destroy(&actions);
     if (spawned != 0) throw std::runtime_error("cannot run " + argv[0] + ": " + std::strerror(spawned));
     int status = 0;
-    rusage usage{};
-    if (wait4(pid, &status, 0, &usage) < 0) throw std::runtime_error("waiting for " + argv[0] + " failed");
-    ProcessResult r;
-    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-    r.peakMib = double(usage.ru_maxrss) / 1024.0;  // KiB on Linux
-    return r;
+    if (waitpid(pid, &status, 0) < 0) throw std::runtime_error("waiting for " + argv[0] + " failed");
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
 }
 
 std::string readText(const fs::path& path) {
@@ -441,15 +432,15 @@ RunOutcome runOnce(const AccuracyOptions& o, const std::vector<std::string>& kno
     const fs::path stats = o.outDir / "logs" / (id + ".json");
     const fs::path log = o.outDir / "logs" / (id + ".log");
     const std::vector<std::string> argv = renderArgs(o, knobs, image, stats, width, height);
-    const ProcessResult p = runProcess(argv, log);
+    const int exitCode = runProcess(argv, log);
     RunOutcome r;
     r.commandLine = joinCommandLine(argv);
-    if (p.exitCode != 0) {
+    if (exitCode != 0) {
         std::string message = readText(log);
         while (!message.empty() && message.back() == '\n') message.pop_back();
-        const std::string what = "accuracy: `" + r.commandLine + "` failed (exit " + std::to_string(p.exitCode) +
+        const std::string what = "accuracy: `" + r.commandLine + "` failed (exit " + std::to_string(exitCode) +
                                  "): " + message;
-        if (p.exitCode == 2) throw scene::InputError(what);
+        if (exitCode == 2) throw scene::InputError(what);
         throw std::runtime_error(what);
     }
     r.stats = nlohmann::json::parse(readText(stats));
@@ -463,8 +454,7 @@ RunOutcome runOnce(const AccuracyOptions& o, const std::vector<std::string>& kno
         r.frameMs += j["shadows"].at("totalMs").get<double>();
         r.setupMs += j["shadows"].at("bvhBuildMs").get<double>() + j["shadows"].value("adjacencyMs", 0.0);
     }
-    // The run's own peak (its VmHWM): wait4's ru_maxrss would count this process's resident set too.
-    r.peakMib = j.contains("process") ? j["process"].at("peakResidentBytes").get<double>() / (1024.0 * 1024.0) : p.peakMib;
+    r.peakMib = j.at("process").at("peakResidentBytes").get<double>() / (1024.0 * 1024.0);  // the run's own VmHWM
     r.image = readImage(image);
     return r;
 }

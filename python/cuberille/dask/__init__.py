@@ -107,12 +107,7 @@ def render(arguments, client, *, frames_per_task=None, progress=None):
     arguments = [os.fspath(a) for a in arguments]
     command = _cuberille.RenderCommand.from_arguments(arguments)
     count = command.frame_count
-    workers = _worker_count(client)
-    runs = _runs_of(count, frames_per_task or _items_per_task(count, workers))
-    threads = _threads_per_worker(client)
-    futures = [client.submit(_render_run, arguments, first, n, threads, pure=False, key=f"cuberille-render-{first}-{_stamp()}")
-               for first, n in runs]
-    results = {r["first"]: r for _, r in _gather(client, futures, count, progress, lambda r: r["count"])}
+    runs, results, workers = _frame_runs(client, _render_run, arguments, count, frames_per_task, progress, "render")
     files = [command.frame_file(i) for i in range(count)]
     _remove_leftovers(files)
     frame_stats = [s for first, _ in runs for s in results[first]["stats"]]
@@ -203,19 +198,14 @@ def fly(arguments, client, *, frames_per_task=None, progress=None):
     arguments = [os.fspath(a) for a in arguments]
     command = _cuberille.FlyCommand.from_arguments(arguments)
     count = command.frames
-    workers = _worker_count(client)
-    runs = _runs_of(count, frames_per_task or _items_per_task(count, workers))
-    threads = _threads_per_worker(client)
-    futures = [client.submit(_fly_run, arguments, first, n, threads, pure=False, key=f"cuberille-fly-{first}-{_stamp()}")
-               for first, n in runs]
-    results = {r["first"]: r["run"] for _, r in _gather(client, futures, count, progress, lambda r: r["count"])}
+    runs, results, workers = _frame_runs(client, _fly_run, arguments, count, frames_per_task, progress, "fly")
     files = []
     if command.out_dir:
         if command.save_every > 0:
             files = [command.frame_file(i) for i in range(0, count, command.save_every)]
         files.append(os.path.join(command.out_dir, "final.png"))
     _remove_leftovers(files)
-    ordered = [results[first] for first, _ in runs]
+    ordered = [results[first]["run"] for first, _ in runs]
     command.finish(ordered)
     _remove_leftovers([f for f in (command.stats, command.plot) if f])
     flown = [json.loads(r) for r in ordered]
@@ -366,6 +356,19 @@ def _cluster_description(client):
 def _runs_of(count, per_task):
     """Frames 0..count-1 as contiguous (first, count) runs of per_task frames."""
     return [(first, min(per_task, count - first)) for first in range(0, count, per_task)]
+
+
+def _frame_runs(client, task, arguments, count, frames_per_task, progress, name):
+    """A sequence's frames 0..count-1 in contiguous runs, one task each: task(arguments, first, n,
+    threads) on a worker, returning {"first": first, "count": n, ...}. The runs, each run's result
+    by its first frame, and the workers."""
+    workers = _worker_count(client)
+    runs = _runs_of(count, frames_per_task or _items_per_task(count, workers))
+    threads = _threads_per_worker(client)
+    futures = [client.submit(task, arguments, first, n, threads, pure=False, key=f"cuberille-{name}-{first}-{_stamp()}")
+               for first, n in runs]
+    results = {r["first"]: r for _, r in _gather(client, futures, count, progress, lambda r: r["count"])}
+    return runs, results, workers
 
 
 def _gather(client, futures, total, progress, done_by=lambda result: 1):
