@@ -43,7 +43,55 @@ struct ShadeQueue {
     float transmitRed[kCapacity], transmitGreen[kCapacity], transmitBlue[kCapacity];
 };
 
+/// The pixels of several small triangles of one tile and draw, shaded as one batch
+/// (SurfaceShader::shadeAcrossTriangles). A triangle of a few pixels would fill a queue of its own
+/// with one to fifteen of them, and then the shade stage's set-up (the per-vertex loads, the
+/// loop's prologue and remainder) costs more than its pixels: in `field` at one sample, shading
+/// such queues was a fifth of the frame, in scalar instructions (perf). GPUs pack the quads of
+/// small primitives into one warp for the same reason. Each pixel carries its triangle's inputs
+/// (copied when it is queued, so the shading loop reads contiguous lanes, not gathers), and
+/// output merge takes the pixels in the order they were queued, so the image is the
+/// per-triangle queues' bit for bit. Only the fused one-light Lambert model (scans, PLY, OBJ,
+/// the built-in scenes) shades from it so far.
+struct CrossTriangleQueue {
+    static constexpr int kCapacity = ShadeQueue::kCapacity;
+    int count = 0;
+    // The pixel's screen-space weight numerators, float(biased edge value - fill bias): the
+    // conversion weightsAt() makes, made at queue time.
+    float edge[3][kCapacity];
+    // Its triangle's: 1 / doubled area (as float), 1 / w per vertex, and +1 or -1 for facing.
+    float invArea[kCapacity], invW[3][kCapacity], facing[kCapacity];
+    float normal[3][3][kCapacity];  // [vertex][component]
+    float color[3][3][kCapacity];   // [vertex][component]: vertex colours or the draw's constant
+    uint32_t firstSample[kCapacity];  // index of the pixel's first sample in the tile
+    uint32_t passMask[kCapacity];     // samples that passed the depth test
+    float red[kCapacity], green[kCapacity], blue[kCapacity];  // the result
+};
+
+/// What a triangle contributes to each of its pixels in a CrossTriangleQueue.
+struct CrossTriangleInputs {
+    int64_t fillBias[3];
+    float invArea, invW[3], facing;
+    float normal[3][3], color[3][3];  // [vertex][component]
+};
+
+/// Appends pixel `first` with its biased centre edge values; the queue must have room.
+inline void queueAcrossTriangles(CrossTriangleQueue& q, const CrossTriangleInputs& in, const int64_t centreEdges[3],
+                                 uint32_t first, uint32_t pass) {
+    const int i = q.count++;
+    for (int k = 0; k < 3; ++k) {
+        q.edge[k][i] = float(centreEdges[k] - in.fillBias[k]);
+        q.invW[k][i] = in.invW[k];
+        for (int c = 0; c < 3; ++c) q.normal[k][c][i] = in.normal[k][c], q.color[k][c][i] = in.color[k][c];
+    }
+    q.invArea[i] = in.invArea;
+    q.facing[i] = in.facing;
+    q.firstSample[i] = first;
+    q.passMask[i] = pass;
+}
+
 struct ConstantColorShader {
+    static constexpr bool kShadesAcrossTriangles = false;
     void shade(const TriangleSetup& t, const float*, ShadeQueue& q, StageCounters&) const {
         for (int i = 0; i < q.count; ++i) {
             q.red[i] = t.flatColor.r;
@@ -77,6 +125,9 @@ class SurfaceShader {
 public:
     static_assert(kModel != ShadingModel::ConstantColor);
     static constexpr bool kLit = kModel != ShadingModel::Unlit;
+    /// Whether the model has a CrossTriangleQueue path at all (shadesAcrossTriangles says
+    /// whether this draw takes it).
+    static constexpr bool kShadesAcrossTriangles = kModel == ShadingModel::Lambert;
 
     SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
@@ -181,10 +232,15 @@ private:
         float w0, w1, w2;
     };
     [[gnu::always_inline]] static Weights weightsAt(const TriangleSetup& t, const ShadeQueue& q, int i) {
-        const float invArea = float(t.invDoubleArea);
-        const float q0 = std::max(0.0f, float(q.edge0[i] - t.fillBias[0]) * invArea) * t.invW[0];
-        const float q1 = std::max(0.0f, float(q.edge1[i] - t.fillBias[1]) * invArea) * t.invW[1];
-        const float q2 = std::max(0.0f, float(q.edge2[i] - t.fillBias[2]) * invArea) * t.invW[2];
+        return weightsOf(float(q.edge0[i] - t.fillBias[0]), float(q.edge1[i] - t.fillBias[1]), float(q.edge2[i] - t.fillBias[2]),
+                         float(t.invDoubleArea), t.invW[0], t.invW[1], t.invW[2]);
+    }
+    /// The weights from the screen-space numerators e_k (edge value less fill bias, as float).
+    [[gnu::always_inline]] static Weights weightsOf(float e0, float e1, float e2, float invArea, float invW0, float invW1,
+                                                    float invW2) {
+        const float q0 = std::max(0.0f, e0 * invArea) * invW0;
+        const float q1 = std::max(0.0f, e1 * invArea) * invW1;
+        const float q2 = std::max(0.0f, e2 * invArea) * invW2;
         const float norm = 1.0f / (q0 + q1 + q2);
         return {q0 * norm, q1 * norm, q2 * norm};
     }
@@ -363,31 +419,82 @@ private:
     // the result agrees with them up to rounding.
     void lambertOneDirectionalLight(const TriangleSetup& t, const float* v, ShadeQueue& q,
                                     StageCounters& counters) const {
-        const int n = layout_.count, on = layout_.normal, oc = layout_.color;
-        const Light& light = s_.lighting.lights[0];
-        const glm::vec3 l = -light.direction * (t.backFacing ? -1.0f : 1.0f), e = light.intensity;
-        const glm::vec3 amb = s_.lighting.ambient;
-        const float alpha = s_.constantColor.a;
         // Per-vertex values in locals: the queue's stores could alias `v` as far as the
         // compiler knows, and would force a reload of all 18 every pixel.
-        float normal[3][3], color[3][3];  // [vertex][component]; a constant colour in all three
-        for (int k = 0; k < 3; ++k)
-            for (int c = 0; c < 3; ++c)
-                normal[k][c] = v[k * n + on + c], color[k][c] = oc >= 0 ? v[k * n + oc + c] : s_.constantColor[c];
+        CrossTriangleInputs in;
+        triangleInputs(t, v, in);
+        const FusedLambertLight light = fusedLambertLight();
         for (int i = 0; i < q.count; ++i) {
             const Weights w = weightsAt(t, q, i);
-            auto lerp = [&](const float(&x)[3][3], int c) { return w.w0 * x[0][c] + w.w1 * x[1][c] + w.w2 * x[2][c]; };
-            const float nx = lerp(normal, 0), ny = lerp(normal, 1), nz = lerp(normal, 2);
-            const float len2 = nx * nx + ny * ny + nz * nz;
-            const float nDotL = nx * l.x + ny * l.y + nz * l.z;
-            const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
-            q.red[i] = lerp(color, 0) * (amb.x + e.x * cosine);
-            q.green[i] = lerp(color, 1) * (amb.y + e.y * cosine);
-            q.blue[i] = lerp(color, 2) * (amb.z + e.z * cosine);
-            q.alpha[i] = alpha;
+            const glm::vec3 c = fusedLambertAt(w, in.normal, in.color, in.facing, light);
+            q.red[i] = c.r, q.green[i] = c.g, q.blue[i] = c.b;
+            q.alpha[i] = light.alpha;
         }
         counters.varyingsInterpolated += uint64_t(q.count) * layout_.count;
         counters.lightEvaluations += uint64_t(q.count);
+    }
+
+public:
+    /// Whether this draw's small triangles may share a CrossTriangleQueue: the fused Lambert
+    /// model, whose per-triangle inputs are CrossTriangleInputs.
+    bool shadesAcrossTriangles() const { return fusedLambert_; }
+
+    /// A triangle's inputs to the fused Lambert model (shadesAcrossTriangles draws).
+    void triangleInputs(const TriangleSetup& t, const float* v, CrossTriangleInputs& in) const {
+        const int n = layout_.count, on = layout_.normal, oc = layout_.color;
+        for (int k = 0; k < 3; ++k) {
+            in.fillBias[k] = t.fillBias[k];
+            in.invW[k] = t.invW[k];
+            for (int c = 0; c < 3; ++c)
+                in.normal[k][c] = v[k * n + on + c], in.color[k][c] = oc >= 0 ? v[k * n + oc + c] : s_.constantColor[c];
+        }
+        in.invArea = float(t.invDoubleArea);
+        in.facing = t.backFacing ? -1.0f : 1.0f;
+    }
+
+    /// The fused Lambert model over a CrossTriangleQueue: the loop of lambertOneDirectionalLight
+    /// with each pixel's triangle inputs read from its lanes, so the same bits per pixel.
+    void shadeAcrossTriangles(CrossTriangleQueue& q, StageCounters& counters) const {
+        const FusedLambertLight light = fusedLambertLight();
+        for (int i = 0; i < q.count; ++i) {
+            const Weights w = weightsOf(q.edge[0][i], q.edge[1][i], q.edge[2][i], q.invArea[i], q.invW[0][i], q.invW[1][i],
+                                        q.invW[2][i]);
+            float normal[3][3], color[3][3];
+            for (int k = 0; k < 3; ++k)
+                for (int c = 0; c < 3; ++c) normal[k][c] = q.normal[k][c][i], color[k][c] = q.color[k][c][i];
+            const glm::vec3 c = fusedLambertAt(w, normal, color, q.facing[i], light);
+            q.red[i] = c.r, q.green[i] = c.g, q.blue[i] = c.b;
+        }
+        counters.varyingsInterpolated += uint64_t(q.count) * layout_.count;
+        counters.lightEvaluations += uint64_t(q.count);
+    }
+
+    /// The alpha every pixel of a fused Lambert draw shades to.
+    float fusedLambertAlpha() const { return s_.constantColor.a; }
+
+private:
+    struct FusedLambertLight {
+        glm::vec3 direction, intensity, ambient;  // direction: towards the light
+        float alpha;
+    };
+    FusedLambertLight fusedLambertLight() const {
+        const Light& light = s_.lighting.lights[0];
+        return {-light.direction, light.intensity, s_.lighting.ambient, s_.constantColor.a};
+    }
+
+    /// One pixel of the fused Lambert model: the normal and colour interpolated, n.l with the
+    /// normal reversed on back faces (facing -1), normalised by the normal's length.
+    [[gnu::always_inline]] static glm::vec3 fusedLambertAt(const Weights& w, const float (&normal)[3][3],
+                                                           const float (&color)[3][3], float facing,
+                                                           const FusedLambertLight& light) {
+        const glm::vec3 l = light.direction * facing, e = light.intensity, amb = light.ambient;
+        auto lerp = [&](const float(&x)[3][3], int c) { return w.w0 * x[0][c] + w.w1 * x[1][c] + w.w2 * x[2][c]; };
+        const float nx = lerp(normal, 0), ny = lerp(normal, 1), nz = lerp(normal, 2);
+        const float len2 = nx * nx + ny * ny + nz * nz;
+        const float nDotL = nx * l.x + ny * l.y + nz * l.z;
+        const float cosine = len2 > 0.0f ? std::max(0.0f, nDotL) / std::sqrt(len2) : 0.0f;
+        return {lerp(color, 0) * (amb.x + e.x * cosine), lerp(color, 1) * (amb.y + e.y * cosine),
+                lerp(color, 2) * (amb.z + e.z * cosine)};
     }
 
     void lambert(const ShadeQueue& q, PixelAttributes& a, const float* occlusion, StageCounters& counters) const {
