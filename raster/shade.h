@@ -46,12 +46,12 @@ struct ShadeQueue {
 /// The pixels of several small triangles of one tile and draw, shaded as one batch
 /// (SurfaceShader::shadeAcrossTriangles). A triangle of a few pixels would fill a queue of its own
 /// with one to fifteen of them, and then the shade stage's set-up (the per-vertex loads, the
-/// loop's prologue and remainder) costs more than its pixels: in `field` at one sample, shading
-/// such queues was a fifth of the frame, in scalar instructions (perf). GPUs pack the quads of
-/// small primitives into one warp for the same reason. Each pixel carries its triangle's inputs
-/// (copied when it is queued, so the shading loop reads contiguous lanes, not gathers), and
-/// output merge takes the pixels in the order they were queued, so the image is the
-/// per-triangle queues' bit for bit. Only the fused one-light Lambert model (scans, PLY, OBJ,
+/// loop's prologue and remainder) costs more than its pixels (in `field` at one sample such
+/// queues ran in scalar instructions; shared, the back end runs 15% fewer: docs/performance.md).
+/// GPUs pack the quads of small primitives into one warp for the same reason. Each pixel
+/// carries its triangle's inputs (copied when it is queued, so the shading loop reads contiguous
+/// lanes, not gathers), and output merge takes the pixels in the order they were queued, so the
+/// image is the per-triangle queues' bit for bit. Only the fused one-light Lambert model (scans, PLY, OBJ,
 /// the built-in scenes) shades from it so far.
 struct CrossTriangleQueue {
     static constexpr int kCapacity = ShadeQueue::kCapacity;
