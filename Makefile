@@ -56,15 +56,24 @@ pipeline-docs: build
 TSAN_TESTS := ^(Determinism\..*|.*\.SameVoxelsForAnyThreadCount|Simplify\.SerialAndParallelGiveIdenticalPyramids|VoxelDeterminism\..*|BlockLoader\..*|BlockPool\..*|Streaming\..*|LazyRefit\..*|BvhBuild\.SameTreeForAnyThreadCount|BvhRefit\.SameBoxesAndDegradationForAnyThreadCount|Shadows\.SameMasksForAnyThreadCount)$$
 sanitize: asan tsan
 
+# The suites' environment under ASan (clang's and GCC's): clang 14's and GCC 12's runtimes take a
+# dynamic TLS block whose address happens to lie one header's size into a page for glibc 2.19's
+# layout and read a bogus range from before it, so the leak check at exit crashes ("Tracer caught
+# signal 11") by the luck of malloc's layout, after a test has passed (google/sanitizers#1322;
+# seen when a test process had loaded the OpenImageIO module's libraries). Not intercepting
+# __tls_get_addr stops it. Its cost: dynamic TLS is no longer scanned for pointers, which can
+# only add leak reports (a block held from there alone), never hide one.
+ASAN_ENV := ASAN_OPTIONS=intercept_tls_get_addr=0$${ASAN_OPTIONS:+:$$ASAN_OPTIONS}
+
 asan: setup
 	@cmake --preset fuzz >/dev/null
 	@cmake --build --preset fuzz -j $(JOBS) --target cuberille cuberille_tests cuberille_golden_tests
-	@ctest --test-dir build/fuzz -j $(JOBS) --output-on-failure
+	@$(ASAN_ENV) ctest --test-dir build/fuzz -j $(JOBS) --output-on-failure
 
 asan-gcc: setup
 	@cmake --preset asan >/dev/null
 	@cmake --build --preset asan -j $(JOBS) --target cuberille cuberille_tests cuberille_golden_tests
-	@ctest --preset asan -j $(JOBS)
+	@$(ASAN_ENV) ctest --preset asan -j $(JOBS)
 
 tsan: setup
 	@cmake --preset tsan >/dev/null

@@ -969,16 +969,12 @@ TEST_F(Cli, StripAndFaceListPlyFilesGiveTheSameImageAndTheSameVoxels) {
     const cuberille::testing::PlyGrid grid;
     auto renderAndVoxelize = [&](const std::string& name, PlyConnectivity kind, bool binary) {
         const fs::path ply = write(name + ".ply", grid.ply(kind, binary));
-        // A 16-bit PNG compared byte for byte (its writer's bytes depend on the image alone): the
-        // test process then loads no OpenImageIO module, whose libraries' dynamic TLS made clang
-        // 14's LeakSanitizer crash at exit in the sanitizer suite ("Tracer caught signal 11" on a
-        // DTLS range it misread), whatever the test found.
-        const fs::path image = dir_ / (name + ".png"), voxels = dir_ / (name + ".cvox");
-        CommandRun r = run("render " + ply.string() + " --width 64 --height 48 --msaa 4 --png-bits 16 --out " + image.string());
+        const fs::path image = dir_ / (name + ".exr"), voxels = dir_ / (name + ".cvox");
+        CommandRun r = run("render " + ply.string() + " --width 64 --height 48 --msaa 4 --out " + image.string());
         EXPECT_EQ(r.exitCode, 0) << r.output;
         r = run("voxelize " + ply.string() + " --resolution 32 -o " + voxels.string());
         EXPECT_EQ(r.exitCode, 0) << r.output;
-        return std::make_pair(fileBytes(image), fileBytes(voxels));
+        return std::make_pair(cuberille::apps::readImage(image), fileBytes(voxels));
     };
     for (bool binary : {false, true}) {  // ASCII positions are rounded to 6 decimals: compare like with like
         const auto faces = renderAndVoxelize(binary ? "facesb" : "facesa", PlyConnectivity::FaceList, binary);
@@ -987,8 +983,7 @@ TEST_F(Cli, StripAndFaceListPlyFilesGiveTheSameImageAndTheSameVoxels) {
                                      PlyConnectivity::StitchedStrip}) {
             const std::string name = "strips" + std::to_string(int(kind)) + (binary ? "b" : "a");
             const auto strips = renderAndVoxelize(name, kind, binary);
-            ASSERT_FALSE(strips.first.empty()) << name;
-            EXPECT_TRUE(strips.first == faces.first) << name << ": the images differ";
+            EXPECT_TRUE(strips.first.rgba == faces.first.rgba) << name << ": the images differ";
             EXPECT_TRUE(strips.second == faces.second) << name << ": the voxel files differ";
         }
     }
