@@ -51,8 +51,8 @@ struct ShadeQueue {
 /// GPUs pack the quads of small primitives into one warp for the same reason. Each pixel
 /// carries its triangle's inputs (copied when it is queued, so the shading loop reads contiguous
 /// lanes, not gathers), and output merge takes the pixels in the order they were queued, so the
-/// image is the per-triangle queues' bit for bit. Only the fused one-light Lambert model (scans, PLY, OBJ,
-/// the built-in scenes) shades from it so far.
+/// image is the per-triangle queues' bit for bit. Only the fused one-light Lambert model (scans,
+/// PLY, OBJ, the built-in scenes) shades from it so far.
 struct CrossTriangleQueue {
     static constexpr int kCapacity = ShadeQueue::kCapacity;
     int count = 0;
@@ -424,11 +424,12 @@ private:
         CrossTriangleInputs in;
         triangleInputs(t, v, in);
         const FusedLambertLight light = fusedLambertLight();
+        const float alpha = fusedLambertAlpha();
         for (int i = 0; i < q.count; ++i) {
             const Weights w = weightsAt(t, q, i);
             const glm::vec3 c = fusedLambertAt(w, in.normal, in.color, in.facing, light);
             q.red[i] = c.r, q.green[i] = c.g, q.blue[i] = c.b;
-            q.alpha[i] = light.alpha;
+            q.alpha[i] = alpha;
         }
         counters.varyingsInterpolated += uint64_t(q.count) * layout_.count;
         counters.lightEvaluations += uint64_t(q.count);
@@ -475,11 +476,10 @@ public:
 private:
     struct FusedLambertLight {
         glm::vec3 direction, intensity, ambient;  // direction: towards the light
-        float alpha;
     };
     FusedLambertLight fusedLambertLight() const {
         const Light& light = s_.lighting.lights[0];
-        return {-light.direction, light.intensity, s_.lighting.ambient, s_.constantColor.a};
+        return {-light.direction, light.intensity, s_.lighting.ambient};
     }
 
     /// One pixel of the fused Lambert model: the normal and colour interpolated, n.l with the
