@@ -157,7 +157,7 @@ std::string flyCsv(const FlyResult& r) {
     csv << "frame,settling,frame_ms,traversal_ms,io_wait_ms,upload_ms,raster_ms,requested_bytes,loaded_bytes,"
            "uploaded_bytes,revived_bytes,dropped_bytes,staged_bytes,resident_voxel_bytes,resident_vertex_bytes,"
            "resident_index_bytes,free_list_bytes,defragmentations,failed_blocks,requests,missing_blocks,stand_ins,"
-           "holes,triangle_blocks,occlusion_culled,faces,faces_between_samples,covered_pixels,faces_per_covered_pixel,"
+           "holes,triangle_blocks,occlusion_culled,faces,faces_between_samples,faces_behind_depth,covered_pixels,faces_per_covered_pixel,"
            "process_resident_bytes";
     for (size_t l = 0; l < levels; ++l) csv << ",drawn_level_" << l;
     csv << "\n";
@@ -173,7 +173,8 @@ std::string flyCsv(const FlyResult& r) {
             << s.freeListBytes[0] + s.freeListBytes[1] + s.freeListBytes[2] << ',' << s.defragmentations << ','
             << s.failedBlocks << ',' << s.requests << ',' << f.voxel.missingBlocks << ',' << f.voxel.standIns << ','
             << f.voxel.holes << ',' << f.voxel.triangleBlocksDrawn << ',' << f.voxel.occlusionCulled << ','
-            << f.voxel.facesEmitted << ',' << f.voxel.facesBetweenSamples << ',' << f.voxel.coveredPixels << ',' << fixed3(f.voxel.facesPerCoveredPixel()) << ','
+            << f.voxel.facesEmitted << ',' << f.voxel.facesBetweenSamples << ',' << f.voxel.facesBehindDepth << ','
+            << f.voxel.coveredPixels << ',' << fixed3(f.voxel.facesPerCoveredPixel()) << ','
             << (i < r.residentBytes.size() ? r.residentBytes[i] : 0);
         for (size_t l = 0; l < levels; ++l)
             csv << ',' << (l < f.voxel.selection.drawnPerLevel.size() ? f.voxel.selection.drawnPerLevel[l] : 0);
@@ -235,7 +236,7 @@ nlohmann::json frameJson(const lod::FlightFrame& f) {
             {"voxel",
              {v.voxelBlocksDrawn, v.triangleBlocksDrawn, v.occlusionCulled, v.visibilityTests, v.voxelsExpanded,
               v.facesEmitted, v.hybridTriangles, v.facesBetweenSamples, v.missingBlocks, v.standIns, v.holes,
-              v.coveredPixels}},
+              v.coveredPixels, v.facesBehindDepth}},
             {"voxelMs", {v.selectMs, v.expandMs}}};
 }
 
@@ -260,7 +261,7 @@ lod::FlightFrame frameFromJson(const nlohmann::json& j) {
     v.voxelBlocksDrawn = vx.at(0), v.triangleBlocksDrawn = vx.at(1), v.occlusionCulled = vx.at(2);
     v.visibilityTests = vx.at(3), v.voxelsExpanded = vx.at(4), v.facesEmitted = vx.at(5), v.hybridTriangles = vx.at(6);
     v.facesBetweenSamples = vx.at(7), v.missingBlocks = vx.at(8), v.standIns = vx.at(9), v.holes = vx.at(10);
-    v.coveredPixels = vx.at(11);
+    v.coveredPixels = vx.at(11), v.facesBehindDepth = vx.at(12);
     v.selectMs = j.at("voxelMs").at(0), v.expandMs = j.at("voxelMs").at(1);
     return f;
 }
@@ -345,7 +346,7 @@ CLI::App* addFlyCommand(CLI::App& app, FlyOptions& o) {
     fly->add_option("--pixel-error", o.pixelError, "Refine blocks until a voxel's edge projects to at most this many pixels")
         ->capture_default_str();
     fly->add_flag("--no-hybrid", o.noHybrid, "Never draw source triangles");
-    fly->add_flag("--no-occlusion", o.noOcclusion, "No occlusion culling");
+    fly->add_flag("--no-occlusion", o.noOcclusion, "No occlusion culling (of blocks hidden last frame, or of voxels behind what the frame drew)");
     fly->add_option("--settle-frames", o.settleFrames,
                     "After the path, render its last view until loading settles, at most this many frames (0: stop)")
         ->capture_default_str();

@@ -103,7 +103,7 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
         ->capture_default_str();
     render->add_flag("--no-hybrid", o.noHybrid,
                      "Voxel models: never draw source triangles where even the finest voxels are too coarse");
-    render->add_flag("--no-occlusion", o.noOcclusion, "Voxel models: no occlusion culling");
+    render->add_flag("--no-occlusion", o.noOcclusion, "Voxel models: no occlusion culling (of blocks hidden last frame, or of voxels behind what the frame drew)");
     render->add_flag("--debug-camera", o.debugCamera,
                      "Voxel models: draw what the camera's frame selected as seen from its side, farther and above");
     render->add_option("--warmup", o.warmup,

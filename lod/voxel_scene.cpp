@@ -14,6 +14,17 @@
 namespace cuberille::lod {
 namespace {
 
+/// The hierarchical-Z bounds of the frame so far, copied for the expansion's threads to read.
+void readDepthFootprint(const raster::Framebuffer& fb, voxel::DepthFootprint& out) {
+    out.blockSizePixels = raster::kBlockSizePixels;
+    out.blocksX = fb.blocksX(), out.blocksY = fb.blocksY();
+    out.keySign = raster::depthKeySign(fb.desc().depthConvention);
+    out.farthestKey.resize(size_t(out.blocksX) * size_t(out.blocksY));
+    for (int by = 0; by < out.blocksY; ++by)
+        for (int bx = 0; bx < out.blocksX; ++bx)
+            out.farthestKey[size_t(by) * size_t(out.blocksX) + size_t(bx)] = fb.farthestDepthKeyOfBlock(bx, by);
+}
+
 /// The frame's sample positions for voxel::SampleFootprint, in pixels from the pixel's top-left
 /// corner (raster/sample_pattern.h gives them in 1/16 pixel from its centre).
 voxel::SampleFootprint sampleFootprint(const glm::dmat4& clipFromWorld, const raster::FramebufferDesc& frame) {
@@ -206,10 +217,13 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     // image (raster/pipeline.h).
     std::optional<voxel::SampleFootprint> footprint;
     if (o.leaveOutFacesBetweenSamples) footprint = sampleFootprint(glm::dmat4(clipFromWorld), pipeline.framebuffer().desc());
+    // Blocks go front to back, so each chunk is tested against the depths of those before it.
+    const bool testDepth = footprint && o.leaveOutVoxelsBehindDepth;
+    bool haveDepth = false;
     for (size_t first = 0, count = 0; first < expand.size(); first += count) {
         size_t chunkVoxels = 0;
         for (count = 0; first + count < expand.size() && count < kBlocksPerExpansionChunk &&
-                        (count == 0 || chunkVoxels < kVoxelsPerExpansionChunk);
+                        (count == 0 || chunkVoxels < o.voxelsPerExpansionChunk);
              ++count)
             chunkVoxels += source.voxels(expand[first + count].block).voxels.size();
         if (faces_.size() < count) faces_.resize(count);
@@ -226,7 +240,8 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
             faces_[i].clear();
             voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[i],
                                     o.coloring == BlockColoring::Model ? modelColor : &tint,
-                                    d.standIn ? &d.region : nullptr, footprint ? &*footprint : nullptr);
+                                    d.standIn ? &d.region : nullptr, footprint ? &*footprint : nullptr,
+                                    haveDepth ? &depthFootprint_ : nullptr);
         });
         stats.expandMs += raster::nowMs() - t0;
         for (size_t i = 0; i < count; ++i) {
@@ -239,9 +254,16 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
             stats.voxelsExpanded += f.voxels;
             stats.facesEmitted += f.faces;
             stats.facesBetweenSamples += f.facesBetweenSamples;
+            stats.facesBehindDepth += f.facesBehindDepth;
             ++(roles[k] == kTest ? stats.visibilityTests : stats.voxelBlocksDrawn);
         }
-        pipeline.flush();
+        if (testDepth && first + count < expand.size()) {
+            pipeline.flushAndTightenHierarchicalDepth();
+            readDepthFootprint(pipeline.framebuffer(), depthFootprint_);
+            haveDepth = true;
+        } else {
+            pipeline.flush();
+        }
         releaseExcessFaceScratch();
     }
 

@@ -1,6 +1,7 @@
 #include "raster/framebuffer.h"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace cuberille::raster {
@@ -58,6 +59,33 @@ void Framebuffer::touchTile(int tile) {
     if (hasColor()) std::fill_n(tileColor(tile), samplesPerTile(), desc_.clearColor);
     std::fill_n(tileDepth(tile), samplesPerTile(), clearDepthKey(desc_));
     std::fill_n(tileBlockMaxDepth(tile), kBlocksPerTile, clearDepthKey(desc_));
+}
+
+void Framebuffer::tightenHierarchicalDepth(int tile) {
+    if (!tileTouched_[tile]) return;
+    const int originX = (tile % tilesX_) * kTileSizePixels, originY = (tile / tilesX_) * kTileSizePixels;
+    const int width = std::min(kTileSizePixels, desc_.widthPixels - originX);
+    const int height = std::min(kTileSizePixels, desc_.heightPixels - originY);
+    const int samples = desc_.samples;
+    const float* depth = tileDepth(tile);
+    float* bound = tileBlockMaxDepth(tile);
+    for (int by = 0; by * kBlockSizePixels < height; ++by)
+        for (int bx = 0; bx * kBlockSizePixels < width; ++bx) {
+            const int x0 = bx * kBlockSizePixels, x1 = std::min(x0 + kBlockSizePixels, width);
+            const int y1 = std::min((by + 1) * kBlockSizePixels, height);
+            float farthest = -std::numeric_limits<float>::infinity();
+            for (int y = by * kBlockSizePixels; y < y1; ++y) {
+                const float* row = depth + (size_t(y) * kTileSizePixels + size_t(x0)) * size_t(samples);
+                for (int i = 0; i < (x1 - x0) * samples; ++i) farthest = std::max(farthest, row[i]);
+            }
+            bound[by * kBlocksPerTileSide + bx] = farthest;
+        }
+}
+
+float Framebuffer::farthestDepthKeyOfBlock(int blockX, int blockY) const {
+    const int tile = (blockY / kBlocksPerTileSide) * tilesX_ + blockX / kBlocksPerTileSide;
+    if (!tileTouched_[tile]) return clearDepthKey(desc_);
+    return tileBlockMaxDepth(tile)[(blockY % kBlocksPerTileSide) * kBlocksPerTileSide + blockX % kBlocksPerTileSide];
 }
 
 }  // namespace cuberille::raster

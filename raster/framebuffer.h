@@ -80,6 +80,19 @@ public:
     /// every stored sample depth in the block. Never below the true maximum, so a triangle whose
     /// depth over a block is not less than it cannot pass a LESS test anywhere in the block.
     float* tileBlockMaxDepth(int tile) { return blockMaxDepth_.get() + size_t(tile) * kBlocksPerTile; }
+    const float* tileBlockMaxDepth(int tile) const { return blockMaxDepth_.get() + size_t(tile) * kBlocksPerTile; }
+
+    /// Sets each 8x8 block's hierarchical Z in a touched tile to the largest key its samples
+    /// inside the image hold: the tightest bound there is. The back end lowers a block's bound
+    /// only when one triangle replaced every sample of it, so after many small triangles (a scan,
+    /// sub-pixel voxel faces) the bound stays at the clear depth; the exact maximum lets later
+    /// draws' hidden blocks be rejected, and can be read to cull geometry before it is drawn
+    /// (farthestDepthKeyOfBlock). Samples outside the image are never tested, so they are left out
+    /// of the maximum. Touches nothing else: the image does not change.
+    void tightenHierarchicalDepth(int tile);
+    /// The hierarchical-Z bound of block (blockX, blockY) of the image: no sample of the block
+    /// holds a key above it. A block of a tile nothing drew into holds the clear key.
+    float farthestDepthKeyOfBlock(int blockX, int blockY) const;
 
     bool tileTouched(int tile) const { return tileTouched_[tile] != 0; }
     /// Clears the tile's samples on first use; called by the one task that owns the tile.

@@ -277,6 +277,13 @@ void Pipeline::flush() {
     recycleFinishedVertexOutputs();
 }
 
+void Pipeline::flushAndTightenHierarchicalDepth() {
+    flush();
+    const double t0 = nowMs();
+    parallelFor(size_t(framebuffer_.tileCount()), [&](size_t tile) { framebuffer_.tightenHierarchicalDepth(int(tile)); });
+    stats_.times.backEndMs += nowMs() - t0;
+}
+
 // After a flush every shaded draw is finished but the one draw() may still be queueing: their
 // vertex storage goes to the spares (its capacity kept), so a frame of a million small draws
 // holds the vertices of one flush, not of the frame.

@@ -39,6 +39,12 @@ public:
     /// Runs every recorded draw through the pipeline now; then the caller may reuse their arrays
     /// (a producer of geometry, such as voxel-face expansion, draws through bounded scratch).
     void flush();
+    /// Runs what is recorded (flush()), then sets every touched tile's hierarchical Z to the exact
+    /// maximum of its stored depths (Framebuffer::tightenHierarchicalDepth), in parallel over
+    /// tiles. The image does not change; later draws' hidden 8x8 blocks are rejected sooner, and
+    /// a producer of geometry can read the bounds (Framebuffer::farthestDepthKeyOfBlock) to leave
+    /// out what lies behind them before it becomes triangles.
+    void flushAndTightenHierarchicalDepth();
     void endFrame();
 
     const Framebuffer& framebuffer() const { return framebuffer_; }

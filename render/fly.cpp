@@ -75,7 +75,7 @@ FlyResult fly(const FlySettings& o, const FlightFrameSink& onFrame, const scene:
     lod::VoxelRenderOptions ro;
     ro.selection.pixelError = o.pixelError;
     ro.selection.hybrid = !o.noHybrid;
-    ro.occlusion = !o.noOcclusion;
+    ro.occlusion = ro.leaveOutVoxelsBehindDepth = !o.noOcclusion;
     ro.refine = o.refine == "partial" ? lod::Refinement::Partial : lod::Refinement::Full;
     raster::FramebufferDesc fb;
     fb.widthPixels = o.width, fb.heightPixels = o.height, fb.samples = o.msaa, fb.clearColor = scene.background;

@@ -351,7 +351,7 @@ void renderVoxelModel(State& st, const FrameSettings& o, RenderResult& result) {
     vo.coloring = o.view == View::Lod          ? lod::BlockColoring::Level
                   : o.view == View::Visibility ? lod::BlockColoring::Visibility
                                                : lod::BlockColoring::Model;
-    vo.occlusion = !o.noOcclusion;
+    vo.occlusion = vo.leaveOutVoxelsBehindDepth = !o.noOcclusion;
     // Occlusion culling learns from the frame before: the warm-up frames give it that history
     // (the image is the same with or without it; only the work differs).
     const auto submit = [&](raster::Pipeline& p) { result.voxel = s.draw(p, o.width, o.height, vo); };
@@ -452,6 +452,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                       {"voxelsExpanded", v.voxelsExpanded},
                       {"facesEmitted", v.facesEmitted},
                       {"facesBetweenSamples", v.facesBetweenSamples},
+                      {"facesBehindDepth", v.facesBehindDepth},
                       {"coveredPixels", v.coveredPixels},
                       {"facesPerCoveredPixel", v.facesPerCoveredPixel()},
                       {"selectMs", v.selectMs},

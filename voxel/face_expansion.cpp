@@ -101,7 +101,8 @@ bool quadHoldsSample(const glm::dvec2 (&q)[4], const glm::dvec2& lo, const glm::
 /// grid position, so a voxel's eight corners cost one matrix product and seven additions.
 class FaceFootprints {
 public:
-    FaceFootprints(const SampleFootprint& f, const VoxelBoxes& boxes) : f_(f) {
+    FaceFootprints(const SampleFootprint& f, const VoxelBoxes& boxes, const DepthFootprint* depth)
+        : f_(f), depth_(depth), boxes_(boxes) {
         origin_ = f.clipFromModel * glm::dvec4(boxes.blockOrigin, 1.0);
         for (int axis = 0; axis < 3; ++axis) step_[axis] = f.clipFromModel[axis] * boxes.voxelSize;
         halfWidth_ = 0.5 * f.widthPixels, halfHeight_ = 0.5 * f.heightPixels;
@@ -126,12 +127,15 @@ public:
     }
 
     /// The faces of `faces` (of the voxel at `p` in the block) that may cover a sample: none when
-    /// the voxel's whole box holds no sample, else each face by its own quad.
-    uint8_t mayCoverSamples(const glm::uvec3& p, uint8_t faces) const {
+    /// the voxel's whole box holds no sample or lies behind the depth footprint (then `behind`),
+    /// else each face by its own quad.
+    uint8_t mayCoverSamples(const glm::uvec3& p, uint8_t faces, bool& behind) const {
+        behind = false;
         if (!mayCoverAnySample(p)) return 0;
         glm::dvec2 window[8];  // corner k at p + (k & 1, k >> 1 & 1, k >> 2 & 1)
         const glm::dvec4 base = origin_ + step_[0] * double(p.x) + step_[1] * double(p.y) + step_[2] * double(p.z);
         glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+        double nearestZ = std::numeric_limits<double>::infinity(), farthestZ = -nearestZ, nearestW = nearestZ;
         for (int k = 0; k < 8; ++k) {
             glm::dvec4 clip = base;
             if (k & 1) clip += step_[0];
@@ -141,8 +145,14 @@ public:
             const double invW = 1.0 / clip.w;
             window[k] = {(clip.x * invW + 1.0) * halfWidth_, (1.0 - clip.y * invW) * halfHeight_};
             lo = glm::min(lo, window[k]), hi = glm::max(hi, window[k]);
+            const double z = clip.z * invW;
+            nearestZ = std::min(nearestZ, z), farthestZ = std::max(farthestZ, z), nearestW = std::min(nearestW, clip.w);
         }
         if (!boxHoldsSample(lo - kFootprintMarginPixels, hi + kFootprintMarginPixels, f_)) return 0;
+        if (depth_ && behindDepth(p, lo, hi, nearestZ, farthestZ, nearestW)) {
+            behind = true;
+            return 0;
+        }
         // The corners of the face on `axis`, in order around it, as bits along the other two axes.
         static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
         uint8_t kept = 0;
@@ -164,7 +174,61 @@ public:
     }
 
 private:
+    /// Whether no sample the voxel's faces cover can pass a LESS test against the depth
+    /// footprint: the nearest key any of them can get, less hiddenDepthMargin, is not below the
+    /// farthest key stored in any 8x8 block under the voxel's widened box. `lo`, `hi`: the box in
+    /// window pixels; nearestZ, farthestZ: the corners' window depths; nearestW: their least clip w.
+    bool behindDepth(const glm::uvec3& p, const glm::dvec2& lo, const glm::dvec2& hi, double nearestZ, double farthestZ,
+                     double nearestW) const {
+        const DepthFootprint& d = *depth_;
+        if (hi.x - lo.x > kDepthTestedVoxelPixels || hi.y - lo.y > kDepthTestedVoxelPixels) return false;
+        const double margin = hiddenDepthMargin(p, nearestZ, farthestZ, nearestW);
+        // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h): monotonic
+        // in the depth, so the nearest key is that of the nearest depth (or, reversed, the farthest).
+        auto key = [&](double z) { return double(d.keySign) * std::clamp(z, 0.0, 1.0); };
+        const double nearestKey = std::min(key(nearestZ), key(farthestZ)) - margin;
+        const int x0 = std::max(0, int(std::floor(lo.x - kFootprintMarginPixels)) / d.blockSizePixels);
+        const int y0 = std::max(0, int(std::floor(lo.y - kFootprintMarginPixels)) / d.blockSizePixels);
+        const int x1 = std::min(d.blocksX - 1, int(std::floor(hi.x + kFootprintMarginPixels)) / d.blockSizePixels);
+        const int y1 = std::min(d.blocksY - 1, int(std::floor(hi.y + kFootprintMarginPixels)) / d.blockSizePixels);
+        if (x0 > x1 || y0 > y1) return false;
+        for (int by = y0; by <= y1; ++by)
+            for (int bx = x0; bx <= x1; ++bx)
+                if (!(double(d.farthestKey[size_t(by) * size_t(d.blocksX) + size_t(bx)]) <= nearestKey)) return false;
+        return true;
+    }
+
+    /// How far in front of nearestZ the rasterizer's depth at a sample one of the voxel's faces
+    /// covers can lie, in window depth. Three sources, each bounded with room to spare:
+    /// - Each face corner's float window depth against the exact z / w found here: the position
+    ///   rounded to float, the float matrix product (four products, three sums) and the division
+    ///   are seven or eight roundings of 2^-24 relative to the terms' magnitudes; 2^-20 of them
+    ///   (sixteen roundings) bounds the error of clip z and w, so of z / w at most
+    ///   2^-20 (Az + |z / w| Aw) / w, with A the sums of |matrix entry x coordinate| of that row.
+    /// - Exactly evaluated, the depth plane at a covered sample is a convex combination of its
+    ///   triangle's three vertex depths (the sample lies in the snapped triangle the plane was fit
+    ///   to), so not in front of the nearest corner.
+    /// - The plane is stored and evaluated in float: z0 + gx X + gy Y, X and Y within the
+    ///   triangle's sides L of the first vertex. The gradient is at most 2 dz L / area2 (dz the
+    ///   vertices' depth range) and the doubled area at least 1 subpixel² (snapped vertices are
+    ///   integers), so each term is at most 2 dz L² <= 2^25 dz for L <= 2^12 subpixels
+    ///   (kDepthTestedVoxelPixels times sqrt 2, under 16 pixels). The gradients' rounding and the
+    ///   sum's three then cost at most 16 dz + 2^-21.
+    double hiddenDepthMargin(const glm::uvec3& p, double nearestZ, double farthestZ, double nearestW) const {
+        const glm::dvec3 low = boxes_.lowCorner(p), high = low + boxes_.voxelSize;
+        const glm::dvec3 magnitude = glm::max(glm::abs(low), glm::abs(high));
+        const glm::dmat4& m = f_.clipFromModel;
+        double az = std::abs(m[3][2]), aw = std::abs(m[3][3]);
+        for (int j = 0; j < 3; ++j) az += std::abs(m[j][2]) * magnitude[j], aw += std::abs(m[j][3]) * magnitude[j];
+        const double zMagnitude = std::max(std::abs(nearestZ), std::abs(farthestZ));
+        const double cornerError = std::ldexp(az + zMagnitude * aw, -20) / nearestW;
+        const double depthRange = farthestZ - nearestZ + 2.0 * cornerError;
+        return cornerError + 16.0 * depthRange + std::ldexp(1.0, -21);
+    }
+
     const SampleFootprint& f_;
+    const DepthFootprint* depth_;
+    VoxelBoxes boxes_;
     glm::dvec4 origin_, step_[3];
     double halfWidth_ = 0.0, halfHeight_ = 0.0;
     glm::dvec4 halfExtent_{0.0};
@@ -173,10 +237,11 @@ private:
 }  // namespace
 
 void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& camera, FaceMesh& out,
-                      const glm::vec3* overrideColor, const VoxelRegion* region, const SampleFootprint* footprint) {
+                      const glm::vec3* overrideColor, const VoxelRegion* region, const SampleFootprint* footprint,
+                      const DepthFootprint* depth) {
     const VoxelBoxes boxes(model, block.level, block.coord);
     std::optional<FaceFootprints> footprints;
-    if (footprint) footprints.emplace(*footprint, boxes);
+    if (footprint) footprints.emplace(*footprint, boxes, depth);
     for (size_t i = 0; i < block.voxels.size(); ++i) {
         const uint32_t packed = block.voxels[i];
         const glm::uvec3 position = voxelPositionInBlock(packed);
@@ -198,8 +263,9 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
         if (camera.z < lo.z) facing |= kFaceNegZ;
         uint8_t emit = mask & facing;
         if (emit && footprints) {
-            const uint8_t covering = footprints->mayCoverSamples(position, emit);
-            out.facesBetweenSamples += uint64_t(__builtin_popcount(emit ^ covering));
+            bool behind = false;
+            const uint8_t covering = footprints->mayCoverSamples(position, emit, behind);
+            (behind ? out.facesBehindDepth : out.facesBetweenSamples) += uint64_t(__builtin_popcount(emit ^ covering));
             emit = covering;
         }
         if (!emit) continue;

@@ -21,10 +21,11 @@ struct FaceMesh {
     std::vector<uint32_t> indices;
     uint64_t voxels = 0, faces = 0;
     uint64_t facesBetweenSamples = 0;  // camera-facing active faces left out: they cover no sample
+    uint64_t facesBehindDepth = 0;     // ... left out: their voxel lies behind what is drawn (DepthFootprint)
 
     void clear() {
         positions.clear(), normals.clear(), colors.clear(), indices.clear();
-        voxels = faces = facesBetweenSamples = 0;
+        voxels = faces = facesBetweenSamples = facesBehindDepth = 0;
     }
 };
 
@@ -47,6 +48,31 @@ struct SampleFootprint {
 /// (relative 2^-24 of the clip coordinates: a thousandth of a pixel at 4K for any camera this
 /// renderer frames) plus half a subpixel (1/512 pixel); 1/16 pixel covers both many times over.
 constexpr double kFootprintMarginPixels = 1.0 / 16.0;
+
+/// What the frame's depth buffer already holds, coarsely, so expansion can leave out voxels behind
+/// it: the same-frame half of hierarchical-Z occlusion culling (Chajdas 2015, section 4.5, does
+/// it per block from the last frame; this is per voxel, from the blocks drawn before in this
+/// frame). At pixel error 1 a closed surface is seen through its own far side: the inner faces
+/// of the shell's back half face the camera, so a frame drew about three faces per covered pixel
+/// where one shows. Blocks are drawn front to back in chunks; after each chunk the rasterizer's
+/// hierarchical Z is made exact (raster::Pipeline::flushAndTightenHierarchicalDepth) and copied
+/// here, and a later voxel whose nearest depth lies behind the farthest depth of every 8x8 block
+/// under it cannot pass a LESS test anywhere, so leaving it out leaves the image the same bits
+/// (VoxelHiddenDepth.LeavingOutVoxelsBehindDrawnDepthLeavesTheImageBitForBit).
+struct DepthFootprint {
+    int blockSizePixels = 8;  // raster::kBlockSizePixels
+    int blocksX = 0, blocksY = 0;
+    float keySign = 1.0f;  // the stored key is keySign times the window depth (raster/depth.h)
+    std::vector<float> farthestKey;  // per block of the image, row-major: no sample holds a key above it
+};
+
+/// Voxels whose projected box is wider or taller than this many pixels are not tested against a
+/// DepthFootprint. Bounding the faces' size bounds the float error of the rasterizer's depth
+/// plane (hiddenDepthMargin in the source): their triangles' sides are then under 16 pixels
+/// (2^12 subpixels), and a plane evaluated anywhere in a snapped triangle of any area is off by at
+/// most a few times the triangle's own depth range. At pixel error 1 a voxel is about a pixel;
+/// voxels seen larger are near the camera, where little lies in front of them.
+constexpr double kDepthTestedVoxelPixels = 8.0;
 
 /// The world box of one voxel of a block (at the block's level).
 struct VoxelBoxes {
@@ -79,11 +105,12 @@ struct VoxelRegion {
 };
 
 /// Appends the camera-facing active faces of every voxel of the block (or of the region); with a
-/// footprint, only those that may cover one of its samples. overrideColor, when given, replaces
-/// the voxels' colours (debug views).
+/// footprint, only those that may cover one of its samples, and with a depth footprint as well,
+/// only those of voxels not behind it. overrideColor, when given, replaces the voxels' colours
+/// (debug views).
 void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& cameraPosition,
                       FaceMesh& out, const glm::vec3* overrideColor = nullptr, const VoxelRegion* region = nullptr,
-                      const SampleFootprint* footprint = nullptr);
+                      const SampleFootprint* footprint = nullptr, const DepthFootprint* depth = nullptr);
 inline void expandVoxelFaces(const VoxelModel& model, const VoxelBlock& block, const glm::dvec3& cameraPosition,
                              FaceMesh& out, const glm::vec3* overrideColor = nullptr) {
     expandVoxelFaces(model, BlockVoxels::of(block), cameraPosition, out, overrideColor);

@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
+#include <span>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -58,7 +60,8 @@ glm::mat4 clipFromView(float fovYRadians, float aspect, float nearPlane, float f
 
 raster::Image render(const RandomDepthScene& s, int samples, bool hiz, bool depthWrite, bool depthTest,
                      raster::PipelineStats* stats = nullptr,
-                     raster::DepthConvention convention = raster::DepthConvention::Standard) {
+                     raster::DepthConvention convention = raster::DepthConvention::Standard,
+                     bool tightenBetweenDraws = false) {
     raster::DrawCall d;
     d.clipFromObject = clipFromView(1.0f, 1.5f, 0.5f, 8.0f, convention);
     d.positions = s.positions;
@@ -72,6 +75,7 @@ raster::Image render(const RandomDepthScene& s, int samples, bool hiz, bool dept
     p.beginFrame(desc);
     // Two draws: the second sees the first's depths (and its hierarchical Z bounds).
     p.draw(d);
+    if (tightenBetweenDraws) p.flushAndTightenHierarchicalDepth();
     d.state.depthTest = true;
     d.state.depthWrite = true;
     p.draw(d);
@@ -90,11 +94,17 @@ void expectHierarchicalDepthChangesNothing(int samples, raster::DepthConvention 
     for (uint32_t seed = 1; seed <= scenes; ++seed) {
         const RandomDepthScene s(seed * seedStride + samples);
         for (auto [test, write] : {std::pair{true, true}, std::pair{true, false}, std::pair{false, true}}) {
-            raster::PipelineStats withStats, withoutStats;
+            raster::PipelineStats withStats, withoutStats, tightenedStats;
             const raster::Image with = render(s, samples, true, write, test, &withStats, convention);
             const raster::Image without = render(s, samples, false, write, test, &withoutStats, convention);
+            // The bounds made exact between the draws (flushAndTightenHierarchicalDepth).
+            const raster::Image tightened = render(s, samples, true, write, test, &tightenedStats, convention, true);
             ASSERT_EQ(with.rgba, without.rgba) << "seed " << seed << " test " << test << " write " << write;
+            ASSERT_EQ(tightened.rgba, without.rgba) << "seed " << seed << " test " << test << " write " << write;
             ASSERT_EQ(withStats.counters.samplesPassed, withoutStats.counters.samplesPassed);
+            ASSERT_EQ(tightenedStats.counters.samplesPassed, withoutStats.counters.samplesPassed);
+            ASSERT_GE(tightenedStats.counters.blocksDepthCulled, withStats.counters.blocksDepthCulled)
+                << "exact bounds reject at least what the back end's own bounds reject";
             culled += withStats.counters.blocksDepthCulled;
         }
     }
@@ -109,6 +119,49 @@ TEST_P(HierarchicalDepth, NeverChangesTheImage) {
 
 TEST_P(HierarchicalDepth, NeverChangesTheImageWithReversedDepth) {
     expectHierarchicalDepthChangesNothing(GetParam(), raster::DepthConvention::Reversed, 30, 104729u);
+}
+
+// After flushAndTightenHierarchicalDepth, each 8x8 block's bound is the largest key any of its
+// samples inside the image holds (a 150x100 frame: tiles and blocks cut by both edges), and a block
+// of a tile nothing drew into reads as the clear key.
+TEST_P(HierarchicalDepth, TighteningSetsEachBlockToTheFarthestKeyItsSamplesHold) {
+    const int samples = GetParam();
+    for (raster::DepthConvention convention : {raster::DepthConvention::Standard, raster::DepthConvention::Reversed})
+        for (uint32_t seed = 1; seed <= 8; ++seed) {
+            const RandomDepthScene s(seed * 31u + uint32_t(samples));
+            raster::DrawCall d;
+            d.clipFromObject = clipFromView(1.0f, 1.5f, 0.5f, 8.0f, convention);
+            d.positions = s.positions;
+            d.triangleColors = s.colors;
+            raster::FramebufferDesc desc = frame(150, 100, samples);
+            desc.depthConvention = convention;
+            raster::Pipeline p;
+            p.beginFrame(desc);
+            // Every other scene only its first five triangles: some tiles stay untouched.
+            d.positions = std::span(s.positions).first(seed % 2 ? s.positions.size() : 15);
+            d.triangleColors = std::span(s.colors).first(d.positions.size() / 3);
+            p.draw(d);
+            p.flushAndTightenHierarchicalDepth();
+            const raster::Framebuffer& fb = p.framebuffer();
+            int touched = 0;
+            for (int by = 0; by < fb.blocksY(); ++by)
+                for (int bx = 0; bx < fb.blocksX(); ++bx) {
+                    const int tile = (by * raster::kBlockSizePixels / raster::kTileSizePixels) * fb.tilesX() +
+                                     bx * raster::kBlockSizePixels / raster::kTileSizePixels;
+                    float farthest = raster::clearDepthKey(desc);
+                    if (fb.tileTouched(tile)) {
+                        ++touched;
+                        farthest = -std::numeric_limits<float>::infinity();
+                        for (int y = by * 8; y < std::min(by * 8 + 8, fb.height()); ++y)
+                            for (int x = bx * 8; x < std::min(bx * 8 + 8, fb.width()); ++x)
+                                for (int k = 0; k < samples; ++k)
+                                    farthest = std::max(farthest, fb.tileDepth(tile)[((y % 64) * 64 + x % 64) * samples + k]);
+                    }
+                    ASSERT_EQ(fb.farthestDepthKeyOfBlock(bx, by), farthest) << "block " << bx << "," << by << " seed " << seed;
+                }
+            EXPECT_GT(touched, 0);
+            p.endFrame();
+        }
 }
 
 INSTANTIATE_TEST_SUITE_P(SampleCounts, HierarchicalDepth, ::testing::Values(1, 2, 4, 8, 16),
