@@ -182,6 +182,7 @@ void Pipeline::beginFrame(const FramebufferDesc& desc) {
     drawsRecycled_ = 0;
     queued_.clear();
     tileCounters_.assign(framebuffer_.tileCount(), {});
+    tilesDrawnSinceTightened_.assign(size_t(framebuffer_.tileCount()), 0);
 }
 
 void Pipeline::draw(const DrawCall& call) {
@@ -264,6 +265,7 @@ void Pipeline::flush() {
     parallelFor(size_t(framebuffer_.tileCount()), [&](size_t tile) {
         for (size_t b = 0; b < queued_.size(); ++b) {
             const TriangleBatch& batch = batches_[b];
+            if (batch.tileOffsets[tile] != batch.tileOffsets[tile + 1]) tilesDrawnSinceTightened_[tile] = 1;
             rasterizeBatchInTile(batch, draws_[batch.drawIndex].state, int(tile), framebuffer_,
                                  tileCounters_[tile]);
         }
@@ -277,10 +279,16 @@ void Pipeline::flush() {
     recycleFinishedVertexOutputs();
 }
 
+// Only tiles a batch reached since the last tightening can have changed: a frame that flushes
+// often (voxel chunks) would otherwise read every tile's depths at each flush.
 void Pipeline::flushAndTightenHierarchicalDepth() {
     flush();
     const double t0 = nowMs();
-    parallelFor(size_t(framebuffer_.tileCount()), [&](size_t tile) { framebuffer_.tightenHierarchicalDepth(int(tile)); });
+    parallelFor(size_t(framebuffer_.tileCount()), [&](size_t tile) {
+        if (!tilesDrawnSinceTightened_[tile]) return;
+        tilesDrawnSinceTightened_[tile] = 0;
+        framebuffer_.tightenHierarchicalDepth(int(tile));
+    });
     stats_.times.backEndMs += nowMs() - t0;
 }
 

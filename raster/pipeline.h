@@ -73,6 +73,7 @@ private:
     std::vector<BatchRef> queued_;
     std::vector<TriangleBatch> batches_;  // reused across flushes and frames
     std::vector<TileCounters> tileCounters_;
+    std::vector<uint8_t> tilesDrawnSinceTightened_;  // per tile: a batch reached it since flushAndTighten...()
     double frameStartMs_ = 0;
 };
 

@@ -137,9 +137,16 @@ TEST_P(HierarchicalDepth, TighteningSetsEachBlockToTheFarthestKeyItsSamplesHold)
             desc.depthConvention = convention;
             raster::Pipeline p;
             p.beginFrame(desc);
-            // Every other scene only its first five triangles: some tiles stay untouched.
-            d.positions = std::span(s.positions).first(seed % 2 ? s.positions.size() : 15);
-            d.triangleColors = std::span(s.colors).first(d.positions.size() / 3);
+            // Every other scene only its first five triangles: some tiles stay untouched. The
+            // triangles come in two flushes, each followed by a tightening, so the second
+            // tightens the tiles the second part reached and keeps the others' bounds.
+            const size_t triangles = seed % 2 ? s.positions.size() / 3 : 5;
+            d.positions = std::span(s.positions).first(3 * (triangles / 2));
+            d.triangleColors = std::span(s.colors).first(triangles / 2);
+            p.draw(d);
+            p.flushAndTightenHierarchicalDepth();
+            d.positions = std::span(s.positions).subspan(3 * (triangles / 2), 3 * (triangles - triangles / 2));
+            d.triangleColors = std::span(s.colors).subspan(triangles / 2, triangles - triangles / 2);
             p.draw(d);
             p.flushAndTightenHierarchicalDepth();
             const raster::Framebuffer& fb = p.framebuffer();
