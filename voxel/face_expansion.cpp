@@ -101,9 +101,21 @@ bool quadHoldsSample(const glm::dvec2 (&q)[4], const glm::dvec2& lo, const glm::
 /// grid position, so a voxel's eight corners cost one matrix product and seven additions.
 class FaceFootprints {
 public:
-    FaceFootprints(const SampleFootprint& f, const VoxelBoxes& boxes, const DepthFootprint* depth)
-        : f_(f), depth_(depth), boxes_(boxes) {
+    FaceFootprints(const SampleFootprint& f, const VoxelBoxes& boxes, uint32_t blockSize, const DepthFootprint* depth)
+        : f_(f), depth_(depth) {
         origin_ = f.clipFromModel * glm::dvec4(boxes.blockOrigin, 1.0);
+        if (depth) {
+            // What the rasterizer's float transform of a corner can be off by, over the whole
+            // block (hiddenDepthMargin): 2^-20 of the sums of |matrix entry x coordinate| of the
+            // clip z and w rows, at the block's largest coordinates.
+            const glm::dvec3 far = boxes.blockOrigin + double(blockSize) * boxes.voxelSize;
+            const glm::dvec3 magnitude = glm::max(glm::abs(boxes.blockOrigin), glm::abs(far));
+            const glm::dmat4& m = f.clipFromModel;
+            clipZError_ = std::abs(m[3][2]), clipWError_ = std::abs(m[3][3]);
+            for (int j = 0; j < 3; ++j)
+                clipZError_ += std::abs(m[j][2]) * magnitude[j], clipWError_ += std::abs(m[j][3]) * magnitude[j];
+            clipZError_ *= kTransformRounding, clipWError_ *= kTransformRounding;
+        }
         for (int axis = 0; axis < 3; ++axis) step_[axis] = f.clipFromModel[axis] * boxes.voxelSize;
         halfWidth_ = 0.5 * f.widthPixels, halfHeight_ = 0.5 * f.heightPixels;
         // How far a corner's clip x, y and w lie from the centre's, at most (the same for every voxel).
@@ -149,7 +161,7 @@ public:
             nearestZ = std::min(nearestZ, z), farthestZ = std::max(farthestZ, z), nearestW = std::min(nearestW, clip.w);
         }
         if (!boxHoldsSample(lo - kFootprintMarginPixels, hi + kFootprintMarginPixels, f_)) return 0;
-        if (depth_ && behindDepth(p, lo, hi, nearestZ, farthestZ, nearestW)) {
+        if (depth_ && behindDepth(lo, hi, nearestZ, farthestZ, nearestW)) {
             behind = true;
             return 0;
         }
@@ -178,19 +190,22 @@ private:
     /// footprint: the nearest key any of them can get, less hiddenDepthMargin, is not below the
     /// farthest key stored in any 8x8 block under the voxel's widened box. `lo`, `hi`: the box in
     /// window pixels; nearestZ, farthestZ: the corners' window depths; nearestW: their least clip w.
-    bool behindDepth(const glm::uvec3& p, const glm::dvec2& lo, const glm::dvec2& hi, double nearestZ, double farthestZ,
+    bool behindDepth(const glm::dvec2& lo, const glm::dvec2& hi, double nearestZ, double farthestZ,
                      double nearestW) const {
         const DepthFootprint& d = *depth_;
         if (hi.x - lo.x > kDepthTestedVoxelPixels || hi.y - lo.y > kDepthTestedVoxelPixels) return false;
-        const double margin = hiddenDepthMargin(p, nearestZ, farthestZ, nearestW);
+        const double margin = hiddenDepthMargin(nearestZ, farthestZ, nearestW);
         // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h): monotonic
         // in the depth, so the nearest key is that of the nearest depth (or, reversed, the farthest).
         auto key = [&](double z) { return double(d.keySign) * std::clamp(z, 0.0, 1.0); };
         const double nearestKey = std::min(key(nearestZ), key(farthestZ)) - margin;
-        const int x0 = std::max(0, int(std::floor(lo.x - kFootprintMarginPixels)) / d.blockSizePixels);
-        const int y0 = std::max(0, int(std::floor(lo.y - kFootprintMarginPixels)) / d.blockSizePixels);
-        const int x1 = std::min(d.blocksX - 1, int(std::floor(hi.x + kFootprintMarginPixels)) / d.blockSizePixels);
-        const int y1 = std::min(d.blocksY - 1, int(std::floor(hi.y + kFootprintMarginPixels)) / d.blockSizePixels);
+        // Pixels by truncation: the box lies within a few pixels of the image here (it holds a
+        // sample, and is at most kDepthTestedVoxelPixels wide), and a pixel one too far left or up
+        // (truncation of a negative value) only adds a block to the test.
+        const int x0 = std::max(0, int(lo.x - kFootprintMarginPixels) / d.blockSizePixels);
+        const int y0 = std::max(0, int(lo.y - kFootprintMarginPixels) / d.blockSizePixels);
+        const int x1 = std::min(d.blocksX - 1, int(hi.x + kFootprintMarginPixels) / d.blockSizePixels);
+        const int y1 = std::min(d.blocksY - 1, int(hi.y + kFootprintMarginPixels) / d.blockSizePixels);
         if (x0 > x1 || y0 > y1) return false;
         for (int by = y0; by <= y1; ++by)
             for (int bx = x0; bx <= x1; ++bx)
@@ -203,8 +218,9 @@ private:
     /// - Each face corner's float window depth against the exact z / w found here: the position
     ///   rounded to float, the float matrix product (four products, three sums) and the division
     ///   are seven or eight roundings of 2^-24 relative to the terms' magnitudes; 2^-20 of them
-    ///   (sixteen roundings) bounds the error of clip z and w, so of z / w at most
-    ///   2^-20 (Az + |z / w| Aw) / w, with A the sums of |matrix entry x coordinate| of that row.
+    ///   (sixteen roundings, kTransformRounding) bounds the error of clip z and w, so of z / w at
+    ///   most (Ez + |z / w| Ew) / w, with E = 2^-20 the sum of |matrix entry x coordinate| of that
+    ///   row (clipZError_, clipWError_: over the block's largest coordinates).
     /// - Exactly evaluated, the depth plane at a covered sample is a convex combination of its
     ///   triangle's three vertex depths (the sample lies in the snapped triangle the plane was fit
     ///   to), so not in front of the nearest corner.
@@ -214,21 +230,19 @@ private:
     ///   integers), so each term is at most 2 dz L² <= 2^25 dz for L <= 2^12 subpixels
     ///   (kDepthTestedVoxelPixels times sqrt 2, under 16 pixels). The gradients' rounding and the
     ///   sum's three then cost at most 16 dz + 2^-21.
-    double hiddenDepthMargin(const glm::uvec3& p, double nearestZ, double farthestZ, double nearestW) const {
-        const glm::dvec3 low = boxes_.lowCorner(p), high = low + boxes_.voxelSize;
-        const glm::dvec3 magnitude = glm::max(glm::abs(low), glm::abs(high));
-        const glm::dmat4& m = f_.clipFromModel;
-        double az = std::abs(m[3][2]), aw = std::abs(m[3][3]);
-        for (int j = 0; j < 3; ++j) az += std::abs(m[j][2]) * magnitude[j], aw += std::abs(m[j][3]) * magnitude[j];
+    double hiddenDepthMargin(double nearestZ, double farthestZ, double nearestW) const {
         const double zMagnitude = std::max(std::abs(nearestZ), std::abs(farthestZ));
-        const double cornerError = std::ldexp(az + zMagnitude * aw, -20) / nearestW;
+        const double cornerError = (clipZError_ + zMagnitude * clipWError_) / nearestW;
         const double depthRange = farthestZ - nearestZ + 2.0 * cornerError;
-        return cornerError + 16.0 * depthRange + std::ldexp(1.0, -21);
+        return cornerError + 16.0 * depthRange + kPlaneRounding;
     }
+
+    static constexpr double kTransformRounding = 0x1p-20;  // sixteen roundings of 2^-24
+    static constexpr double kPlaneRounding = 0x1p-21;      // the plane sum's roundings of terms up to 1
 
     const SampleFootprint& f_;
     const DepthFootprint* depth_;
-    VoxelBoxes boxes_;
+    double clipZError_ = 0.0, clipWError_ = 0.0;
     glm::dvec4 origin_, step_[3];
     double halfWidth_ = 0.0, halfHeight_ = 0.0;
     glm::dvec4 halfExtent_{0.0};
@@ -241,7 +255,7 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
                       const DepthFootprint* depth) {
     const VoxelBoxes boxes(model, block.level, block.coord);
     std::optional<FaceFootprints> footprints;
-    if (footprint) footprints.emplace(*footprint, boxes, depth);
+    if (footprint) footprints.emplace(*footprint, boxes, model.blockSize, depth);
     for (size_t i = 0; i < block.voxels.size(); ++i) {
         const uint32_t packed = block.voxels[i];
         const glm::uvec3 position = voxelPositionInBlock(packed);
