@@ -217,9 +217,15 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     // image (raster/pipeline.h).
     std::optional<voxel::SampleFootprint> footprint;
     if (o.leaveOutFacesBetweenSamples) footprint = sampleFootprint(glm::dmat4(clipFromWorld), pipeline.framebuffer().desc());
-    // Blocks go front to back, so each chunk is tested against the depths of those before it.
+    // Blocks go front to back, so each chunk is tested against the depths of those before it; the
+    // first against what the frame drew before its voxels (the source-triangle blocks, or the
+    // caller's draws).
     const bool testDepth = footprint && o.leaveOutVoxelsBehindDepth;
-    bool haveDepth = false;
+    if (testDepth) {
+        pipeline.flushAndTightenHierarchicalDepth();
+        readDepthFootprint(pipeline.framebuffer(), depthFootprint_);
+    }
+    bool haveDepth = testDepth;
     for (size_t first = 0, count = 0; first < expand.size(); first += count) {
         size_t chunkVoxels = 0;
         for (count = 0; first + count < expand.size() && count < kBlocksPerExpansionChunk &&
