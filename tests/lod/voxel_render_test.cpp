@@ -321,6 +321,24 @@ TEST(VoxelFootprint, LeavingOutFacesBetweenSamplesLeavesTheImageBitForBit) {
     EXPECT_GT(farLeftOut, farDrawn) << "far away, at one sample, most faces fall between samples";
 }
 
+/// A voxel frame drawn with voxels behind the depth drawn before left out ([0]) and without ([1]),
+/// the last of `frames` (the occlusion tests learn from the frame before), and its statistics.
+struct WithAndWithout {
+    std::vector<float> image[2];
+    lod::VoxelFrameStats stats[2];
+};
+WithAndWithout renderWithAndWithoutDepthTest(const voxel::VoxelModel& model, const scene::Camera& camera,
+                                             lod::VoxelRenderOptions o, int samples, int frames = 1) {
+    WithAndWithout r;
+    for (int i = 0; i < 2; ++i) {
+        lod::VoxelScene scene(model, 0.0f, 0.0f);
+        scene.camera = camera;
+        o.leaveOutVoxelsBehindDepth = i == 0;
+        for (int frame = 0; frame < frames; ++frame) r.image[i] = renderColor(scene, o, &r.stats[i], samples);
+    }
+    return r;
+}
+
 // Voxels behind what earlier chunks of the frame drew are left out before they become faces
 // (voxel::DepthFootprint); no sample of theirs could pass the depth test, so every pixel of every
 // sample count stays the same bits: the sphere seen through its own far side from afar, near,
@@ -343,22 +361,16 @@ TEST(VoxelHiddenDepth, LeavingOutVoxelsBehindDrawnDepthLeavesTheImageBitForBit) 
                 for (bool reversed : {false, true}) {
                     SCOPED_TRACE(::testing::Message() << "eye " << view.eye.x << "," << view.eye.y << "," << view.eye.z << ", "
                                                       << samples << " samples, occlusion " << occlusion << ", reversed " << reversed);
-                    std::vector<float> images[2];
-                    for (int i = 0; i < 2; ++i) {
-                        lod::VoxelScene scene(*view.model, 0.0f, 0.0f);
-                        scene.camera = cameraAt(view.eye);
-                        scene.camera.reversedDepth = reversed;
-                        lod::VoxelRenderOptions o;
-                        o.occlusion = occlusion;
-                        o.leaveOutVoxelsBehindDepth = i == 0;
-                        o.voxelsPerExpansionChunk = 300;
-                        lod::VoxelFrameStats stats;
-                        for (int frame = 0; frame < (occlusion ? 2 : 1); ++frame) images[i] = renderColor(scene, o, &stats, samples);
-                        (i == 0 ? drawn : drawnWithout) += stats.facesEmitted;
-                        (i == 0 ? betweenWith : betweenWithout) += stats.facesBetweenSamples;
-                        if (i == 0) behind += stats.facesBehindDepth;
-                    }
-                    EXPECT_EQ(images[0], images[1]);
+                    scene::Camera camera = cameraAt(view.eye);
+                    camera.reversedDepth = reversed;
+                    lod::VoxelRenderOptions o;
+                    o.occlusion = occlusion;
+                    o.voxelsPerExpansionChunk = 300;
+                    const WithAndWithout r = renderWithAndWithoutDepthTest(*view.model, camera, o, samples, occlusion ? 2 : 1);
+                    drawn += r.stats[0].facesEmitted, drawnWithout += r.stats[1].facesEmitted;
+                    betweenWith += r.stats[0].facesBetweenSamples, betweenWithout += r.stats[1].facesBetweenSamples;
+                    behind += r.stats[0].facesBehindDepth;
+                    EXPECT_EQ(r.image[0], r.image[1]);
                 }
     // Every camera-facing face is drawn, between samples or behind: the three add up.
     EXPECT_EQ(drawn + behind + betweenWith, drawnWithout + betweenWithout);
@@ -384,21 +396,15 @@ TEST(VoxelHiddenDepth, RandomViewsGiveTheSameImageWithAndWithoutIt) {
         const int samples = view % 3 == 0 ? 4 : 1;
         const bool reversed = view % 2 == 1;
         SCOPED_TRACE(::testing::Message() << "view " << view << ": eye " << eye.x << "," << eye.y << "," << eye.z);
-        std::vector<float> images[2];
-        for (int i = 0; i < 2; ++i) {
-            lod::VoxelScene scene(view % 4 == 3 ? spheres : sphere, 0.0f, 0.0f);
-            scene.camera = cameraAt(eye);
-            scene.camera.target = glm::vec3(target);
-            scene.camera.reversedDepth = reversed;
-            lod::VoxelRenderOptions o;
-            o.occlusion = false;
-            o.leaveOutVoxelsBehindDepth = i == 0;
-            o.voxelsPerExpansionChunk = 200;
-            lod::VoxelFrameStats stats;
-            images[i] = renderColor(scene, o, &stats, samples);
-            if (i == 0) behind += stats.facesBehindDepth;
-        }
-        EXPECT_EQ(images[0], images[1]);
+        scene::Camera camera = cameraAt(eye);
+        camera.target = glm::vec3(target);
+        camera.reversedDepth = reversed;
+        lod::VoxelRenderOptions o;
+        o.occlusion = false;
+        o.voxelsPerExpansionChunk = 200;
+        const WithAndWithout r = renderWithAndWithoutDepthTest(view % 4 == 3 ? spheres : sphere, camera, o, samples);
+        behind += r.stats[0].facesBehindDepth;
+        EXPECT_EQ(r.image[0], r.image[1]);
     }
     EXPECT_GT(behind, 0u);
 }
