@@ -52,11 +52,11 @@ constexpr double kFootprintMarginPixels = 1.0 / 16.0;
 /// What the frame's depth buffer already holds, coarsely, so expansion can leave out voxels behind
 /// it: the same-frame half of hierarchical-Z occlusion culling (Chajdas 2015, section 4.5, does
 /// it per block from the last frame; this is per voxel, from the blocks drawn before in this
-/// frame). At pixel error 1 a closed surface is seen through its own far side: the inner faces
-/// of the shell's back half face the camera, so a frame drew about three faces per covered pixel
-/// where one shows. Blocks are drawn front to back in chunks; after each chunk the rasterizer's
-/// hierarchical Z is made exact (raster::Pipeline::flushAndTightenHierarchicalDepth) and copied
-/// here, and a later voxel whose nearest depth lies behind the farthest depth of every 8x8 block
+/// frame). Voxel faces are drawn with the depth test alone deciding what shows: the dragon at
+/// pixel error 1 drew 2.88 faces per covered pixel, behind nearer surfaces of the model, where one
+/// shows (2.40 with this; docs/performance.md). Blocks are drawn front to back in chunks; after
+/// each chunk the rasterizer's hierarchical Z is made exact
+/// (raster::Pipeline::flushAndTightenHierarchicalDepth) and copied here, and a later voxel whose nearest depth lies behind the farthest depth of every 8x8 block
 /// under it cannot pass a LESS test anywhere, so leaving it out leaves the image the same bits
 /// (VoxelHiddenDepth.LeavingOutVoxelsBehindDrawnDepthLeavesTheImageBitForBit).
 struct DepthFootprint {
