@@ -56,9 +56,9 @@ constexpr double kFootprintMarginPixels = 1.0 / 16.0;
 /// pixel error 1 drew 2.88 faces per covered pixel, behind nearer surfaces of the model, where one
 /// shows (2.40 with this; docs/performance.md). Blocks are drawn front to back in chunks; after
 /// each chunk the rasterizer's hierarchical Z is made exact
-/// (raster::Pipeline::flushAndTightenHierarchicalDepth) and copied here, and a later voxel whose nearest depth lies behind the farthest depth of every 8x8 block
-/// under it cannot pass a LESS test anywhere, so leaving it out leaves the image the same bits
-/// (VoxelHiddenDepth.LeavingOutVoxelsBehindDrawnDepthLeavesTheImageBitForBit).
+/// (raster::Pipeline::flushAndTightenHierarchicalDepth) and copied here, and a later voxel whose
+/// nearest depth lies behind the farthest depth of every 8x8 block under it cannot pass a LESS
+/// test anywhere, so leaving it out leaves the image the same bits (VoxelHiddenDepth.*).
 struct DepthFootprint {
     int blockSizePixels = 8;  // raster::kBlockSizePixels
     int blocksX = 0, blocksY = 0;
