@@ -221,11 +221,11 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     // first against what the frame drew before its voxels (the source-triangle blocks, or the
     // caller's draws).
     const bool testDepth = footprint && o.leaveOutVoxelsBehindDepth;
-    if (testDepth) {
+    auto drawAndReadDepth = [&] {
         pipeline.flushAndTightenHierarchicalDepth();
         readDepthFootprint(pipeline.framebuffer(), depthFootprint_);
-    }
-    bool haveDepth = testDepth;
+    };
+    if (testDepth) drawAndReadDepth();
     for (size_t first = 0, count = 0; first < expand.size(); first += count) {
         size_t chunkVoxels = 0;
         for (count = 0; first + count < expand.size() && count < kBlocksPerExpansionChunk &&
@@ -247,7 +247,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
             voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[i],
                                     o.coloring == BlockColoring::Model ? modelColor : &tint,
                                     d.standIn ? &d.region : nullptr, footprint ? &*footprint : nullptr,
-                                    haveDepth ? &depthFootprint_ : nullptr);
+                                    testDepth ? &depthFootprint_ : nullptr);
         });
         stats.expandMs += raster::nowMs() - t0;
         for (size_t i = 0; i < count; ++i) {
@@ -263,13 +263,10 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
             stats.facesBehindDepth += f.facesBehindDepth;
             ++(roles[k] == kTest ? stats.visibilityTests : stats.voxelBlocksDrawn);
         }
-        if (testDepth && first + count < expand.size()) {
-            pipeline.flushAndTightenHierarchicalDepth();
-            readDepthFootprint(pipeline.framebuffer(), depthFootprint_);
-            haveDepth = true;
-        } else {
+        if (testDepth && first + count < expand.size())
+            drawAndReadDepth();
+        else
             pipeline.flush();
-        }
         releaseExcessFaceScratch();
     }
 
