@@ -170,8 +170,9 @@ TEST_F(Cli, ATransparentBackgroundWritesCoverageAsAlpha) {
         for (int c = 0; c < 3; ++c) EXPECT_EQ(clear.rgba[i * 4 + c], black.rgba[i * 4 + c]) << i;
         EXPECT_EQ(black.rgba[i * 4 + 3], 1.0f);
         EXPECT_EQ(clearPng.rgba[i * 4 + 3], std::round(a * 255.0f) / 255.0f) << i;
-        if (a == 1.0f)
+        if (a == 1.0f) {
             for (int c = 0; c < 3; ++c) EXPECT_EQ(clearPng.rgba[i * 4 + c], blackPng.rgba[i * 4 + c]) << i;
+        }
     }
     EXPECT_GT(inside, 100);
     EXPECT_GT(outside, 100);

@@ -45,8 +45,8 @@ TEST(FlightRuns, RunsNumberFramesAsOneFlightAndOnlyTheLastSettlesOnTheFlightsIma
         // Only the run that ends the path settles (which may take no frame at all, when its last
         // frame already had every block it needed).
         EXPECT_EQ(r.settled, last);
-        if (!last) EXPECT_EQ(r.frames.size(), size_t(count));
-        if (last) EXPECT_EQ(r.finalImage.rgba, one.finalImage.rgba) << "the settled image is the whole model's";
+        if (!last) { EXPECT_EQ(r.frames.size(), size_t(count)); }
+        if (last) { EXPECT_EQ(r.finalImage.rgba, one.finalImage.rgba) << "the settled image is the whole model's"; }
     }
     std::swap(runs[0], runs[2]);  // joined in path order whatever order they came back in
     const apps::FlyResult joined = apps::joinFlyRuns(runs);

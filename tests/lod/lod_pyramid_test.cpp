@@ -57,7 +57,7 @@ TEST(Simplify, SerialAndParallelGiveIdenticalPyramids) {
         const testing::ThreadCountScope scope(count);
         VoxelModel again = base;
         lod::buildLodPyramid(again, {lod::SimplifyMethod::Parallel, 0});
-        if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+        if (count.exact) { EXPECT_EQ(scope.ran(), count.threads) << "threads that ran"; }
         EXPECT_TRUE(sameBlocks(again.blocks, parallel.blocks)) << count.threads << " threads";
     }
 }

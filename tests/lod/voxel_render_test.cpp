@@ -491,7 +491,7 @@ TEST(VoxelDeterminism, SameFrameForAnyThreadCount) {
         p.endFrame();
         raster::Image image;
         raster::resolveColor(p.framebuffer(), image);
-        if (count.exact) EXPECT_EQ(scope.ran(), count.threads) << "threads that ran";
+        if (count.exact) { EXPECT_EQ(scope.ran(), count.threads) << "threads that ran"; }
         return image.rgba;
     };
     const auto one = render(testing::kThreadCounts[0]);

@@ -93,7 +93,7 @@ TEST(BvhBuild, SameTreeForAnyThreadCount) {
             const int threads = count.threads;
             const cuberille::testing::ThreadCountScope scope(count);
             const Bvh bvh = buildBvh(soup.view(), {.method = method});
-            if (count.exact) EXPECT_EQ(scope.ran(), threads) << "threads that ran";
+            if (count.exact) { EXPECT_EQ(scope.ran(), threads) << "threads that ran"; }
             if (threads == 1) {
                 reference = bvh;
                 continue;

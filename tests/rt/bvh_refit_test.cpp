@@ -126,7 +126,7 @@ TEST(BvhRefit, SameBoxesAndDegradationForAnyThreadCount) {
         const cuberille::testing::ThreadCountScope scope(count);
         Bvh bvh = buildBvh(rest.view());
         const double degradation = refitBvh(bvh, moved.view());
-        if (count.exact) EXPECT_EQ(scope.ran(), threads) << "threads that ran";
+        if (count.exact) { EXPECT_EQ(scope.ran(), threads) << "threads that ran"; }
         if (threads == 1) {
             reference = bvh;
             referenceDegradation = degradation;

@@ -63,7 +63,10 @@ Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, con
     Rendered r;
     raster::Pipeline gpu;
     r.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, width, height, gpu);
-    r.masks = computeShadows(r.surfaces, lighting, {mesh, &bvh, meshBounds(mesh), silhouettesOnly ? &adjacency : nullptr}, options, gpu);
+    r.masks = computeShadows(r.surfaces, lighting,
+                             {.mesh = mesh, .bvh = &bvh, .bounds = meshBounds(mesh),
+                              .adjacency = silhouettesOnly ? &adjacency : nullptr, .adjacencyOnDemand = {}},
+                             options, gpu);
     return r;
 }
 
@@ -317,7 +320,7 @@ TEST(Shadows, MasksDrawnOverAnEarlierFramesEqualFreshOnes) {
     const TriangleMeshView mesh = scene.view();
     const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);
     const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
-    const ShadowCasters casters{mesh, &bvh, meshBounds(mesh), &adjacency};
+    const ShadowCasters casters{.mesh = mesh, .bvh = &bvh, .bounds = meshBounds(mesh), .adjacency = &adjacency, .adjacencyOnDemand = {}};
     const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
     raster::Pipeline gpu;
     auto surfacesFrom = [&](glm::vec3 eye) {
@@ -376,7 +379,7 @@ TEST(Shadows, SameMasksForAnyThreadCount) {
         const int threads = count.threads;
         const cuberille::testing::ThreadCountScope scope(count);
         const Rendered r = shadowsOf(scene, sun(), options);
-        if (count.exact) EXPECT_EQ(scope.ran(), threads) << "threads that ran";
+        if (count.exact) { EXPECT_EQ(scope.ran(), threads) << "threads that ran"; }
         if (threads == 1) reference = r.masks.visibility[0];
         else EXPECT_EQ(r.masks.visibility[0], reference) << threads << " threads";
     }

@@ -75,7 +75,7 @@ TEST(UniformGrid, RaysAlongCellFacesThroughEdgesAndVerticesEqualBruteForce) {
     const OwnedMesh lattice = testing::cubeLattice(4);
     for (const float lambda : {kGridCellsPerTriangle, 64.0f / float(lattice.view().triangleCount())}) {
         const UniformGrid grid = buildUniformGrid(lattice.view(), lambda);
-        if (lambda < 1.0f) ASSERT_EQ(grid.cells, glm::ivec3(4));
+        if (lambda < 1.0f) { ASSERT_EQ(grid.cells, glm::ivec3(4)); }
         testing::forEachLatticeRay([&](const Ray& ray) { expectSameAsBruteForce(grid, lattice.view(), ray); });
     }
 }
