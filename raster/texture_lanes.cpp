@@ -119,11 +119,18 @@ VF wrap(VF f, VF size, WrapMode mode);
 /// Where texel (x, y) of a level lies: the tile's row and column, then the texel in the tile.
 VI tiledIndex(VI x, VI y, VI offset, VI tileRowStride);
 
+/// A level's size and place in every lane.
+struct LaneLevels {
+    VI width, height, offset, tileRowStride;
+};
+LaneLevels levelsOf(const TexelPyramid& t, VI level);
+/// Texel column (or row) f and the next one, wrapped.
+void wrapPair(VF f, VF size, WrapMode mode, VI& first, VI& next);
+
 Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
     const DF df;
-    const DI di;
-    const VI width = hn::GatherIndex(di, t.width, level), height = hn::GatherIndex(di, t.height, level);
-    const VF w = hn::ConvertTo(df, width), h = hn::ConvertTo(df, height);
+    const LaneLevels levels = levelsOf(t, level);
+    const VF w = hn::ConvertTo(df, levels.width), h = hn::ConvertTo(df, levels.height);
     // Texel space with texel centres on integers (a nearest tap's: texel corners on integers);
     // non-finite coordinates sample texel 0, and the rest are clamped far beyond any wrap
     // period (Texture::footprint, Texture::nearestIndex).
@@ -134,14 +141,42 @@ Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
     x = hn::Min(hn::Max(hn::IfThenElseZero(finite, x), lo), hi);
     y = hn::Min(hn::Max(hn::IfThenElseZero(finite, y), lo), hi);
     const VF fx = hn::Floor(x), fy = hn::Floor(y);
-    const VF one = hn::Set(df, 1.0f);
-    const VI xa = hn::ConvertTo(di, wrap(fx, w, t.wrapU)), xb = hn::ConvertTo(di, wrap(hn::Add(fx, one), w, t.wrapU));
-    const VI ya = hn::ConvertTo(di, wrap(fy, h, t.wrapV)), yb = hn::ConvertTo(di, wrap(hn::Add(fy, one), h, t.wrapV));
-    const VI offset = hn::GatherIndex(di, t.offset, level), stride = hn::GatherIndex(di, t.tileRowStride, level);
+    VI xa, xb, ya, yb;
+    wrapPair(fx, w, t.wrapU, xa, xb);
+    wrapPair(fy, h, t.wrapV, ya, yb);
+    const VI offset = levels.offset, stride = levels.tileRowStride;
     return {{tiledIndex(xa, ya, offset, stride), tiledIndex(xb, ya, offset, stride), tiledIndex(xa, yb, offset, stride),
              tiledIndex(xb, yb, offset, stride)},
             hn::IfThenZeroElse(nearest, hn::Sub(x, fx)),
             hn::IfThenZeroElse(nearest, hn::Sub(y, fy))};
+}
+
+/// Neighbouring points mostly read one level (a shade queue holds pixels of one triangle, often
+/// of one tile): then its four values are loaded once and broadcast, not gathered per lane.
+LaneLevels levelsOf(const TexelPyramid& t, VI level) {
+    const DI di;
+    const int32_t first = hn::GetLane(level);
+    if (hn::AllTrue(di, hn::Eq(level, hn::Set(di, first))))
+        return {hn::Set(di, t.width[first]), hn::Set(di, t.height[first]), hn::Set(di, t.offset[first]),
+                hn::Set(di, t.tileRowStride[first])};
+    return {hn::GatherIndex(di, t.width, level), hn::GatherIndex(di, t.height, level), hn::GatherIndex(di, t.offset, level),
+            hn::GatherIndex(di, t.tileRowStride, level)};
+}
+
+/// Under Repeat the next texel is the wrapped one plus one, back to 0 at the period: (f + 1) mod n
+/// = ((f mod n) + 1) mod n, and modulo() is exact, so this is wrap(f + 1) without a second
+/// modulo. The other modes wrap both (a clamp is cheaper than the test).
+void wrapPair(VF f, VF size, WrapMode mode, VI& first, VI& next) {
+    const DF df;
+    const DI di;
+    const VF a = wrap(f, size, mode);
+    first = hn::ConvertTo(di, a);
+    if (mode == WrapMode::Repeat) {
+        const VF b = hn::Add(a, hn::Set(df, 1.0f));
+        next = hn::ConvertTo(di, hn::IfThenZeroElse(hn::Eq(b, size), b));
+    } else {
+        next = hn::ConvertTo(di, wrap(hn::Add(f, hn::Set(df, 1.0f)), size, mode));
+    }
 }
 
 /// f mod period for integers held in float: the quotient from a rounded reciprocal is off by at
@@ -150,6 +185,9 @@ Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
 /// below 2^24, so exact.
 VF modulo(VF f, VF period) {
     const DF df;
+    // Coordinates inside one period (a texture not tiled across the triangle) are their own
+    // remainder: the same value the steps below compute, without the division.
+    if (hn::AllTrue(df, hn::And(hn::Ge(f, hn::Zero(df)), hn::Lt(f, period)))) return f;
     const VF quotient = hn::Floor(hn::Mul(f, hn::Div(hn::Set(df, 1.0f), period)));
     VF m = hn::Sub(f, hn::Mul(period, quotient));
     m = hn::IfThenElse(hn::Lt(m, hn::Zero(df)), hn::Add(m, period), m);

@@ -153,12 +153,24 @@ TEST(Texture, BatchSamplingIsSampleBitForBitUnderEveryFilter) {
     const raster::MinFilter filters[] = {raster::MinFilter::Nearest, raster::MinFilter::Linear,
                                          raster::MinFilter::NearestMipmapNearest, raster::MinFilter::LinearMipmapNearest,
                                          raster::MinFilter::NearestMipmapLinear, raster::MinFilter::LinearMipmapLinear};
-    constexpr int kPoints = 150;  // more than one run of the batch, and not a whole number of vectors
+    // Scattered points first, then coherent ones as a shade queue holds them: runs of 16 (whole
+    // vectors on every instruction set) sharing a level of detail, inside one period of the
+    // texture and across its last texel, where Repeat's next texel wraps to the first (the lane
+    // sampler reads such runs through its shortcuts). 262 is more than one run of the batch, and
+    // not a whole number of vectors.
+    constexpr int kScattered = 160, kPoints = 262;
     float u[kPoints], v[kPoints], lod[kPoints];
     for (int i = 0; i < kPoints; ++i) u[i] = coordinate(rng), v[i] = coordinate(rng), lod[i] = level(rng);
     // Edge cases: exact levels, no minification, non-finite coordinates and levels, far tiles.
     lod[0] = 0.0f, lod[1] = 1.0f, lod[2] = 3.0f, lod[3] = NAN, lod[4] = INFINITY, lod[5] = -INFINITY;
     u[6] = NAN, v[7] = INFINITY, u[8] = -1e30f, u[9] = 4097.3f, v[10] = -12345.6f, u[11] = 0.999999f;
+    const float runLevels[] = {-1.0f, 0.0f, 0.4f, 1.0f, 2.7f, 5.5f};
+    for (int i = kScattered; i < kPoints; ++i) {
+        const int run = (i - kScattered) / 16, k = (i - kScattered) % 16;
+        lod[i] = runLevels[run % 6];
+        const float start = run % 2 ? 0.9f : 0.05f;  // odd runs reach across the last texel
+        u[i] = start + 0.006f * float(k), v[i] = 0.3f + 0.0371f * float(k);
+    }
     const WrapMode wraps[] = {WrapMode::Repeat, WrapMode::ClampToEdge, WrapMode::MirroredRepeat};
     const raster::TexelFormat formats[] = {raster::TexelFormat::LinearFloat, raster::TexelFormat::Srgb8,
                                            raster::TexelFormat::Unorm8};
