@@ -34,10 +34,10 @@ struct Footprint {
     VF ax, ay;
 };
 
-Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v);
-Texel bilinear(const TexelPyramid& t, const Footprint& f);
-Texel texelsAt(const TexelPyramid& t, VI index);
-VF mix(VF a, VF b, VF weight);
+HWY_INLINE Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v);
+HWY_INLINE Texel bilinear(const TexelPyramid& t, const Footprint& f);
+HWY_INLINE Texel texelsAt(const TexelPyramid& t, VI index);
+HWY_INLINE VF mix(VF a, VF b, VF weight);
 
 /// The taps one vector of points reads under the texture's filters (Texture::plan): a level and
 /// whether its tap is nearest, and for the mipmap-linear filters a second level and the weight.
@@ -48,7 +48,7 @@ struct LanePlan {
     VF weight;
 };
 
-LanePlan plan(const TexelPyramid& t, VF lod) {
+HWY_INLINE LanePlan plan(const TexelPyramid& t, VF lod) {
     const DF df;
     const DI di;
     const TextureFilter& filter = t.filter;
@@ -90,13 +90,13 @@ LanePlan plan(const TexelPyramid& t, VF lod) {
 
 /// One tap per lane on the given levels: one texel where every lane's tap is nearest (glTF's
 /// NEAREST_MIPMAP_LINEAR, common in exported models, reads 2 texels a point and not 8).
-Texel tap(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
+HWY_INLINE Texel tap(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
     const Footprint f = footprint(t, level, nearest, u, v);
     return hn::AllTrue(DF(), nearest) ? texelsAt(t, f.index[0]) : bilinear(t, f);
 }
 
 /// One vector of points: Texture::plan() then Texture::gather().
-Texel sample(const TexelPyramid& t, VF u, VF v, VF lod) {
+HWY_INLINE Texel sample(const TexelPyramid& t, VF u, VF v, VF lod) {
     const DF df;
     const LanePlan p = plan(t, lod);
     const Texel first = tap(t, p.first, p.nearest, u, v);
@@ -109,25 +109,25 @@ Texel sample(const TexelPyramid& t, VF u, VF v, VF lod) {
 }
 
 /// glm::mix's arithmetic: a (1 - weight) + b weight.
-VF mix(VF a, VF b, VF weight) {
+HWY_INLINE VF mix(VF a, VF b, VF weight) {
     const VF one = hn::Set(DF(), 1.0f);
     return hn::Add(hn::Mul(a, hn::Sub(one, weight)), hn::Mul(b, weight));
 }
 
 /// An integer texel coordinate f (held exactly in float) wrapped into [0, size).
-VF wrap(VF f, VF size, WrapMode mode);
+HWY_INLINE VF wrap(VF f, VF size, WrapMode mode);
 /// Where texel (x, y) of a level lies: the tile's row and column, then the texel in the tile.
-VI tiledIndex(VI x, VI y, VI offset, VI tileRowStride);
+HWY_INLINE VI tiledIndex(VI x, VI y, VI offset, VI tileRowStride);
 
 /// A level's size and place in every lane.
 struct LaneLevels {
     VI width, height, offset, tileRowStride;
 };
-LaneLevels levelsOf(const TexelPyramid& t, VI level);
+HWY_INLINE LaneLevels levelsOf(const TexelPyramid& t, VI level);
 /// Texel column (or row) f and the next one, wrapped.
-void wrapPair(VF f, VF size, WrapMode mode, VI& first, VI& next);
+HWY_INLINE void wrapPair(VF f, VF size, WrapMode mode, VI& first, VI& next);
 
-Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
+HWY_INLINE Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
     const DF df;
     const LaneLevels levels = levelsOf(t, level);
     const VF w = hn::ConvertTo(df, levels.width), h = hn::ConvertTo(df, levels.height);
@@ -153,7 +153,7 @@ Footprint footprint(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
 
 /// Neighbouring points mostly read one level (a shade queue holds pixels of one triangle, often
 /// of one tile): then its four values are loaded once and broadcast, not gathered per lane.
-LaneLevels levelsOf(const TexelPyramid& t, VI level) {
+HWY_INLINE LaneLevels levelsOf(const TexelPyramid& t, VI level) {
     const DI di;
     const int32_t first = hn::GetLane(level);
     if (hn::AllTrue(di, hn::Eq(level, hn::Set(di, first))))
@@ -166,7 +166,7 @@ LaneLevels levelsOf(const TexelPyramid& t, VI level) {
 /// Under Repeat the next texel is the wrapped one plus one, back to 0 at the period: (f + 1) mod n
 /// = ((f mod n) + 1) mod n, and modulo() is exact, so this is wrap(f + 1) without a second
 /// modulo. The other modes wrap both (a clamp is cheaper than the test).
-void wrapPair(VF f, VF size, WrapMode mode, VI& first, VI& next) {
+HWY_INLINE void wrapPair(VF f, VF size, WrapMode mode, VI& first, VI& next) {
     const DF df;
     const DI di;
     const VF a = wrap(f, size, mode);
@@ -183,7 +183,7 @@ void wrapPair(VF f, VF size, WrapMode mode, VI& first, VI& next) {
 /// most one (|f| <= 1e6 + 1, so the relative error 2^-22 of f / period is below 1/4 of a
 /// period), which one step either way corrects; every product and difference is an integer
 /// below 2^24, so exact.
-VF modulo(VF f, VF period) {
+HWY_INLINE VF modulo(VF f, VF period) {
     const DF df;
     // Coordinates inside one period (a texture not tiled across the triangle) are their own
     // remainder: the same value the steps below compute, without the division.
@@ -194,7 +194,7 @@ VF modulo(VF f, VF period) {
     return hn::IfThenElse(hn::Ge(m, period), hn::Sub(m, period), m);
 }
 
-VF wrap(VF f, VF size, WrapMode mode) {
+HWY_INLINE VF wrap(VF f, VF size, WrapMode mode) {
     const DF df;
     switch (mode) {
         case WrapMode::ClampToEdge: return hn::Min(hn::Max(f, hn::Zero(df)), hn::Sub(size, hn::Set(df, 1.0f)));
@@ -208,7 +208,7 @@ VF wrap(VF f, VF size, WrapMode mode) {
     return hn::Zero(df);
 }
 
-VI tiledIndex(VI x, VI y, VI offset, VI tileRowStride) {
+HWY_INLINE VI tiledIndex(VI x, VI y, VI offset, VI tileRowStride) {
     const DI di;
     const VI three = hn::Set(di, 3);
     const VI column = hn::Add(hn::ShiftLeft<4>(hn::ShiftRight<2>(x)), hn::And(x, three));
@@ -219,9 +219,9 @@ VI tiledIndex(VI x, VI y, VI offset, VI tileRowStride) {
 /// One texel per lane, decoded as Texture::texelAt decodes: linear bytes as b / 255 (computed,
 /// the value its table holds), sRGB colour bytes through the table (gathered: a gather is the
 /// slow part of a fetch, so only the three sRGB channels pay for one).
-VF unorm8(VI byte) { return hn::Div(hn::ConvertTo(DF(), byte), hn::Set(DF(), 255.0f)); }
+HWY_INLINE VF unorm8(VI byte) { return hn::Div(hn::ConvertTo(DF(), byte), hn::Set(DF(), 255.0f)); }
 
-Texel texelsAt(const TexelPyramid& t, VI index) {
+HWY_INLINE Texel texelsAt(const TexelPyramid& t, VI index) {
     const DF df;
     const DI di;
     const DU du;
@@ -236,7 +236,7 @@ Texel texelsAt(const TexelPyramid& t, VI index) {
 }
 
 /// Texture::blend: the top pair and the bottom pair mixed across, then the two down.
-Texel bilinear(const TexelPyramid& t, const Footprint& f) {
+HWY_INLINE Texel bilinear(const TexelPyramid& t, const Footprint& f) {
     const Texel t00 = texelsAt(t, f.index[0]), t10 = texelsAt(t, f.index[1]);
     const Texel t01 = texelsAt(t, f.index[2]), t11 = texelsAt(t, f.index[3]);
     auto channel = [&](VF Texel::* c) {
