@@ -53,7 +53,9 @@ fs::path dataPath(const std::string& name) {
 std::optional<scene::Scene> loadScene(const std::string& name, float time = 0.0f) {
     const fs::path path = dataPath(name);
     if (!fs::exists(path)) return std::nullopt;
-    return scene::loadModelScene(path, {30.0f, 20.0f, -1, time}, [](const std::string&) {});
+    scene::ModelSceneOptions options;  // the default framing
+    options.timeSeconds = time;
+    return scene::loadModelScene(path, options, [](const std::string&) {});
 }
 
 Geometry concatenate(const scene::Scene& s) {

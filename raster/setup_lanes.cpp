@@ -38,7 +38,7 @@ void setUpChunk(const TriangleLanes& in, int count, const SetupContext& context,
     coverageOfFewPixels(out, count, *context.samples, covered);
     depthPlanes(in, v, count, out);
     for (int i = 0; i < count; ++i)
-        out.verdict[i] = SetupResult(testSamples[i] & !covered[i] ? int32_t(SetupResult::NoSamples) : verdict[i]);
+        out.verdict[i] = SetupResult((testSamples[i] & !covered[i]) ? int32_t(SetupResult::NoSamples) : verdict[i]);
 }
 
 /// The doubled signed area from the snapped vertices (exact in double); its sign is the
