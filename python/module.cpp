@@ -339,6 +339,9 @@ py::dict fly(const std::string& model, const std::string& path, int frames, int 
         d["io_wait_ms"] = f.ioWaitMs, d["upload_ms"] = f.uploadMs, d["raster_ms"] = f.rasterMs;
         d["faces"] = f.voxel.facesEmitted, d["loaded_bytes"] = f.streaming.loadedBytes;
         d["missing_blocks"] = f.voxel.missingBlocks, d["occlusion_culled"] = f.voxel.occlusionCulled;
+        // The CSV's waste figures (issue 25): faces left out before drawing, and faces per covered pixel.
+        d["faces_between_samples"] = f.voxel.facesBetweenSamples, d["faces_behind_depth"] = f.voxel.facesBehindDepth;
+        d["covered_pixels"] = f.voxel.coveredPixels, d["faces_per_covered_pixel"] = f.voxel.facesPerCoveredPixel();
         perFrame.append(d);
     }
     py::array_t<uint8_t> image({r.finalImage.height, r.finalImage.width, 4});

@@ -2,6 +2,7 @@
 the tool writes, a loaded scene that renders the same frame whatever it rendered before, errors
 with the tool's messages, the GIL released while rendering, and the golden-image helper."""
 
+import csv
 import subprocess
 from pathlib import Path
 import threading
@@ -213,7 +214,19 @@ def test_fly_streams_a_voxel_model_and_settles_on_the_cli_final_image(examples, 
     assert (image[:, :, :3] != image[0, 0, :3]).any(axis=2).sum() > 1000  # the torus, not the background
     out = tmp_path / "flight"
     subprocess.run([cli, "fly", str(model), "--path", "orbit", "--frames", "6", "--width", "160", "--height", "120",
-                    "--msaa", "1", "--budget-mib", "4", "--out-dir", str(out), "--quiet"], check=True)
+                    "--msaa", "1", "--budget-mib", "4", "--out-dir", str(out), "--stats", str(tmp_path / "f.csv"),
+                    "--quiet"], check=True)
     assert np.array_equal(result["final_image"], cuberille.read_png(str(out / "final.png")))
+    # The settled frame's face figures are the CLI's last CSV row (the frames before it depend on
+    # when the I/O thread's blocks arrived, in either run).
+    with open(tmp_path / "f.csv", newline="") as f:
+        last = list(csv.DictReader(f))[-1]
+    settled = result["frames"][-1]
+    for name in ("faces", "faces_between_samples", "faces_behind_depth", "covered_pixels"):
+        assert settled[name] == int(last[name]), name
+    assert settled["faces_per_covered_pixel"] == pytest.approx(float(last["faces_per_covered_pixel"]), abs=5e-4)
+    assert settled["faces_between_samples"] > 0 and settled["covered_pixels"] > 1000
+    for frame in result["frames"]:
+        assert frame["faces_per_covered_pixel"] == pytest.approx(frame["faces"] / max(frame["covered_pixels"], 1))
     with pytest.raises(cuberille.InputError, match="fly needs a voxel model"):
         cuberille.fly(examples / "torus.ply")
