@@ -247,7 +247,8 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
             voxel::expandVoxelFaces(model, voxels, glm::dvec3(eye.position), faces_[i],
                                     o.coloring == BlockColoring::Model ? modelColor : &tint,
                                     d.standIn ? &d.region : nullptr, footprint ? &*footprint : nullptr,
-                                    testDepth ? &depthFootprint_ : nullptr);
+                                    testDepth ? &depthFootprint_ : nullptr,
+                                    o.leaveOutVoxelsBehindTheirBlock && roles[k] != kTest);
         });
         stats.expandMs += raster::nowMs() - t0;
         for (size_t i = 0; i < count; ++i) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <optional>
 
+#include "raster/limits.h"
 #include "voxel/packing.h"
 
 namespace cuberille::voxel {
@@ -68,11 +69,14 @@ bool boxHoldsSample(const glm::dvec2& lo, const glm::dvec2& hi, const SampleFoot
     return false;
 }
 
-/// Whether a sample of some pixel lies in the convex quad (window pixels, either winding) widened
-/// by kFootprintMarginPixels: each edge's line moved outwards by at least the margin (by margin
-/// times |dx| + |dy| over the edge's length, which is at least 1: no square root). `lo`, `hi`:
-/// the widened quad's box.
-bool quadHoldsSample(const glm::dvec2 (&q)[4], const glm::dvec2& lo, const glm::dvec2& hi, const SampleFootprint& f) {
+/// Calls visit(x, y, s) for the samples s of pixels (x, y) that lie in the convex quad (window
+/// pixels, either winding) with each edge's line moved outwards by at least `margin` pixels
+/// (inwards, when negative: by margin times |dx| + |dy| over the edge's length, which is at least
+/// 1: no square root), until visit returns false; returns whether it did. Widened, the samples
+/// looked at are those in the quad's box widened by the margin, which holds every sample within
+/// the margin of the quad.
+template <class Visit>
+bool visitSamplesInQuad(const glm::dvec2 (&q)[4], double margin, const SampleFootprint& f, Visit&& visit) {
     double area2 = 0.0;
     for (int i = 0; i < 4; ++i) area2 += q[i].x * q[(i + 1) % 4].y - q[(i + 1) % 4].x * q[i].y;
     const double orientation = area2 >= 0.0 ? 1.0 : -1.0;
@@ -80,22 +84,48 @@ bool quadHoldsSample(const glm::dvec2 (&q)[4], const glm::dvec2& lo, const glm::
     for (int i = 0; i < 4; ++i) {
         const glm::dvec2 d = q[(i + 1) % 4] - q[i];
         edgeA[i] = -d.y * orientation, edgeB[i] = d.x * orientation;
-        edgeC[i] = -(edgeA[i] * q[i].x + edgeB[i] * q[i].y) + kFootprintMarginPixels * (std::abs(d.x) + std::abs(d.y));
+        edgeC[i] = -(edgeA[i] * q[i].x + edgeB[i] * q[i].y) + margin * (std::abs(d.x) + std::abs(d.y));
     }
-    for (const glm::dvec2& s : f.samples) {
+    const double widening = std::max(margin, 0.0);
+    const glm::dvec2 lo = glm::min(glm::min(q[0], q[1]), glm::min(q[2], q[3])) - widening;
+    const glm::dvec2 hi = glm::max(glm::max(q[0], q[1]), glm::max(q[2], q[3])) + widening;
+    for (size_t s = 0; s < f.samples.size(); ++s) {
         int x0, x1, y0, y1;
-        samplePixels(lo.x, hi.x, s.x, f.widthPixels, x0, x1);
-        samplePixels(lo.y, hi.y, s.y, f.heightPixels, y0, y1);
+        samplePixels(lo.x, hi.x, f.samples[s].x, f.widthPixels, x0, x1);
+        samplePixels(lo.y, hi.y, f.samples[s].y, f.heightPixels, y0, y1);
         for (int y = y0; y <= y1; ++y)
             for (int x = x0; x <= x1; ++x) {
-                const double sx = x + s.x, sy = y + s.y;
+                const double sx = x + f.samples[s].x, sy = y + f.samples[s].y;
                 bool inside = true;
                 for (int i = 0; i < 4 && inside; ++i) inside = edgeA[i] * sx + edgeB[i] * sy + edgeC[i] >= 0.0;
-                if (inside) return true;
+                if (inside && !visit(x, y, s)) return true;
             }
     }
     return false;
 }
+
+/// Whether a sample of some pixel may lie under the face: in its quad widened by kFootprintMarginPixels.
+bool quadHoldsSample(const glm::dvec2 (&q)[4], const SampleFootprint& f) {
+    return visitSamplesInQuad(q, kFootprintMarginPixels, f, [](int, int, size_t) { return false; });
+}
+
+/// One voxel as the depth tests see it: its corners in window pixels, their box, and the range
+/// of depth keys the rasterizer can give any sample its faces cover (hiddenDepthMargin included).
+struct ProjectedVoxel {
+    glm::dvec2 window[8];  // corner k at p + (k & 1, k >> 1 & 1, k >> 2 & 1)
+    glm::dvec2 lo, hi;
+    double nearestKey = 0.0, farthestKey = 0.0;
+    bool depthTested = false;  // small and wholly in front of the near plane: the bounds above hold
+    bool occludes = false;     // ... and wholly inside the viewport and the far plane: never clipped
+};
+
+/// How far inside a face's exact projected quad a sample must lie for the rasterizer's snapped
+/// triangles of that face to surely cover it: the quad's float corners, snapped, lie within
+/// half a subpixel (1/512 pixel) and the float transform's error (a thousandth of a pixel at 4K,
+/// kFootprintMarginPixels) of the exact ones, so each edge within about 1/300 pixel of its exact
+/// line; four subpixels is twice that and more. (Widening, kFootprintMarginPixels is far looser:
+/// it is paid once per face, this once per sample a voxel hides.)
+constexpr double kSurelyInsideMarginPixels = 4.0 / 256.0;
 
 /// A block's faces against a footprint: the clip position of a voxel corner is affine in its
 /// grid position, so a voxel's eight corners cost one matrix product and seven additions.
@@ -140,11 +170,14 @@ public:
 
     /// The faces of `faces` (of the voxel at `p` in the block) that may cover a sample: none when
     /// the voxel's whole box holds no sample or lies behind the depth footprint (then `behind`),
-    /// else each face by its own quad.
-    uint8_t mayCoverSamples(const glm::uvec3& p, uint8_t faces, bool& behind) const {
+    /// else each face by its own quad. With `projected`, what the depth tests know of the voxel.
+    uint8_t mayCoverSamples(const glm::uvec3& p, uint8_t faces, bool& behind, ProjectedVoxel* projected = nullptr) const {
         behind = false;
+        ProjectedVoxel local;
+        ProjectedVoxel& v = projected ? *projected : local;
+        v.depthTested = v.occludes = false;
         if (!mayCoverAnySample(p)) return 0;
-        glm::dvec2 window[8];  // corner k at p + (k & 1, k >> 1 & 1, k >> 2 & 1)
+        glm::dvec2(&window)[8] = v.window;
         const glm::dvec4 base = origin_ + step_[0] * double(p.x) + step_[1] * double(p.y) + step_[2] * double(p.z);
         glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
         double nearestZ = std::numeric_limits<double>::infinity(), farthestZ = -nearestZ, nearestW = nearestZ;
@@ -161,44 +194,54 @@ public:
             nearestZ = std::min(nearestZ, z), farthestZ = std::max(farthestZ, z), nearestW = std::min(nearestW, clip.w);
         }
         if (!boxHoldsSample(lo - kFootprintMarginPixels, hi + kFootprintMarginPixels, f_)) return 0;
-        if (depth_ && behindDepth(lo, hi, nearestZ, farthestZ, nearestW)) {
-            behind = true;
-            return 0;
+        if (depth_ && hi.x - lo.x <= kDepthTestedVoxelPixels && hi.y - lo.y <= kDepthTestedVoxelPixels) {
+            const double cornerError = this->cornerError(nearestZ, farthestZ, nearestW);
+            const double margin = hiddenDepthMargin(nearestZ, farthestZ, cornerError, planeTermRatio(window, faces));
+            // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h):
+            // monotonic in the depth, so the nearest key is that of the nearest depth (or,
+            // reversed, the farthest).
+            auto key = [&](double z) { return double(depth_->keySign) * std::clamp(z, 0.0, 1.0); };
+            v.lo = lo, v.hi = hi;
+            v.nearestKey = std::min(key(nearestZ), key(farthestZ)) - margin;
+            v.farthestKey = std::max(key(nearestZ), key(farthestZ)) + margin;
+            v.depthTested = true;
+            v.occludes = lo.x >= 0.0 && lo.y >= 0.0 && hi.x <= double(f_.widthPixels) && hi.y <= double(f_.heightPixels) &&
+                         nearestZ - cornerError > 0.0 && farthestZ + cornerError < 1.0;
+            if (behindFootprint(lo, hi, v.nearestKey)) {
+                behind = true;
+                return 0;
+            }
         }
-        // The corners of the face on `axis`, in order around it, as bits along the other two axes.
-        static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
         uint8_t kept = 0;
         for (int axis = 0; axis < 3; ++axis)
             for (int side = 0; side < 2; ++side) {
                 const uint8_t bit = uint8_t(1u << (2 * axis + side));
                 if (!(faces & bit)) continue;
-                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
                 glm::dvec2 quad[4];
-                for (int c = 0; c < 4; ++c)
-                    quad[c] = window[(side == 0 ? 1 << axis : 0) | kAround[c][0] << u | kAround[c][1] << v];
+                faceQuad(window, axis, side, quad);
                 glm::dvec2 faceLo = glm::min(glm::min(quad[0], quad[1]), glm::min(quad[2], quad[3]));
                 glm::dvec2 faceHi = glm::max(glm::max(quad[0], quad[1]), glm::max(quad[2], quad[3]));
                 if (faceHi.x - faceLo.x > kSearchedFacePixels || faceHi.y - faceLo.y > kSearchedFacePixels ||
-                    quadHoldsSample(quad, faceLo - kFootprintMarginPixels, faceHi + kFootprintMarginPixels, f_))
+                    quadHoldsSample(quad, f_))
                     kept |= bit;
             }
         return kept;
     }
 
+    /// The window corners of the voxel's face on `axis` (side 0: the positive one), in order around
+    /// it: the corners' bits along the other two axes.
+    static void faceQuad(const glm::dvec2 (&window)[8], int axis, int side, glm::dvec2 (&quad)[4]) {
+        static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        for (int c = 0; c < 4; ++c) quad[c] = window[(side == 0 ? 1 << axis : 0) | kAround[c][0] << u | kAround[c][1] << v];
+    }
+
 private:
-    /// Whether no sample the voxel's faces cover can pass a LESS test against the depth
-    /// footprint: the nearest key any of them can get, less hiddenDepthMargin, is not below the
-    /// farthest key stored in any 8x8 block under the voxel's widened box. `lo`, `hi`: the box in
-    /// window pixels; nearestZ, farthestZ: the corners' window depths; nearestW: their least clip w.
-    bool behindDepth(const glm::dvec2& lo, const glm::dvec2& hi, double nearestZ, double farthestZ,
-                     double nearestW) const {
+    /// Whether no sample under the voxel's box (window pixels) can pass a LESS test against the
+    /// depth footprint: `nearestKey`, the least key any of its faces' samples can get, is not below
+    /// the farthest key stored in any 8x8 block under the widened box.
+    bool behindFootprint(const glm::dvec2& lo, const glm::dvec2& hi, double nearestKey) const {
         const DepthFootprint& d = *depth_;
-        if (hi.x - lo.x > kDepthTestedVoxelPixels || hi.y - lo.y > kDepthTestedVoxelPixels) return false;
-        const double margin = hiddenDepthMargin(nearestZ, farthestZ, nearestW);
-        // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h): monotonic
-        // in the depth, so the nearest key is that of the nearest depth (or, reversed, the farthest).
-        auto key = [&](double z) { return double(d.keySign) * std::clamp(z, 0.0, 1.0); };
-        const double nearestKey = std::min(key(nearestZ), key(farthestZ)) - margin;
         // Pixels by truncation: the box lies within a few pixels of the image here (it holds a
         // sample, and is at most kDepthTestedVoxelPixels wide), and a pixel one too far left or up
         // (truncation of a negative value) only adds a block to the test.
@@ -213,32 +256,73 @@ private:
         return true;
     }
 
-    /// How far in front of nearestZ the rasterizer's depth at a sample one of the voxel's faces
-    /// covers can lie, in window depth. Three sources, each bounded with room to spare:
-    /// - Each face corner's float window depth against the exact z / w found here: the position
-    ///   rounded to float, the float matrix product (four products, three sums) and the division
-    ///   are seven or eight roundings of 2^-24 relative to the terms' magnitudes; 2^-20 of them
-    ///   (sixteen roundings, kTransformRounding) bounds the error of clip z and w, so of z / w at
-    ///   most (Ez + |z / w| Ew) / w, with E = 2^-20 the sum of |matrix entry x coordinate| of that
-    ///   row (clipZError_, clipWError_: over the block's largest coordinates).
+    /// How far the rasterizer's float window depth of a corner can lie from the exact z / w found
+    /// here: the position rounded to float, the float matrix product (four products, three sums)
+    /// and the division are seven or eight roundings of 2^-24 relative to the terms' magnitudes;
+    /// 2^-20 of them (sixteen roundings, kTransformRounding) bounds the error of clip z and w, so of
+    /// z / w at most (Ez + |z / w| Ew) / w, with E = 2^-20 the sum of |matrix entry x coordinate|
+    /// of that row (clipZError_, clipWError_: over the block's largest coordinates).
+    double cornerError(double nearestZ, double farthestZ, double nearestW) const {
+        const double zMagnitude = std::max(std::abs(nearestZ), std::abs(farthestZ));
+        return (clipZError_ + zMagnitude * clipWError_) / nearestW;
+    }
+
+    /// How far outside [nearestZ, farthestZ] the rasterizer's depth at a sample one of the voxel's
+    /// faces covers can lie, in window depth. Three sources, each bounded with room to spare:
+    /// - Each face corner's float window depth against the exact one: cornerError.
     /// - Exactly evaluated, the depth plane at a covered sample is a convex combination of its
     ///   triangle's three vertex depths (the sample lies in the snapped triangle the plane was fit
-    ///   to), so not in front of the nearest corner.
+    ///   to), so not outside the corners' range.
     /// - The plane is stored and evaluated in float: z0 + gx X + gy Y, X and Y within the
-    ///   triangle's sides L of the first vertex. The gradient is at most 2 dz L / area2 (dz the
-    ///   vertices' depth range) and the doubled area at least 1 subpixel² (snapped vertices are
-    ///   integers), so each term is at most 2 dz L² <= 2^25 dz for L <= 2^12 subpixels
-    ///   (kDepthTestedVoxelPixels times sqrt 2, under 16 pixels). The gradients' rounding and the
-    ///   sum's three then cost at most 16 dz + 2^-21.
-    double hiddenDepthMargin(double nearestZ, double farthestZ, double nearestW) const {
-        const double zMagnitude = std::max(std::abs(nearestZ), std::abs(farthestZ));
-        const double cornerError = (clipZError_ + zMagnitude * clipWError_) / nearestW;
+    ///   triangle's sides L of the first vertex (raster/depth.h, setDepthPlane). The gradient is at
+    ///   most 2 dz L / area2 (dz the vertices' depth range, area2 the snapped doubled area), so each
+    ///   term is at most 2 dz R with R = L² / area2 (planeTermRatio). The gradients' float rounding,
+    ///   the two products' and the two sums' are each at most 2^-24 of terms up to 2 dz R (or 1,
+    ///   the depth at the origin), so together at most 2^-20 R dz + 2^-21. R is at most 2^24 for
+    ///   any triangle of the tested size (L <= 2^12 subpixels: kDepthTestedVoxelPixels times sqrt 2,
+    ///   under 16 pixels; area2 >= 1 subpixel², snapped vertices being integers): 16 dz, the bound
+    ///   for a sliver; a face seen square on, of about a pixel, has R near 2, and its margin is then
+    ///   about the corners' error alone.
+    static double hiddenDepthMargin(double nearestZ, double farthestZ, double cornerError, double planeTermRatio) {
         const double depthRange = farthestZ - nearestZ + 2.0 * cornerError;
-        return cornerError + 16.0 * depthRange + kPlaneRounding;
+        return cornerError + 0x1p-20 * planeTermRatio * depthRange + kPlaneRounding;
+    }
+
+    /// R = L² / area2 of the worst of the faces' triangles (hiddenDepthMargin), from their exact
+    /// window corners: each snapped vertex lies within kSnapSlackSubpixels of the exact one on
+    /// each axis, which lengthens a side by at most twice that and shrinks the doubled area by at
+    /// most 4 d P + 8 d² (d the slack, P the sum of the sides' |dx| + |dy|). Capped at 2^24, the
+    /// bound for any triangle of the tested size.
+    static double planeTermRatio(const glm::dvec2 (&window)[8], uint8_t faces) {
+        constexpr double kWorst = 0x1p24, s = raster::kSubpixelsPerPixel, d = kSnapSlackSubpixels;
+        double worst = 0.0;
+        for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side) {
+                if (!(faces & (1u << (2 * axis + side)))) continue;
+                glm::dvec2 q[4];
+                faceQuad(window, axis, side, q);
+                static constexpr int kTriangles[2][3] = {{0, 1, 2}, {0, 2, 3}};  // the draw's two per face
+                for (const auto& t : kTriangles) {
+                    const glm::dvec2 a = q[t[0]] * s, b = q[t[1]] * s, c = q[t[2]] * s;
+                    const glm::dvec2 ab = b - a, ac = c - a, bc = c - b;
+                    const double sides = std::abs(ab.x) + std::abs(ab.y) + std::abs(ac.x) + std::abs(ac.y) +
+                                         std::abs(bc.x) + std::abs(bc.y);
+                    const double area2 = std::abs(ab.x * ac.y - ab.y * ac.x) - 4.0 * d * sides - 8.0 * d * d;
+                    const glm::dvec2 extent = glm::max(glm::max(a, b), c) - glm::min(glm::min(a, b), c);
+                    const double l = std::max(extent.x, extent.y) + 2.0 * d;
+                    if (!(area2 >= 1.0)) return kWorst;
+                    worst = std::max(worst, l * l / area2);
+                }
+            }
+        return std::min(worst, kWorst);
     }
 
     static constexpr double kTransformRounding = 0x1p-20;  // sixteen roundings of 2^-24
     static constexpr double kPlaneRounding = 0x1p-21;      // the plane sum's roundings of terms up to 1
+    /// How far a snapped window vertex lies from the exact one here, per axis, in subpixels: half
+    /// a subpixel of snapping and the float transform's error (about a thousandth of a pixel at
+    /// 4K, a quarter of a subpixel: kFootprintMarginPixels).
+    static constexpr double kSnapSlackSubpixels = 1.0;
 
     const SampleFootprint& f_;
     const DepthFootprint* depth_;
@@ -248,14 +332,140 @@ private:
     glm::dvec4 halfExtent_{0.0};
 };
 
+/// A voxel whose faces survived the tests made one at a time, waiting for the block's own
+/// occlusion test.
+struct KeptVoxel {
+    uint32_t index;  // in the block's arrays
+    uint8_t faces;   // the faces still to draw
+    ProjectedVoxel projected;
+};
+
+/// The most sample keys a block's own depth test holds (a block seen at over 1,000 x 1,000 pixels,
+/// or 512 x 512 at 16 samples, is left to the rasterizer: its voxels are near and large).
+constexpr size_t kMaxBlockDepthSamples = size_t(1) << 24;
+
+/// Same-block occlusion: the far side of a block lies behind its near side, and a block is drawn
+/// in one chunk, so the frame's depth footprint (made from the chunks before) cannot see it. The
+/// block's voxels are visited front to back (by their nearest key, in kDepthOrderBins bins: the
+/// order decides only how many are found, not whether a finding is right); each voxel that may
+/// be clipped by nothing records, at every sample its faces surely cover, the farthest key it can
+/// write there; a later voxel every one of whose samples already holds a key below its nearest
+/// key (strictly: in the draw they may come in either order, and a tie would go to the first)
+/// cannot show anywhere, and is left out. The faces drawn are then the same bits as before.
+void leaveOutVoxelsBehindTheirBlock(std::vector<KeptVoxel>& kept, const SampleFootprint& f, uint64_t& facesBehind) {
+    constexpr int kDepthOrderBins = 1024;
+    int x0 = f.widthPixels, y0 = f.heightPixels, x1 = -1, y1 = -1;
+    double keyLo = std::numeric_limits<double>::infinity(), keyHi = -keyLo;
+    size_t tested = 0;
+    // A pixel's samples lie within it, so the pixels whose samples can lie in [lo - m, hi + m]
+    // are within [trunc(lo - m) - 1, trunc(hi + m) + 1] (truncation of a negative value only widens it).
+    auto pixelsOf = [&](const ProjectedVoxel& v, int& px0, int& py0, int& px1, int& py1) {
+        px0 = std::max(0, int(v.lo.x - kFootprintMarginPixels) - 1), py0 = std::max(0, int(v.lo.y - kFootprintMarginPixels) - 1);
+        px1 = std::min(f.widthPixels - 1, int(v.hi.x + kFootprintMarginPixels) + 1);
+        py1 = std::min(f.heightPixels - 1, int(v.hi.y + kFootprintMarginPixels) + 1);
+    };
+    for (const KeptVoxel& k : kept) {
+        if (!k.projected.depthTested) continue;
+        int px0, py0, px1, py1;
+        pixelsOf(k.projected, px0, py0, px1, py1);
+        x0 = std::min(x0, px0), y0 = std::min(y0, py0), x1 = std::max(x1, px1), y1 = std::max(y1, py1);
+        keyLo = std::min(keyLo, k.projected.nearestKey), keyHi = std::max(keyHi, k.projected.nearestKey);
+        ++tested;
+    }
+    if (tested < 2 || x0 > x1 || y0 > y1) return;
+    const size_t samples = f.samples.size(), width = size_t(x1 - x0 + 1);
+    const size_t keyCount = width * size_t(y1 - y0 + 1) * samples;
+    if (keyCount > kMaxBlockDepthSamples) return;
+    thread_local std::vector<double> keys;  // per sample of the rectangle: the farthest key drawn there, at most
+    thread_local std::vector<uint32_t> order, binStart;
+    keys.assign(keyCount, std::numeric_limits<double>::infinity());
+    auto keyAt = [&](int x, int y, size_t s) -> double& {
+        return keys[(size_t(y - y0) * width + size_t(x - x0)) * samples + s];
+    };
+    // Front to back: a counting sort of the tested voxels by their nearest key.
+    const double binScale = keyHi > keyLo ? (kDepthOrderBins - 1) / (keyHi - keyLo) : 0.0;
+    auto binOf = [&](const KeptVoxel& k) { return size_t((k.projected.nearestKey - keyLo) * binScale); };
+    binStart.assign(kDepthOrderBins + 1, 0);
+    for (const KeptVoxel& k : kept)
+        if (k.projected.depthTested) ++binStart[binOf(k) + 1];
+    for (int b = 0; b < kDepthOrderBins; ++b) binStart[size_t(b) + 1] += binStart[size_t(b)];
+    order.resize(tested);
+    for (size_t i = 0; i < kept.size(); ++i)
+        if (kept[i].projected.depthTested) order[binStart[binOf(kept[i])]++] = uint32_t(i);
+
+    for (uint32_t i : order) {
+        KeptVoxel& k = kept[i];
+        const ProjectedVoxel& v = k.projected;
+        // Hidden when every sample any of its faces may cover already holds a nearer key.
+        bool hidden = true;
+        for (int axis = 0; axis < 3 && hidden; ++axis)
+            for (int side = 0; side < 2 && hidden; ++side) {
+                if (!(k.faces & (1u << (2 * axis + side)))) continue;
+                glm::dvec2 quad[4];
+                FaceFootprints::faceQuad(v.window, axis, side, quad);
+                hidden = !visitSamplesInQuad(quad, kFootprintMarginPixels, f,
+                                             [&](int x, int y, size_t s) { return keyAt(x, y, s) < v.nearestKey; });
+            }
+        if (hidden) {
+            facesBehind += uint64_t(__builtin_popcount(k.faces));
+            k.faces = 0;
+            continue;
+        }
+        if (!v.occludes) continue;
+        for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side) {
+                if (!(k.faces & (1u << (2 * axis + side)))) continue;
+                glm::dvec2 quad[4];
+                FaceFootprints::faceQuad(v.window, axis, side, quad);
+                // The samples the rasterizer's snapped triangles of the face surely cover (a
+                // sample on the quad's diagonal belongs to one of its two by the fill rule).
+                visitSamplesInQuad(quad, -kSurelyInsideMarginPixels, f, [&](int x, int y, size_t s) {
+                    double& key = keyAt(x, y, s);
+                    key = std::min(key, v.farthestKey);
+                    return true;
+                });
+            }
+    }
+}
+
+/// Appends the voxel's faces `emit` as quads of two triangles carrying its normal and colour.
+void appendVoxelFaces(const glm::dvec3& lo, const glm::dvec3& hi, uint8_t emit, const glm::vec3& normal,
+                      const glm::vec3& color, FaceMesh& out) {
+    ++out.voxels;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            if (!(emit & (1u << (2 * axis + side)))) continue;
+            glm::dvec3 c[4];
+            faceCorners(lo, hi, axis, side == 0, c);
+            const uint32_t base = uint32_t(out.positions.size());
+            for (const glm::dvec3& p : c) {
+                out.positions.push_back(glm::vec3(p));
+                out.normals.push_back(normal);
+                out.colors.push_back(color);
+            }
+            out.indices.insert(out.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+            ++out.faces;
+        }
+}
+
 }  // namespace
 
 void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& camera, FaceMesh& out,
                       const glm::vec3* overrideColor, const VoxelRegion* region, const SampleFootprint* footprint,
-                      const DepthFootprint* depth) {
+                      const DepthFootprint* depth, bool facesWriteDepth) {
     const VoxelBoxes boxes(model, block.level, block.coord);
     std::optional<FaceFootprints> footprints;
     if (footprint) footprints.emplace(*footprint, boxes, model.blockSize, depth);
+    // With the block's own occlusion test, the faces are appended after it, in the block's order
+    // (the order the draw would have had: ties in depth go the same way).
+    const bool testWithinBlock = footprints && depth && facesWriteDepth;
+    thread_local std::vector<KeptVoxel> kept;
+    kept.clear();
+    auto append = [&](size_t i, const glm::dvec3& lo, uint8_t emit) {
+        const glm::vec3 normal = unpackNormal1010102(block.normals[i]);
+        const glm::vec3 color = overrideColor ? *overrideColor : unpackSrgba8Rgb(block.colors[i]);
+        appendVoxelFaces(lo, lo + boxes.voxelSize, emit, normal, color, out);
+    };
     for (size_t i = 0; i < block.voxels.size(); ++i) {
         const uint32_t packed = block.voxels[i];
         const glm::uvec3 position = voxelPositionInBlock(packed);
@@ -278,29 +488,25 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
         uint8_t emit = mask & facing;
         if (emit && footprints) {
             bool behind = false;
-            const uint8_t covering = footprints->mayCoverSamples(position, emit, behind);
+            ProjectedVoxel* projected = nullptr;
+            if (testWithinBlock) projected = &kept.emplace_back().projected;
+            const uint8_t covering = footprints->mayCoverSamples(position, emit, behind, projected);
             (behind ? out.facesBehindDepth : out.facesBetweenSamples) += uint64_t(__builtin_popcount(emit ^ covering));
             emit = covering;
-        }
-        if (!emit) continue;
-        ++out.voxels;
-        const glm::vec3 normal = unpackNormal1010102(block.normals[i]);
-        const glm::vec3 color = overrideColor ? *overrideColor : unpackSrgba8Rgb(block.colors[i]);
-        for (int axis = 0; axis < 3; ++axis)
-            for (int side = 0; side < 2; ++side) {
-                if (!(emit & (1u << (2 * axis + side)))) continue;
-                glm::dvec3 c[4];
-                faceCorners(lo, hi, axis, side == 0, c);
-                const uint32_t base = uint32_t(out.positions.size());
-                for (const glm::dvec3& p : c) {
-                    out.positions.push_back(glm::vec3(p));
-                    out.normals.push_back(normal);
-                    out.colors.push_back(color);
-                }
-                out.indices.insert(out.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-                ++out.faces;
+            if (testWithinBlock) {
+                if (emit)
+                    kept.back().index = uint32_t(i), kept.back().faces = emit;
+                else
+                    kept.pop_back();
+                continue;
             }
+        }
+        if (emit) append(i, lo, emit);
     }
+    if (!testWithinBlock) return;
+    leaveOutVoxelsBehindTheirBlock(kept, *footprint, out.facesBehindDepth);
+    for (const KeptVoxel& k : kept)
+        if (k.faces) append(k.index, boxes.lowCorner(voxelPositionInBlock(block.voxels[k.index])), k.faces);
 }
 
 }  // namespace cuberille::voxel

@@ -54,7 +54,7 @@ constexpr double kFootprintMarginPixels = 1.0 / 16.0;
 /// it per block from the last frame; this is per voxel, from the blocks drawn before in this
 /// frame). Voxel faces are drawn with the depth test alone deciding what shows: the dragon at
 /// pixel error 1 drew 2.88 faces per covered pixel, behind nearer surfaces of the model, where one
-/// shows (2.40 with this; docs/performance.md). Blocks are drawn front to back in chunks; after
+/// shows (2.35 with this; docs/performance.md). Blocks are drawn front to back in chunks; after
 /// each chunk the rasterizer's hierarchical Z is made exact
 /// (raster::Pipeline::flushAndTightenHierarchicalDepth) and copied here, and a later voxel whose
 /// nearest depth lies behind the farthest depth of every 8x8 block under it cannot pass a LESS
@@ -106,11 +106,12 @@ struct VoxelRegion {
 
 /// Appends the camera-facing active faces of every voxel of the block (or of the region); with a
 /// footprint, only those that may cover one of its samples, and with a depth footprint as well,
-/// only those of voxels not behind it. overrideColor, when given, replaces the voxels' colours
-/// (debug views).
+/// only those of voxels not behind it, nor (when the faces are drawn writing depth) behind the
+/// block's own nearer voxels. overrideColor, when given, replaces the voxels' colours (debug views).
 void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& cameraPosition,
                       FaceMesh& out, const glm::vec3* overrideColor = nullptr, const VoxelRegion* region = nullptr,
-                      const SampleFootprint* footprint = nullptr, const DepthFootprint* depth = nullptr);
+                      const SampleFootprint* footprint = nullptr, const DepthFootprint* depth = nullptr,
+                      bool facesWriteDepth = false);
 inline void expandVoxelFaces(const VoxelModel& model, const VoxelBlock& block, const glm::dvec3& cameraPosition,
                              FaceMesh& out, const glm::vec3* overrideColor = nullptr) {
     expandVoxelFaces(model, BlockVoxels::of(block), cameraPosition, out, overrideColor);
