@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstring>
 
-#include "raster/parallel.h"
 #include "voxel/packing.h"
 
 namespace cuberille::lod {
@@ -58,14 +57,16 @@ IndexedTriangles indexSourceTriangles(std::span<const voxel::SourceTriangle> tri
     return out;
 }
 
-ModelBlocks::ModelBlocks(voxel::VoxelModel model) : model_(std::move(model)), triangles_(model_.blocks.size()) {
-    raster::parallelFor(model_.blocks.size(), [&](size_t i) {
-        voxel::VoxelBlock& b = model_.blocks[i];
-        if (b.triangles.empty()) return;
-        triangles_[i] = indexSourceTriangles(b.triangles);
+ModelBlocks::ModelBlocks(voxel::VoxelModel model) : model_(std::move(model)), triangles_(model_.blocks.size()) {}
+
+bool ModelBlocks::acquire(uint32_t block, BlockParts part) {
+    voxel::VoxelBlock& b = model_.blocks[block];
+    if ((part & BlockParts::kTriangles) && !b.triangles.empty()) {
+        triangles_[block] = indexSourceTriangles(b.triangles);
         b.layoutTriangles = uint32_t(b.triangles.size());
         b.triangles = {};  // drawn from the indexed form; the count stays in the layout
-    });
+    }
+    return true;
 }
 
 }  // namespace cuberille::lod

@@ -74,11 +74,14 @@ public:
 /// A whole model in memory: every block resident, nothing ever missing.
 class ModelBlocks final : public BlockSource {
 public:
-    /// Indexes each block's source triangles once (in parallel); the model keeps their counts.
     explicit ModelBlocks(voxel::VoxelModel model);
 
     const voxel::VoxelModel& layout() const override { return model_; }
-    bool acquire(uint32_t, BlockParts) override { return true; }
+    /// A block's source triangles are indexed the first time a frame draws them, and kept in that
+    /// form (the model keeps their count): a run whose frames never come close enough to draw
+    /// source triangles never pays for them (the dragon at 2048^3: about 0.3 s of CPU time for
+    /// all 2,398 blocks, on every load).
+    bool acquire(uint32_t block, BlockParts part) override;
     voxel::BlockVoxels voxels(uint32_t block) const override {
         return voxel::BlockVoxels::of(model_.blocks[block]);
     }

@@ -500,6 +500,42 @@ TEST(VoxelHiddenDepth, FarSideOfABlockIsLeftOutBehindItsNearSideBitForBit) {
         << behindFrameDepth << " and " << behindBoth << " left out behind, of " << drawnWithout;
 }
 
+// A block's source triangles are indexed for drawing the first time a frame draws them, not when
+// the model is loaded (lod::ModelBlocks): a far view indexes none; a near view indexes the blocks
+// it draws as triangles, and draws the same image as a scene that indexed them in an earlier frame.
+TEST(SourceTriangles, AreIndexedOnlyForTheBlocksAFrameDraws) {
+    const voxel::VoxelModel model = spherePyramid(256);
+    auto blocksStillRaw = [](const lod::VoxelScene& s) {
+        size_t raw = 0;
+        for (const voxel::VoxelBlock& b : s.model().blocks) raw += !b.triangles.empty();
+        return raw;
+    };
+    size_t withTriangles = 0;
+    for (const voxel::VoxelBlock& b : model.blocks) withTriangles += !b.triangles.empty();
+    ASSERT_GT(withTriangles, 0u);
+    const glm::dvec3 far(0.4, 0.3, 40.0), near(0.3, 0.1, 2.05);  // the surface is 0.25 from `near`
+    lod::VoxelRenderOptions o;
+    o.occlusion = false;
+    lod::VoxelFrameStats stats;
+
+    lod::VoxelScene farFirst(model, 0.0f, 0.0f);
+    farFirst.camera = cameraAt(far);
+    renderColor(farFirst, o, &stats);
+    EXPECT_EQ(stats.triangleBlocksDrawn, 0u);
+    EXPECT_EQ(blocksStillRaw(farFirst), withTriangles);
+
+    farFirst.camera = cameraAt(near);
+    const std::vector<float> nearAfterFar = renderColor(farFirst, o, &stats);
+    ASSERT_GT(stats.triangleBlocksDrawn, 0u);
+    EXPECT_EQ(blocksStillRaw(farFirst), withTriangles - stats.triangleBlocksDrawn);
+    const std::vector<float> nearAgain = renderColor(farFirst, o, &stats);  // drawn from what was indexed
+
+    lod::VoxelScene nearFirst(model, 0.0f, 0.0f);
+    nearFirst.camera = cameraAt(near);
+    EXPECT_EQ(renderColor(nearFirst, o, nullptr), nearAfterFar);
+    EXPECT_EQ(nearAgain, nearAfterFar);
+}
+
 TEST(Occlusion, VisibilityViewShowsNoCulledBlockFromTheMainCamera) {
     // The culled blocks are drawn in red after everything else: none may show.
     const voxel::VoxelModel model = twoSpheres();
