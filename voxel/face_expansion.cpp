@@ -213,27 +213,32 @@ public:
             }
         }
         uint8_t kept = 0;
+        forEachFaceQuad(window, faces, [&](uint8_t bit, const glm::dvec2(&quad)[4]) {
+            glm::dvec2 faceLo = glm::min(glm::min(quad[0], quad[1]), glm::min(quad[2], quad[3]));
+            glm::dvec2 faceHi = glm::max(glm::max(quad[0], quad[1]), glm::max(quad[2], quad[3]));
+            if (faceHi.x - faceLo.x > kSearchedFacePixels || faceHi.y - faceLo.y > kSearchedFacePixels ||
+                quadHoldsSample(quad, f_))
+                kept |= bit;
+        });
+        return kept;
+    }
+
+    /// Calls visit(bit, quad) for each face of `faces` (bit 1 << (2 axis + side), side 0 the
+    /// positive one) with its window corners in order around it: the corners' bits along the other
+    /// two axes.
+    template <class Visit>
+    static void forEachFaceQuad(const glm::dvec2 (&window)[8], uint8_t faces, Visit&& visit) {
+        static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
         for (int axis = 0; axis < 3; ++axis)
             for (int side = 0; side < 2; ++side) {
                 const uint8_t bit = uint8_t(1u << (2 * axis + side));
                 if (!(faces & bit)) continue;
+                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
                 glm::dvec2 quad[4];
-                faceQuad(window, axis, side, quad);
-                glm::dvec2 faceLo = glm::min(glm::min(quad[0], quad[1]), glm::min(quad[2], quad[3]));
-                glm::dvec2 faceHi = glm::max(glm::max(quad[0], quad[1]), glm::max(quad[2], quad[3]));
-                if (faceHi.x - faceLo.x > kSearchedFacePixels || faceHi.y - faceLo.y > kSearchedFacePixels ||
-                    quadHoldsSample(quad, f_))
-                    kept |= bit;
+                for (int c = 0; c < 4; ++c)
+                    quad[c] = window[(side == 0 ? 1 << axis : 0) | kAround[c][0] << u | kAround[c][1] << v];
+                visit(bit, quad);
             }
-        return kept;
-    }
-
-    /// The window corners of the voxel's face on `axis` (side 0: the positive one), in order around
-    /// it: the corners' bits along the other two axes.
-    static void faceQuad(const glm::dvec2 (&window)[8], int axis, int side, glm::dvec2 (&quad)[4]) {
-        static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-        for (int c = 0; c < 4; ++c) quad[c] = window[(side == 0 ? 1 << axis : 0) | kAround[c][0] << u | kAround[c][1] << v];
     }
 
 private:
@@ -296,24 +301,19 @@ private:
     static double planeTermRatio(const glm::dvec2 (&window)[8], uint8_t faces) {
         constexpr double kWorst = 0x1p24, s = raster::kSubpixelsPerPixel, d = kSnapSlackSubpixels;
         double worst = 0.0;
-        for (int axis = 0; axis < 3; ++axis)
-            for (int side = 0; side < 2; ++side) {
-                if (!(faces & (1u << (2 * axis + side)))) continue;
-                glm::dvec2 q[4];
-                faceQuad(window, axis, side, q);
-                static constexpr int kTriangles[2][3] = {{0, 1, 2}, {0, 2, 3}};  // the draw's two per face
-                for (const auto& t : kTriangles) {
-                    const glm::dvec2 a = q[t[0]] * s, b = q[t[1]] * s, c = q[t[2]] * s;
-                    const glm::dvec2 ab = b - a, ac = c - a, bc = c - b;
-                    const double sides = std::abs(ab.x) + std::abs(ab.y) + std::abs(ac.x) + std::abs(ac.y) +
-                                         std::abs(bc.x) + std::abs(bc.y);
-                    const double area2 = std::abs(ab.x * ac.y - ab.y * ac.x) - 4.0 * d * sides - 8.0 * d * d;
-                    const glm::dvec2 extent = glm::max(glm::max(a, b), c) - glm::min(glm::min(a, b), c);
-                    const double l = std::max(extent.x, extent.y) + 2.0 * d;
-                    if (!(area2 >= 1.0)) return kWorst;
-                    worst = std::max(worst, l * l / area2);
-                }
+        forEachFaceQuad(window, faces, [&](uint8_t, const glm::dvec2(&q)[4]) {
+            static constexpr int kTriangles[2][3] = {{0, 1, 2}, {0, 2, 3}};  // the draw's two per face
+            for (const auto& t : kTriangles) {
+                const glm::dvec2 a = q[t[0]] * s, b = q[t[1]] * s, c = q[t[2]] * s;
+                const glm::dvec2 ab = b - a, ac = c - a, bc = c - b;
+                const double sides = std::abs(ab.x) + std::abs(ab.y) + std::abs(ac.x) + std::abs(ac.y) +
+                                     std::abs(bc.x) + std::abs(bc.y);
+                const double area2 = std::abs(ab.x * ac.y - ab.y * ac.x) - 4.0 * d * sides - 8.0 * d * d;
+                const glm::dvec2 extent = glm::max(glm::max(a, b), c) - glm::min(glm::min(a, b), c);
+                const double l = std::max(extent.x, extent.y) + 2.0 * d;
+                worst = area2 >= 1.0 ? std::max(worst, l * l / area2) : kWorst;  // a sliver: the worst case
             }
+        });
         return std::min(worst, kWorst);
     }
 
@@ -398,33 +398,26 @@ void leaveOutVoxelsBehindTheirBlock(std::vector<KeptVoxel>& kept, const SampleFo
         const ProjectedVoxel& v = k.projected;
         // Hidden when every sample any of its faces may cover already holds a nearer key.
         bool hidden = true;
-        for (int axis = 0; axis < 3 && hidden; ++axis)
-            for (int side = 0; side < 2 && hidden; ++side) {
-                if (!(k.faces & (1u << (2 * axis + side)))) continue;
-                glm::dvec2 quad[4];
-                FaceFootprints::faceQuad(v.window, axis, side, quad);
-                hidden = !visitSamplesInQuad(quad, kFootprintMarginPixels, f,
-                                             [&](int x, int y, size_t s) { return keyAt(x, y, s) < v.nearestKey; });
-            }
+        FaceFootprints::forEachFaceQuad(v.window, k.faces, [&](uint8_t, const glm::dvec2(&quad)[4]) {
+            hidden = hidden && !visitSamplesInQuad(quad, kFootprintMarginPixels, f, [&](int x, int y, size_t s) {
+                return keyAt(x, y, s) < v.nearestKey;
+            });
+        });
         if (hidden) {
             facesBehind += uint64_t(__builtin_popcount(k.faces));
             k.faces = 0;
             continue;
         }
         if (!v.occludes) continue;
-        for (int axis = 0; axis < 3; ++axis)
-            for (int side = 0; side < 2; ++side) {
-                if (!(k.faces & (1u << (2 * axis + side)))) continue;
-                glm::dvec2 quad[4];
-                FaceFootprints::faceQuad(v.window, axis, side, quad);
-                // The samples the rasterizer's snapped triangles of the face surely cover (a
-                // sample on the quad's diagonal belongs to one of its two by the fill rule).
-                visitSamplesInQuad(quad, -kSurelyInsideMarginPixels, f, [&](int x, int y, size_t s) {
-                    double& key = keyAt(x, y, s);
-                    key = std::min(key, v.farthestKey);
-                    return true;
-                });
-            }
+        FaceFootprints::forEachFaceQuad(v.window, k.faces, [&](uint8_t, const glm::dvec2(&quad)[4]) {
+            // The samples the rasterizer's snapped triangles of the face surely cover (a sample
+            // on the quad's diagonal belongs to one of its two by the fill rule).
+            visitSamplesInQuad(quad, -kSurelyInsideMarginPixels, f, [&](int x, int y, size_t s) {
+                double& key = keyAt(x, y, s);
+                key = std::min(key, v.farthestKey);
+                return true;
+            });
+        });
     }
 }
 
@@ -452,13 +445,13 @@ void appendVoxelFaces(const glm::dvec3& lo, const glm::dvec3& hi, uint8_t emit, 
 
 void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& camera, FaceMesh& out,
                       const glm::vec3* overrideColor, const VoxelRegion* region, const SampleFootprint* footprint,
-                      const DepthFootprint* depth, bool facesWriteDepth) {
+                      const DepthFootprint* depth, bool testWithinBlock) {
     const VoxelBoxes boxes(model, block.level, block.coord);
     std::optional<FaceFootprints> footprints;
     if (footprint) footprints.emplace(*footprint, boxes, model.blockSize, depth);
     // With the block's own occlusion test, the faces are appended after it, in the block's order
     // (the order the draw would have had: ties in depth go the same way).
-    const bool testWithinBlock = footprints && depth && facesWriteDepth;
+    testWithinBlock = testWithinBlock && footprints && depth;
     thread_local std::vector<KeptVoxel> kept;
     kept.clear();
     auto append = [&](size_t i, const glm::dvec3& lo, uint8_t emit) {

@@ -106,12 +106,14 @@ struct VoxelRegion {
 
 /// Appends the camera-facing active faces of every voxel of the block (or of the region); with a
 /// footprint, only those that may cover one of its samples, and with a depth footprint as well,
-/// only those of voxels not behind it, nor (when the faces are drawn writing depth) behind the
-/// block's own nearer voxels. overrideColor, when given, replaces the voxels' colours (debug views).
+/// only those of voxels not behind it, nor, with testWithinBlock, behind the block's own nearer
+/// voxels (only for faces the caller draws writing depth: a voxel is left out because nearer
+/// faces of its block will be in the depth buffer). overrideColor, when given, replaces the
+/// voxels' colours (debug views).
 void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& cameraPosition,
                       FaceMesh& out, const glm::vec3* overrideColor = nullptr, const VoxelRegion* region = nullptr,
                       const SampleFootprint* footprint = nullptr, const DepthFootprint* depth = nullptr,
-                      bool facesWriteDepth = false);
+                      bool testWithinBlock = false);
 inline void expandVoxelFaces(const VoxelModel& model, const VoxelBlock& block, const glm::dvec3& cameraPosition,
                              FaceMesh& out, const glm::vec3* overrideColor = nullptr) {
     expandVoxelFaces(model, BlockVoxels::of(block), cameraPosition, out, overrideColor);

@@ -343,6 +343,12 @@ WithAndWithout renderWithAndWithoutDepthTest(const voxel::VoxelModel& model, con
     return r;
 }
 
+/// A model seen from an eye (looking at its centre, cameraAt).
+struct ModelView {
+    const voxel::VoxelModel* model;
+    glm::dvec3 eye;
+};
+
 // Voxels behind what earlier chunks of the frame drew are left out before they become faces
 // (voxel::DepthFootprint); no sample of theirs could pass the depth test, so every pixel of every
 // sample count stays the same bits: the sphere seen through its own far side from afar, near,
@@ -352,14 +358,10 @@ WithAndWithout renderWithAndWithoutDepthTest(const voxel::VoxelModel& model, con
 // depth.
 TEST(VoxelHiddenDepth, LeavingOutVoxelsBehindDrawnDepthLeavesTheImageBitForBit) {
     const voxel::VoxelModel sphere = spherePyramid(512), spheres = twoSpheres();
-    struct View {
-        const voxel::VoxelModel* model;
-        glm::dvec3 eye;
-    };
-    const View views[] = {{&sphere, {0.4, 0.3, 40.0}}, {&sphere, {0.4, 0.3, 7.0}}, {&sphere, {6.0, 2.5, -1.0}},
-                          {&sphere, {0.3, 2.35, 0.2}}, {&sphere, {0.3, 0.1, 2.2}}, {&spheres, {0.5, 0.3, 9.0}}};
+    const ModelView views[] = {{&sphere, {0.4, 0.3, 40.0}}, {&sphere, {0.4, 0.3, 7.0}}, {&sphere, {6.0, 2.5, -1.0}},
+                               {&sphere, {0.3, 2.35, 0.2}}, {&sphere, {0.3, 0.1, 2.2}}, {&spheres, {0.5, 0.3, 9.0}}};
     uint64_t behind = 0, drawn = 0, drawnWithout = 0, betweenWith = 0, betweenWithout = 0;
-    for (const View& view : views)
+    for (const ModelView& view : views)
         for (int samples : {1, 4, 16})
             for (bool occlusion : {false, true})
                 for (bool reversed : {false, true}) {
@@ -464,14 +466,10 @@ TEST(VoxelHiddenDepth, VoxelsAroundAWallDrawnFirstAreLeftOutOnlyBehindIt) {
 // leaves out faces the frame's depth alone does not.
 TEST(VoxelHiddenDepth, FarSideOfABlockIsLeftOutBehindItsNearSideBitForBit) {
     const voxel::VoxelModel sphere = spherePyramid(512), spheres = twoSpheres();
-    struct View {
-        const voxel::VoxelModel* model;
-        glm::dvec3 eye;
-    };
-    const View views[] = {{&sphere, {0.4, 0.3, 40.0}}, {&sphere, {0.4, 0.3, 7.0}}, {&sphere, {6.0, 2.5, -1.0}},
-                          {&sphere, {0.3, 2.35, 0.2}}, {&sphere, {0.3, 0.1, 1.2}}, {&spheres, {0.5, 0.3, 9.0}}};
+    const ModelView views[] = {{&sphere, {0.4, 0.3, 40.0}}, {&sphere, {0.4, 0.3, 7.0}}, {&sphere, {6.0, 2.5, -1.0}},
+                               {&sphere, {0.3, 2.35, 0.2}}, {&sphere, {0.3, 0.1, 1.2}}, {&spheres, {0.5, 0.3, 9.0}}};
     uint64_t behindFrameDepth = 0, behindBoth = 0, drawnWithout = 0;
-    for (const View& view : views)
+    for (const ModelView& view : views)
         for (int samples : {1, 4, 16})
             for (bool reversed : {false, true}) {
                 SCOPED_TRACE(::testing::Message() << "eye " << view.eye.x << "," << view.eye.y << "," << view.eye.z << ", "
