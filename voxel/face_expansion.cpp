@@ -40,9 +40,14 @@ uint8_t regionSideFaces(const glm::uvec3& p, const VoxelRegion& r) {
     return faces;
 }
 
-/// Faces whose screen box is wider or taller than this many pixels are kept without looking for
-/// their samples: they cover some in all but rare slivers, and the search would cost more than
-/// drawing them.
+/// Faces whose screen box is wider or taller than kSearchedFacePixels over the samples per pixel
+/// are kept without looking for their samples: a face that size nearly always covers one, and
+/// the search costs more than drawing the few that do not. The threshold is a fit to two
+/// measurements on the 4096³ dragon's flights at pixel error 1 (docs/performance.md), where faces
+/// are half a pixel to a pixel: at 1 sample, searching every face under 2 pixels leaves out half
+/// of those it searches, for 20% fewer faces at the same frame time as searching under 1 pixel;
+/// at 4 samples, where a tenth of the faces under 2 pixels cover no sample, searching them cost 5
+/// to 10% more frame time than searching only those under half a pixel (none there).
 constexpr double kSearchedFacePixels = 2.0;
 
 /// The pixels [first, last] whose sample at `offset` (pixels from the pixel's corner) lies in
@@ -56,18 +61,6 @@ inline void samplePixels(double lo, double hi, double offset, int pixels, int& f
     first += double(first) < from;
     last -= double(last) > to;
     first = std::max(first, 0), last = std::min(last, pixels - 1);
-}
-
-/// Whether a sample of some pixel lies in the box. Asked once or twice of every voxel a frame
-/// expands, so always inlined: as a call it was a tenth of a zoom flight's time.
-[[gnu::always_inline]] inline bool boxHoldsSample(const glm::dvec2& lo, const glm::dvec2& hi, const SampleFootprint& f) {
-    for (const glm::dvec2& s : f.samples) {
-        int x0, x1, y0, y1;
-        samplePixels(lo.x, hi.x, s.x, f.widthPixels, x0, x1);
-        samplePixels(lo.y, hi.y, s.y, f.heightPixels, y0, y1);
-        if (x0 <= x1 && y0 <= y1) return true;
-    }
-    return false;
 }
 
 /// Calls visit(x, y, s) for the samples s of pixels (x, y) that lie in the convex quad (window
@@ -149,35 +142,20 @@ public:
         }
         for (int axis = 0; axis < 3; ++axis) step_[axis] = f.clipFromModel[axis] * boxes.voxelSize;
         halfWidth_ = 0.5 * f.widthPixels, halfHeight_ = 0.5 * f.heightPixels;
-        // How far a corner's clip x, y and w lie from the centre's, at most (the same for every voxel).
-        halfExtent_ = 0.5 * (glm::abs(step_[0]) + glm::abs(step_[1]) + glm::abs(step_[2]));
-    }
-
-    /// False when no sample can lie under the voxel: a box about the projected centre that holds
-    /// every corner (a corner at c + d in clip space lies at x/w with |x/w - cx/cw| at most
-    /// (|dx| + |cx/cw| |dw|) / (cw - |dw|)), for two divisions instead of eight.
-    bool mayCoverAnySample(const glm::uvec3& p) const {
-        const glm::dvec4 centre =
-            origin_ + step_[0] * (p.x + 0.5) + step_[1] * (p.y + 0.5) + step_[2] * (p.z + 0.5);
-        const double nearestW = centre.w - halfExtent_.w;
-        if (!(nearestW > 0.0) || centre.z - halfExtent_.z < 0.0) return true;  // may cross the near plane
-        const double invW = 1.0 / centre.w, x = centre.x * invW, y = centre.y * invW;
-        const double invNearestW = 1.0 / nearestW;
-        const double rx = (halfExtent_.x + std::abs(x) * halfExtent_.w) * invNearestW * halfWidth_ + kFootprintMarginPixels;
-        const double ry = (halfExtent_.y + std::abs(y) * halfExtent_.w) * invNearestW * halfHeight_ + kFootprintMarginPixels;
-        const glm::dvec2 at((x + 1.0) * halfWidth_, (1.0 - y) * halfHeight_);
-        return boxHoldsSample(at - glm::dvec2(rx, ry), at + glm::dvec2(rx, ry), f_);
+        searchedFacePixels_ = kSearchedFacePixels / double(std::max<size_t>(f.samples.size(), 1));
     }
 
     /// The faces of `faces` (of the voxel at `p` in the block) that may cover a sample: none when
-    /// the voxel's whole box holds no sample or lies behind the depth footprint (then `behind`),
-    /// else each face by its own quad. With `projected`, what the depth tests know of the voxel.
+    /// the voxel lies behind the depth footprint (then `behind`), else each face by its own quad
+    /// (kSearchedFacePixels). With `projected`, what the depth tests know of the voxel. There is no
+    /// test of the voxel's whole box first: the faces' own tests find the same voxels, and two such
+    /// pre-tests (a box about the projected centre, then the corners' box), which caught a fifth of
+    /// the voxels at 1 sample and almost none at 4, cost more than they saved at every sample count.
     uint8_t mayCoverSamples(const glm::uvec3& p, uint8_t faces, bool& behind, ProjectedVoxel* projected = nullptr) const {
         behind = false;
         ProjectedVoxel local;
         ProjectedVoxel& v = projected ? *projected : local;
         v.depthTested = v.occludes = false;
-        if (!mayCoverAnySample(p)) return 0;
         glm::dvec2(&window)[8] = v.window;
         const glm::dvec4 base = origin_ + step_[0] * double(p.x) + step_[1] * double(p.y) + step_[2] * double(p.z);
         glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
@@ -194,7 +172,6 @@ public:
             const double z = clip.z * invW;
             nearestZ = std::min(nearestZ, z), farthestZ = std::max(farthestZ, z), nearestW = std::min(nearestW, clip.w);
         }
-        if (!boxHoldsSample(lo - kFootprintMarginPixels, hi + kFootprintMarginPixels, f_)) return 0;
         if (depth_ && hi.x - lo.x <= kDepthTestedVoxelPixels && hi.y - lo.y <= kDepthTestedVoxelPixels) {
             const double cornerError = this->cornerError(nearestZ, farthestZ, nearestW);
             // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h):
@@ -226,7 +203,7 @@ public:
         forEachFaceQuad(window, faces, [&](uint8_t bit, const glm::dvec2(&quad)[4]) {
             glm::dvec2 faceLo = glm::min(glm::min(quad[0], quad[1]), glm::min(quad[2], quad[3]));
             glm::dvec2 faceHi = glm::max(glm::max(quad[0], quad[1]), glm::max(quad[2], quad[3]));
-            if (faceHi.x - faceLo.x > kSearchedFacePixels || faceHi.y - faceLo.y > kSearchedFacePixels ||
+            if (faceHi.x - faceLo.x > searchedFacePixels_ || faceHi.y - faceLo.y > searchedFacePixels_ ||
                 quadHoldsSample(quad, f_))
                 kept |= bit;
         });
@@ -339,7 +316,7 @@ private:
     double clipZError_ = 0.0, clipWError_ = 0.0;
     glm::dvec4 origin_, step_[3];
     double halfWidth_ = 0.0, halfHeight_ = 0.0;
-    glm::dvec4 halfExtent_{0.0};
+    double searchedFacePixels_ = 0.0;  // kSearchedFacePixels over the samples per pixel
 };
 
 /// A voxel whose faces survived the tests made one at a time, waiting for the block's own

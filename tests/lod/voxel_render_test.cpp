@@ -297,6 +297,7 @@ TEST(VoxelFootprint, LeavingOutFacesBetweenSamplesLeavesTheImageBitForBit) {
     const voxel::VoxelModel model = spherePyramid(512);
     const glm::dvec3 eyes[] = {{0.4, 0.3, 40.0}, {0.4, 0.3, 7.0}, {6.0, 2.5, -1.0}, {0.3, 2.35, 0.2}, {0.3, 0.1, 2.2}};
     uint64_t leftOut = 0, behind = 0, drawn = 0, drawnWithout = 0, farLeftOut = 0, farDrawn = 0;
+    uint64_t leftOutAtSeveralSamples = 0;
     for (const glm::dvec3& eye : eyes)
         for (int samples : {1, 4, 16})
             for (bool occlusion : {false, true}) {
@@ -313,6 +314,7 @@ TEST(VoxelFootprint, LeavingOutFacesBetweenSamplesLeavesTheImageBitForBit) {
                     for (int frame = 0; frame < (occlusion ? 2 : 1); ++frame) images[i] = renderColor(scene, o, &stats, samples);
                     (i == 0 ? drawn : drawnWithout) += stats.facesEmitted;
                     if (i == 0) leftOut += stats.facesBetweenSamples, behind += stats.facesBehindDepth;
+                    if (i == 0 && samples > 1) leftOutAtSeveralSamples += stats.facesBetweenSamples;
                     if (i == 0 && eye == eyes[0] && samples == 1)
                         farLeftOut += stats.facesBetweenSamples, farDrawn += stats.facesEmitted;
                 }
@@ -321,6 +323,9 @@ TEST(VoxelFootprint, LeavingOutFacesBetweenSamplesLeavesTheImageBitForBit) {
     EXPECT_EQ(drawn + leftOut + behind, drawnWithout);  // voxels behind the depth are tested only with a footprint
     EXPECT_GT(farLeftOut, 0u);
     EXPECT_GT(farLeftOut, farDrawn) << "far away, at one sample, most faces fall between samples";
+    // Faces are searched at every sample count (only smaller ones at more samples: kSearchedFacePixels),
+    // so the images above hold the multisample search to the same bits too.
+    EXPECT_GT(leftOutAtSeveralSamples, 0u);
 }
 
 /// A voxel frame drawn with voxels behind the depth drawn before left out ([0]) and without ([1]),
