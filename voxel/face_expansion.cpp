@@ -172,6 +172,11 @@ public:
             const double z = clip.z * invW;
             nearestZ = std::min(nearestZ, z), farthestZ = std::max(farthestZ, z), nearestW = std::min(nearestW, clip.w);
         }
+        // Outside the viewport, where a block straddling its edge puts some voxels: no sample (the
+        // one test of the whole voxel that pays, at four comparisons).
+        if (hi.x < -kFootprintMarginPixels || hi.y < -kFootprintMarginPixels ||
+            lo.x > f_.widthPixels + kFootprintMarginPixels || lo.y > f_.heightPixels + kFootprintMarginPixels)
+            return 0;
         if (depth_ && hi.x - lo.x <= kDepthTestedVoxelPixels && hi.y - lo.y <= kDepthTestedVoxelPixels) {
             const double cornerError = this->cornerError(nearestZ, farthestZ, nearestW);
             // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h):
