@@ -147,10 +147,11 @@ public:
 
     /// The faces of `faces` (of the voxel at `p` in the block) that may cover a sample: none when
     /// the voxel lies behind the depth footprint (then `behind`), else each face by its own quad
-    /// (kSearchedFacePixels). With `projected`, what the depth tests know of the voxel. There is no
-    /// test of the voxel's whole box first: the faces' own tests find the same voxels, and two such
-    /// pre-tests (a box about the projected centre, then the corners' box), which caught a fifth of
-    /// the voxels at 1 sample and almost none at 4, cost more than they saved at every sample count.
+    /// (kSearchedFacePixels). With `projected`, what the depth tests know of the voxel. The voxel's
+    /// whole box is tested only against the viewport: the faces' own tests find the rest, and two
+    /// sample pre-tests of the box (about the projected centre, then the corners'), which caught a
+    /// fifth of the voxels at 1 sample and almost none at 4, cost more than they saved at every
+    /// sample count.
     uint8_t mayCoverSamples(const glm::uvec3& p, uint8_t faces, bool& behind, ProjectedVoxel* projected = nullptr) const {
         behind = false;
         ProjectedVoxel local;
