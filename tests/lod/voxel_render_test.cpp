@@ -328,6 +328,36 @@ TEST(VoxelFootprint, LeavingOutFacesBetweenSamplesLeavesTheImageBitForBit) {
     EXPECT_GT(leftOutAtSeveralSamples, 0u);
 }
 
+// A block straddling the viewport's edge holds voxels outside it, which expansion leaves out
+// before looking at their faces; the image stays the same bits along every edge of the frame, at
+// 1 and 4 samples (at 4, faces of a pixel are not searched, so the viewport test is most of what
+// is left out).
+TEST(VoxelFootprint, VoxelsOutsideTheViewportAreLeftOutBitForBit) {
+    const voxel::VoxelModel model = spherePyramid(512, false);
+    // The sphere pushed against each corner of the frame in turn: it crosses two edges each time.
+    const glm::dvec3 offsets[] = {{1.9, 1.3, 0.0}, {-1.9, 1.3, 0.0}, {1.9, -1.3, 0.0}, {-1.9, -1.3, 0.0}};
+    uint64_t leftOutAtFourSamples = 0;
+    for (const glm::dvec3& offset : offsets)
+        for (int samples : {1, 4}) {
+            SCOPED_TRACE(::testing::Message() << "offset " << offset.x << "," << offset.y << ", " << samples << " samples");
+            std::vector<float> images[2];
+            for (int i = 0; i < 2; ++i) {
+                lod::VoxelScene scene(model, 0.0f, 0.0f);
+                scene.camera = cameraAt({0.4, 0.3, 6.0});
+                scene.camera.target = glm::vec3(kCentre + offset);
+                lod::VoxelRenderOptions o;
+                o.occlusion = false;
+                o.leaveOutFacesBetweenSamples = i == 0;
+                lod::VoxelFrameStats stats;
+                images[i] = renderColor(scene, o, &stats, samples);
+                if (i == 0 && samples == 4) leftOutAtFourSamples += stats.facesBetweenSamples;
+                if (i == 0) EXPECT_EQ(stats.triangleBlocksDrawn, 0u) << "the test is about voxel faces";
+            }
+            EXPECT_EQ(images[0], images[1]);
+        }
+    EXPECT_GT(leftOutAtFourSamples, 0u);
+}
+
 /// A voxel frame drawn with voxels behind the depth drawn before left out ([0]) and without ([1]),
 /// the last of `frames` (the occlusion tests learn from the frame before), and its statistics.
 struct WithAndWithout {
