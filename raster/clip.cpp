@@ -3,10 +3,6 @@
 namespace cuberille::raster {
 namespace {
 
-// Smallest w a vertex may keep; keeps 1/w finite for any projection, including odd ones
-// where z >= 0 does not imply w > 0.
-constexpr float kMinClipW = 1e-20f;
-
 float planeDistance(const glm::vec4& plane, const glm::vec4& p, int planeIndex) {
     float d = plane.x * p.x + plane.y * p.y + plane.z * p.z + plane.w * p.w;
     return planeIndex == 2 ? d - kMinClipW : d;

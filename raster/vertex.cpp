@@ -1,18 +1,11 @@
 #include "raster/vertex.h"
 
+#include "raster/vertex_lanes.h"
+
 #include <cmath>
 
 namespace cuberille::raster {
 namespace {
-
-void transformPositions(const DrawCall& draw, size_t begin, size_t end, glm::vec4* out) {
-    if (draw.space == PositionSpace::Window) {
-        for (size_t i = begin; i < end; ++i) out[i] = glm::vec4(draw.positions[i], 1.0f);
-        return;
-    }
-    const glm::mat4& m = draw.clipFromObject;
-    for (size_t i = begin; i < end; ++i) out[i] = m * glm::vec4(draw.positions[i], 1.0f);
-}
 
 void writeVaryings(const DrawCall& draw, const VaryingLayout& layout, size_t begin, size_t end, float* out) {
     const glm::vec3 base(draw.state.constantColor);
@@ -40,21 +33,6 @@ void writeVaryings(const DrawCall& draw, const VaryingLayout& layout, size_t beg
             v[layout.tangent] = t.x, v[layout.tangent + 1] = t.y, v[layout.tangent + 2] = t.z;
             v[layout.tangent + 3] = draw.tangents[i].w;
         }
-    }
-}
-
-void postTransform(const ClipVolume& volume, const SetupContext& viewport, size_t begin,
-                   size_t end, VertexStageOutput& out) {
-    for (size_t i = begin; i < end; ++i) {
-        const glm::vec4& p = out.clipPositions[i];
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(p.w)) {
-            out.outcodes[i] = kInvalidVertex;
-            continue;
-        }
-        const uint32_t code = outcode(volume, p);
-        out.outcodes[i] = uint8_t(code);
-        if (code == 0 && !projectToWindow(p, viewport, out.window[i]))
-            out.outcodes[i] = kInvalidVertex;
     }
 }
 
@@ -96,9 +74,9 @@ VaryingLayout varyingLayoutFor(const DrawCall& draw) {
 
 void runVertexStage(const DrawCall& draw, const ClipVolume& volume, const SetupContext& viewport,
                     size_t begin, size_t end, VertexStageOutput& out) {
-    transformPositions(draw, begin, end, out.clipPositions.data());
+    transformAndProjectVertices(draw.positions, draw.space, draw.clipFromObject, volume, viewport, begin, end,
+                                out.clipPositions.data(), out.outcodes.data(), out.window.data());
     if (out.layout.count > 0) writeVaryings(draw, out.layout, begin, end, out.varyings.data());
-    postTransform(volume, viewport, begin, end, out);
 }
 
 }  // namespace cuberille::raster

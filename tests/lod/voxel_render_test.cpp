@@ -351,7 +351,9 @@ TEST(VoxelFootprint, VoxelsOutsideTheViewportAreLeftOutBitForBit) {
                 lod::VoxelFrameStats stats;
                 images[i] = renderColor(scene, o, &stats, samples);
                 if (i == 0 && samples == 4) leftOutAtFourSamples += stats.facesBetweenSamples;
-                if (i == 0) EXPECT_EQ(stats.triangleBlocksDrawn, 0u) << "the test is about voxel faces";
+                if (i == 0) {
+                    EXPECT_EQ(stats.triangleBlocksDrawn, 0u) << "the test is about voxel faces";
+                }
             }
             EXPECT_EQ(images[0], images[1]);
         }
