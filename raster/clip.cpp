@@ -5,7 +5,7 @@ namespace {
 
 float planeDistance(const glm::vec4& plane, const glm::vec4& p, int planeIndex) {
     float d = plane.x * p.x + plane.y * p.y + plane.z * p.z + plane.w * p.w;
-    return planeIndex == 2 ? d - kMinClipW : d;
+    return planeIndex == ClipVolume::kMinWPlane ? d - kMinClipW : d;
 }
 
 ClipVertex intersect(const ClipVertex& inside, float dInside, const ClipVertex& outside,

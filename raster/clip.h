@@ -21,13 +21,14 @@ struct ClipVertex {
     std::array<float, kMaxVaryings> varyings;
 };
 
-/// Smallest w a vertex may keep (the third plane is w >= kMinClipW): keeps 1/w finite for any
-/// projection, including odd ones where z >= 0 does not imply w > 0.
+/// Smallest w a vertex may keep (ClipVolume::kMinWPlane is w >= kMinClipW): keeps 1/w finite
+/// for any projection, including odd ones where z >= 0 does not imply w > 0.
 inline constexpr float kMinClipW = 1e-20f;
 
 /// The clip volume of one viewport, as planes dot(plane, p) >= 0 in clip space.
 struct ClipVolume {
     static constexpr int kPlaneCount = 7;  // near, far, w > 0, left, right, top, bottom
+    static constexpr int kMinWPlane = 2;   // w >= kMinClipW: its distance is taken less kMinClipW
     std::array<glm::vec4, kPlaneCount> planes;
 
     /// For clip-space draws into a width x height viewport.

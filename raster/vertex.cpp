@@ -2,8 +2,6 @@
 
 #include "raster/vertex_lanes.h"
 
-#include <cmath>
-
 namespace cuberille::raster {
 namespace {
 

@@ -70,10 +70,9 @@ void outcodes(int count, const VertexTransform& t, VertexChunkLanes& l) {
     for (int i = 0; i < count; ++i) l.code[i] = 0;
     for (int k = 0; k < ClipVolume::kPlaneCount; ++k) {
         const float a = t.plane[k][0], b = t.plane[k][1], c = t.plane[k][2], d = t.plane[k][3];
-        const float minW = k == 2 ? kMinClipW : 0.0f;
         for (int i = 0; i < count; ++i) {
             float distance = a * l.x[i] + b * l.y[i] + c * l.z[i] + d * l.w[i];
-            if (k == 2) distance = distance - minW;
+            if (k == ClipVolume::kMinWPlane) distance = distance - kMinClipW;
             l.code[i] |= int32_t(!(distance >= 0.0f)) << k;
         }
     }
@@ -84,21 +83,18 @@ void outcodes(int count, const VertexTransform& t, VertexChunkLanes& l) {
 }
 
 /// projectToWindow() for the lanes inside the clip volume: the divide, the viewport transform,
-/// the snap (setup.cpp's snapToSubpixels: round to nearest even by adding and subtracting
-/// 1.5 * 2^52 in double) and the depth clamp; a lane whose result is not finite becomes
-/// kInvalidVertex. Other lanes snap 0, so no conversion sees a value out of range.
+/// snapToSubpixels() (inlined here, so vectorised) and the depth clamp; a lane whose result is
+/// not finite becomes kInvalidVertex. Other lanes snap 0, so no conversion sees a value out of
+/// range.
 void project(int count, const VertexTransform& t, VertexChunkLanes& l) {
-    constexpr double kRoundToIntegerBias = 6755399441055744.0;  // 1.5 * 2^52, as in snapToSubpixels()
     for (int i = 0; i < count; ++i) {
         const float invW = 1.0f / l.w[i];
         const float x = l.x[i] * invW * t.scaleX + t.offsetX;
         const float y = l.y[i] * invW * t.scaleY + t.offsetY;
         const float z = l.z[i] * invW;
         const int32_t usable = (l.code[i] == 0) & finite(x) & finite(y) & finite(z) & finite(invW);
-        const double sx = double(usable ? x : 0.0f) * kSubpixelsPerPixel;
-        const double sy = double(usable ? y : 0.0f) * kSubpixelsPerPixel;
-        l.snappedX[i] = static_cast<int32_t>((sx + kRoundToIntegerBias) - kRoundToIntegerBias);
-        l.snappedY[i] = static_cast<int32_t>((sy + kRoundToIntegerBias) - kRoundToIntegerBias);
+        l.snappedX[i] = snapToSubpixels(usable ? x : 0.0f);
+        l.snappedY[i] = snapToSubpixels(usable ? y : 0.0f);
         l.depth[i] = z < 0.0f ? 0.0f : (1.0f < z ? 1.0f : z);  // std::clamp(z, 0, 1)
         l.invW[i] = invW;
         l.code[i] = (l.code[i] == 0 && !usable) ? int32_t(kInvalidVertex) : l.code[i];
