@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "raster/limits.h"
+#include "voxel/face_footprint_lanes.h"
 #include "voxel/packing.h"
 
 namespace cuberille::voxel {
@@ -122,12 +123,13 @@ struct ProjectedVoxel {
 constexpr double kSurelyInsideMarginPixels = 4.0 / 256.0;
 
 /// A block's faces against a footprint: the clip position of a voxel corner is affine in its
-/// grid position, so a voxel's eight corners cost one matrix product and seven additions.
+/// grid position, so a voxel's eight corners cost one matrix product and seven additions (in
+/// lanes, voxel/face_footprint_lanes.h).
 class FaceFootprints {
 public:
     FaceFootprints(const SampleFootprint& f, const VoxelBoxes& boxes, uint32_t blockSize, const DepthFootprint* depth)
         : f_(f), depth_(depth) {
-        origin_ = f.clipFromModel * glm::dvec4(boxes.blockOrigin, 1.0);
+        cornerFrame_.origin = f.clipFromModel * glm::dvec4(boxes.blockOrigin, 1.0);
         if (depth) {
             // What the rasterizer's float transform of a corner can be off by, over the whole
             // block (hiddenDepthMargin): 2^-20 of the sums of |matrix entry x coordinate| of the
@@ -140,44 +142,32 @@ public:
                 clipZError_ += std::abs(m[j][2]) * magnitude[j], clipWError_ += std::abs(m[j][3]) * magnitude[j];
             clipZError_ *= kTransformRounding, clipWError_ *= kTransformRounding;
         }
-        for (int axis = 0; axis < 3; ++axis) step_[axis] = f.clipFromModel[axis] * boxes.voxelSize;
-        halfWidth_ = 0.5 * f.widthPixels, halfHeight_ = 0.5 * f.heightPixels;
+        for (int axis = 0; axis < 3; ++axis) cornerFrame_.step[axis] = f.clipFromModel[axis] * boxes.voxelSize;
+        cornerFrame_.halfWidth = 0.5 * f.widthPixels, cornerFrame_.halfHeight = 0.5 * f.heightPixels;
+        cornerFrame_.widthPixels = f.widthPixels, cornerFrame_.heightPixels = f.heightPixels;
         searchedFacePixels_ = kSearchedFacePixels / double(std::max<size_t>(f.samples.size(), 1));
     }
 
-    /// The faces of `faces` (of the voxel at `p` in the block) that may cover a sample: none when
-    /// the voxel lies behind the depth footprint (then `behind`), else each face by its own quad
-    /// (kSearchedFacePixels). With `projected`, what the depth tests know of the voxel. The voxel's
-    /// whole box is tested only against the viewport: the faces' own tests find the rest, and two
-    /// sample pre-tests of the box (about the projected centre, then the corners'), which caught a
-    /// fifth of the voxels at 1 sample and almost none at 4, cost more than they saved at every
-    /// sample count.
-    uint8_t mayCoverSamples(const glm::uvec3& p, uint8_t faces, bool& behind, ProjectedVoxel* projected = nullptr) const {
+    /// What the corner projection in lanes reads of this block and frame.
+    const VoxelCornerFrame& cornerFrame() const { return cornerFrame_; }
+    const SampleFootprint& sampleFootprint() const { return f_; }
+    double searchedFacePixels() const { return searchedFacePixels_; }
+
+    /// The faces of `faces` (of lane i of a projected run, `sampled`: those whose quads the face
+    /// search found may cover a sample) that may cover a sample: none when the voxel lies behind
+    /// the depth footprint (then `behind`), else `sampled`. With `projected`, what the depth tests
+    /// know of the voxel. The voxel's whole box is tested only against the viewport (in the
+    /// lanes): the faces' own tests find the rest, and two sample pre-tests of the box (about the
+    /// projected centre, then the corners'), which caught a fifth of the voxels at 1 sample and
+    /// almost none at 4, cost more than they saved at every sample count.
+    uint8_t mayCoverSamples(const VoxelCornerLanes& l, int i, uint8_t faces, uint8_t sampled, bool& behind,
+                            ProjectedVoxel* projected = nullptr) const {
         behind = false;
-        ProjectedVoxel local;
-        ProjectedVoxel& v = projected ? *projected : local;
-        v.depthTested = v.occludes = false;
-        glm::dvec2(&window)[8] = v.window;
-        const glm::dvec4 base = origin_ + step_[0] * double(p.x) + step_[1] * double(p.y) + step_[2] * double(p.z);
-        glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-        double nearestZ = std::numeric_limits<double>::infinity(), farthestZ = -nearestZ, nearestW = nearestZ;
-        for (int k = 0; k < 8; ++k) {
-            glm::dvec4 clip = base;
-            if (k & 1) clip += step_[0];
-            if (k & 2) clip += step_[1];
-            if (k & 4) clip += step_[2];
-            if (!(clip.w > 0.0) || clip.z < 0.0) return faces;  // crosses the near plane: clipped by the rasterizer; kept whole
-            const double invW = 1.0 / clip.w;
-            window[k] = {(clip.x * invW + 1.0) * halfWidth_, (1.0 - clip.y * invW) * halfHeight_};
-            lo = glm::min(lo, window[k]), hi = glm::max(hi, window[k]);
-            const double z = clip.z * invW;
-            nearestZ = std::min(nearestZ, z), farthestZ = std::max(farthestZ, z), nearestW = std::min(nearestW, clip.w);
-        }
-        // Outside the viewport, where a block straddling its edge puts some voxels: no sample (the
-        // one test of the whole voxel that pays, at four comparisons).
-        if (hi.x < -kFootprintMarginPixels || hi.y < -kFootprintMarginPixels ||
-            lo.x > f_.widthPixels + kFootprintMarginPixels || lo.y > f_.heightPixels + kFootprintMarginPixels)
-            return 0;
+        if (projected) projected->depthTested = projected->occludes = false;
+        if (l.projection[i] == kCrossesNearPlane) return faces;  // clipped by the rasterizer; kept whole
+        if (l.projection[i] == kOutsideViewport) return 0;  // no sample (the one test of the whole voxel that pays)
+        const glm::dvec2 lo(l.loX[i], l.loY[i]), hi(l.hiX[i], l.hiY[i]);
+        const double nearestZ = l.nearestZ[i], farthestZ = l.farthestZ[i], nearestW = l.nearestW[i];
         if (depth_ && hi.x - lo.x <= kDepthTestedVoxelPixels && hi.y - lo.y <= kDepthTestedVoxelPixels) {
             const double cornerError = this->cornerError(nearestZ, farthestZ, nearestW);
             // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h):
@@ -192,7 +182,10 @@ public:
             const bool mayBeBehind =
                 behindFootprint(lo, hi, nearestKey - hiddenDepthMargin(nearestZ, farthestZ, cornerError, 0.0));
             if (mayBeBehind || projected) {
-                const double margin = hiddenDepthMargin(nearestZ, farthestZ, cornerError, planeTermRatio(window, faces));
+                ProjectedVoxel local;
+                ProjectedVoxel& v = projected ? *projected : local;
+                for (int k = 0; k < 8; ++k) v.window[k] = {l.windowX[k][i], l.windowY[k][i]};
+                const double margin = hiddenDepthMargin(nearestZ, farthestZ, cornerError, planeTermRatio(v.window, faces));
                 v.lo = lo, v.hi = hi;
                 v.nearestKey = nearestKey - margin;
                 v.farthestKey = farthestKey + margin;
@@ -205,15 +198,14 @@ public:
                 }
             }
         }
-        uint8_t kept = 0;
-        forEachFaceQuad(window, faces, [&](uint8_t bit, const glm::dvec2(&quad)[4]) {
-            glm::dvec2 faceLo = glm::min(glm::min(quad[0], quad[1]), glm::min(quad[2], quad[3]));
-            glm::dvec2 faceHi = glm::max(glm::max(quad[0], quad[1]), glm::max(quad[2], quad[3]));
-            if (faceHi.x - faceLo.x > searchedFacePixels_ || faceHi.y - faceLo.y > searchedFacePixels_ ||
-                quadHoldsSample(quad, f_))
-                kept |= bit;
-        });
-        return kept;
+        return sampled;
+    }
+
+    /// The voxel corner (bit a set for the high side along axis a) at place c around the face on
+    /// `axis` and `side` (0 the positive one): the corners' bits along the other two axes.
+    static constexpr int quadCorner(int axis, int side, int c) {
+        constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        return (side == 0 ? 1 << axis : 0) | kAround[c][0] << ((axis + 1) % 3) | kAround[c][1] << ((axis + 2) % 3);
     }
 
     /// Calls visit(bit, quad) for each face of `faces` (bit 1 << (2 axis + side), side 0 the
@@ -221,15 +213,12 @@ public:
     /// two axes.
     template <class Visit>
     static void forEachFaceQuad(const glm::dvec2 (&window)[8], uint8_t faces, Visit&& visit) {
-        static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
         for (int axis = 0; axis < 3; ++axis)
             for (int side = 0; side < 2; ++side) {
                 const uint8_t bit = uint8_t(1u << (2 * axis + side));
                 if (!(faces & bit)) continue;
-                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
                 glm::dvec2 quad[4];
-                for (int c = 0; c < 4; ++c)
-                    quad[c] = window[(side == 0 ? 1 << axis : 0) | kAround[c][0] << u | kAround[c][1] << v];
+                for (int c = 0; c < 4; ++c) quad[c] = window[quadCorner(axis, side, c)];
                 visit(bit, quad);
             }
     }
@@ -320,8 +309,7 @@ private:
     const SampleFootprint& f_;
     const DepthFootprint* depth_;
     double clipZError_ = 0.0, clipWError_ = 0.0;
-    glm::dvec4 origin_, step_[3];
-    double halfWidth_ = 0.0, halfHeight_ = 0.0;
+    VoxelCornerFrame cornerFrame_;  // the clip position of the block's first corner, a voxel's steps
     double searchedFacePixels_ = 0.0;  // kSearchedFacePixels over the samples per pixel
 };
 
@@ -414,19 +402,83 @@ void leaveOutVoxelsBehindTheirBlock(std::vector<KeptVoxel>& kept, const SampleFo
     }
 }
 
+/// Up to kFootprintLanes voxels of a block waiting for their footprint tests, which run in lanes:
+/// their corners projected together, then their faces' quads searched for samples together.
+struct FootprintRun {
+    int count = 0;
+    uint32_t index[kFootprintLanes];  // in the block's arrays
+    glm::dvec3 lo[kFootprintLanes];   // low corner, model units
+    uint8_t emit[kFootprintLanes];    // camera-facing active faces
+    uint8_t sampled[kFootprintLanes]; // after test(): those of emit that may cover a sample
+    VoxelCornerLanes corners;
+    FaceQuadLanes quads;
+    int quadVoxel[kFootprintLanes];  // the run's voxel each quad belongs to
+    uint8_t quadBit[kFootprintLanes];
+
+    void add(uint32_t i, const glm::uvec3& position, const glm::dvec3& low, uint8_t faces) {
+        index[count] = i, lo[count] = low, emit[count] = faces;
+        corners.x[count] = int32_t(position.x), corners.y[count] = int32_t(position.y), corners.z[count] = int32_t(position.z);
+        ++count;
+    }
+
+    /// Projects the run's corners, then searches each face of each projected voxel for a sample.
+    void test(const FaceFootprints& footprints) {
+        corners.count = count;
+        projectVoxelCorners(footprints.cornerFrame(), corners);
+        quads.count = 0;
+        for (int j = 0; j < count; ++j) {
+            sampled[j] = 0;
+            if (corners.projection[j] != kProjected) continue;
+            for (int axis = 0; axis < 3; ++axis)
+                for (int side = 0; side < 2; ++side) {
+                    const uint8_t bit = uint8_t(1u << (2 * axis + side));
+                    if (!(emit[j] & bit)) continue;
+                    if (quads.count == kFootprintLanes) searchQuads(footprints);
+                    const int q = quads.count++;
+                    for (int c = 0; c < 4; ++c) {
+                        const int k = FaceFootprints::quadCorner(axis, side, c);
+                        quads.x[c][q] = corners.windowX[k][j], quads.y[c][q] = corners.windowY[k][j];
+                    }
+                    quadVoxel[q] = j, quadBit[q] = bit;
+                }
+        }
+        searchQuads(footprints);
+    }
+
+private:
+    void searchQuads(const FaceFootprints& footprints) {
+        const SampleFootprint& f = footprints.sampleFootprint();
+        searchFaceSamples(f, kFootprintMarginPixels, footprints.searchedFacePixels(), quads);
+        for (int q = 0; q < quads.count; ++q) {
+            bool covers = quads.found[q] == kMayCover;
+            if (quads.found[q] == kSearchOnOwn) {
+                const glm::dvec2 quad[4] = {{quads.x[0][q], quads.y[0][q]}, {quads.x[1][q], quads.y[1][q]},
+                                            {quads.x[2][q], quads.y[2][q]}, {quads.x[3][q], quads.y[3][q]}};
+                covers = quadHoldsSample(quad, f);
+            }
+            if (covers) sampled[quadVoxel[q]] |= quadBit[q];
+        }
+        quads.count = 0;
+    }
+};
+
 /// Appends the voxel's faces `emit` as quads of two triangles carrying its normal and colour.
-/// The arrays grow once per voxel and are written in place (push_back's capacity test per
-/// element was most of this function's time).
+/// The arrays grow once per voxel and are written in place: push_back's capacity test per
+/// element was most of this function's time, and then resize(n, value)'s fill, whose 12-byte
+/// value GCC 12 assembles on the stack for every element (a store-forwarding stall per vertex:
+/// a third of the function's samples, perf annotate).
 void appendVoxelFaces(const glm::dvec3& lo, const glm::dvec3& hi, uint8_t emit, const glm::vec3& normal,
                       const glm::vec3& color, FaceMesh& out) {
     ++out.voxels;
     const size_t faces = size_t(__builtin_popcount(emit)), firstVertex = out.positions.size();
     const size_t firstIndex = out.indices.size();
     out.positions.resize(firstVertex + 4 * faces);
-    out.normals.resize(firstVertex + 4 * faces, normal);
-    out.colors.resize(firstVertex + 4 * faces, color);
+    out.normals.resize(firstVertex + 4 * faces);
+    out.colors.resize(firstVertex + 4 * faces);
     out.indices.resize(firstIndex + 6 * faces);
     glm::vec3* position = out.positions.data() + firstVertex;
+    glm::vec3* vertexNormal = out.normals.data() + firstVertex;
+    glm::vec3* vertexColor = out.colors.data() + firstVertex;
     uint32_t* index = out.indices.data() + firstIndex;
     uint32_t base = uint32_t(firstVertex);
     for (int axis = 0; axis < 3; ++axis)
@@ -434,7 +486,7 @@ void appendVoxelFaces(const glm::dvec3& lo, const glm::dvec3& hi, uint8_t emit, 
             if (!(emit & (1u << (2 * axis + side)))) continue;
             glm::dvec3 c[4];
             faceCorners(lo, hi, axis, side == 0, c);
-            for (const glm::dvec3& p : c) *position++ = glm::vec3(p);
+            for (const glm::dvec3& p : c) *position++ = glm::vec3(p), *vertexNormal++ = normal, *vertexColor++ = color;
             *index++ = base, *index++ = base + 1, *index++ = base + 2;
             *index++ = base, *index++ = base + 2, *index++ = base + 3;
             base += 4;
@@ -460,6 +512,31 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
         const glm::vec3 color = overrideColor ? *overrideColor : unpackSrgba8Rgb(block.colors[i]);
         appendVoxelFaces(lo, lo + boxes.voxelSize, emit, normal, color, out);
     };
+    // With a footprint, the voxels with faces to emit wait in a run, whose tests go through lanes
+    // together (testRun); their faces are then appended in the block's order.
+    thread_local FootprintRun run;
+    run.count = 0;
+    auto testRun = [&] {
+        if (run.count == 0) return;
+        run.test(*footprints);
+        for (int j = 0; j < run.count; ++j) {
+            const uint32_t i = run.index[j];
+            const uint8_t emit = run.emit[j];
+            bool behind = false;
+            ProjectedVoxel* projected = testWithinBlock ? &kept.emplace_back().projected : nullptr;
+            const uint8_t covering = footprints->mayCoverSamples(run.corners, j, emit, run.sampled[j], behind, projected);
+            (behind ? out.facesBehindDepth : out.facesBetweenSamples) += uint64_t(__builtin_popcount(emit ^ covering));
+            if (testWithinBlock) {
+                if (covering)
+                    kept.back().index = i, kept.back().faces = covering;
+                else
+                    kept.pop_back();
+            } else if (covering) {
+                append(i, run.lo[j], covering);
+            }
+        }
+        run.count = 0;
+    };
     for (size_t i = 0; i < block.voxels.size(); ++i) {
         const uint32_t packed = block.voxels[i];
         const glm::uvec3 position = voxelPositionInBlock(packed);
@@ -479,24 +556,16 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
         if (camera.y < lo.y) facing |= kFaceNegY;
         if (camera.z > hi.z) facing |= kFacePosZ;
         if (camera.z < lo.z) facing |= kFaceNegZ;
-        uint8_t emit = mask & facing;
-        if (emit && footprints) {
-            bool behind = false;
-            ProjectedVoxel* projected = nullptr;
-            if (testWithinBlock) projected = &kept.emplace_back().projected;
-            const uint8_t covering = footprints->mayCoverSamples(position, emit, behind, projected);
-            (behind ? out.facesBehindDepth : out.facesBetweenSamples) += uint64_t(__builtin_popcount(emit ^ covering));
-            emit = covering;
-            if (testWithinBlock) {
-                if (emit)
-                    kept.back().index = uint32_t(i), kept.back().faces = emit;
-                else
-                    kept.pop_back();
-                continue;
-            }
+        const uint8_t emit = mask & facing;
+        if (!emit) continue;
+        if (!footprints) {
+            append(i, lo, emit);
+            continue;
         }
-        if (emit) append(i, lo, emit);
+        run.add(uint32_t(i), position, lo, emit);
+        if (run.count == kFootprintLanes) testRun();
     }
+    testRun();
     if (!testWithinBlock) return;
     leaveOutVoxelsBehindTheirBlock(kept, *footprint, out.facesBehindDepth);
     for (const KeptVoxel& k : kept)
