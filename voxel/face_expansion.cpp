@@ -150,6 +150,8 @@ public:
 
     /// What the corner projection in lanes reads of this block and frame.
     const VoxelCornerFrame& cornerFrame() const { return cornerFrame_; }
+    /// ... and the hidden-depth pre-test (its depth is null without a depth footprint).
+    HiddenDepthFrame hiddenDepthFrame() const { return {depth_, clipZError_, clipWError_}; }
     const SampleFootprint& sampleFootprint() const { return f_; }
     double searchedFacePixels() const { return searchedFacePixels_; }
 
@@ -160,8 +162,8 @@ public:
     /// lanes): the faces' own tests find the rest, and two sample pre-tests of the box (about the
     /// projected centre, then the corners'), which caught a fifth of the voxels at 1 sample and
     /// almost none at 4, cost more than they saved at every sample count.
-    uint8_t mayCoverSamples(const VoxelCornerLanes& l, int i, uint8_t faces, uint8_t sampled, bool& behind,
-                            ProjectedVoxel* projected = nullptr) const {
+    uint8_t mayCoverSamples(const VoxelCornerLanes& l, int i, uint8_t faces, uint8_t sampled, DepthPretest pretest,
+                            bool& behind, ProjectedVoxel* projected = nullptr) const {
         behind = false;
         if (projected) projected->depthTested = projected->occludes = false;
         if (l.projection[i] == kCrossesNearPlane) return faces;  // clipped by the rasterizer; kept whole
@@ -169,6 +171,9 @@ public:
         const glm::dvec2 lo(l.loX[i], l.loY[i]), hi(l.hiX[i], l.hiY[i]);
         const double nearestZ = l.nearestZ[i], farthestZ = l.farthestZ[i], nearestW = l.nearestW[i];
         if (depth_ && hi.x - lo.x <= kDepthTestedVoxelPixels && hi.y - lo.y <= kDepthTestedVoxelPixels) {
+            // In front even with the least margin (found in lanes): nothing more to learn here
+            // unless the block's own test wants the voxel's bounds.
+            if (pretest == kInFront && !projected) return sampled;
             const double cornerError = this->cornerError(nearestZ, farthestZ, nearestW);
             // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h):
             // monotonic in the depth, so the nearest key is that of the nearest depth (or,
@@ -180,7 +185,9 @@ public:
             // footprint test: a voxel not behind the footprint with the least margin (ratio 0) is
             // not behind it with its own, and needs the ratio only for the block's own test.
             const bool mayBeBehind =
-                behindFootprint(lo, hi, nearestKey - hiddenDepthMargin(nearestZ, farthestZ, cornerError, 0.0));
+                pretest == kInFront       ? false
+                : pretest == kMayBeBehind ? true
+                                          : behindFootprint(lo, hi, nearestKey - hiddenDepthMargin(nearestZ, farthestZ, cornerError, 0.0));
             if (mayBeBehind || projected) {
                 ProjectedVoxel local;
                 ProjectedVoxel& v = projected ? *projected : local;
@@ -232,10 +239,15 @@ private:
         // Pixels by truncation: the box lies within a few pixels of the image here (it holds a
         // sample, and is at most kDepthTestedVoxelPixels wide), and a pixel one too far left or up
         // (truncation of a negative value) only adds a block to the test.
-        const int x0 = std::max(0, int(lo.x - kFootprintMarginPixels) / d.blockSizePixels);
-        const int y0 = std::max(0, int(lo.y - kFootprintMarginPixels) / d.blockSizePixels);
-        const int x1 = std::min(d.blocksX - 1, int(hi.x + kFootprintMarginPixels) / d.blockSizePixels);
-        const int y1 = std::min(d.blocksY - 1, int(hi.y + kFootprintMarginPixels) / d.blockSizePixels);
+        // Divided by a constant where the blocks are the rasterizer's, as they are in a frame: a
+        // shift and a sign correction where four integer divisions were a third of this test.
+        auto block = [&](int pixel) {
+            return d.blockSizePixels == raster::kBlockSizePixels ? pixel / raster::kBlockSizePixels : pixel / d.blockSizePixels;
+        };
+        const int x0 = std::max(0, block(int(lo.x - kFootprintMarginPixels)));
+        const int y0 = std::max(0, block(int(lo.y - kFootprintMarginPixels)));
+        const int x1 = std::min(d.blocksX - 1, block(int(hi.x + kFootprintMarginPixels)));
+        const int y1 = std::min(d.blocksY - 1, block(int(hi.y + kFootprintMarginPixels)));
         if (x0 > x1 || y0 > y1) return false;
         for (int by = y0; by <= y1; ++by)
             for (int bx = x0; bx <= x1; ++bx)
@@ -243,36 +255,8 @@ private:
         return true;
     }
 
-    /// How far the rasterizer's float window depth of a corner can lie from the exact z / w found
-    /// here: the position rounded to float, the float matrix product (four products, three sums)
-    /// and the division are seven or eight roundings of 2^-24 relative to the terms' magnitudes;
-    /// 2^-20 of them (sixteen roundings, kTransformRounding) bounds the error of clip z and w, so of
-    /// z / w at most (Ez + |z / w| Ew) / w, with E = 2^-20 the sum of |matrix entry x coordinate|
-    /// of that row (clipZError_, clipWError_: over the block's largest coordinates).
     double cornerError(double nearestZ, double farthestZ, double nearestW) const {
-        const double zMagnitude = std::max(std::abs(nearestZ), std::abs(farthestZ));
-        return (clipZError_ + zMagnitude * clipWError_) / nearestW;
-    }
-
-    /// How far outside [nearestZ, farthestZ] the rasterizer's depth at a sample one of the voxel's
-    /// faces covers can lie, in window depth. Three sources, each bounded with room to spare:
-    /// - Each face corner's float window depth against the exact one: cornerError.
-    /// - Exactly evaluated, the depth plane at a covered sample is a convex combination of its
-    ///   triangle's three vertex depths (the sample lies in the snapped triangle the plane was fit
-    ///   to), so not outside the corners' range.
-    /// - The plane is stored and evaluated in float: z0 + gx X + gy Y, X and Y within the
-    ///   triangle's sides L of the first vertex (raster/depth.h, setDepthPlane). The gradient is at
-    ///   most 2 dz L / area2 (dz the vertices' depth range, area2 the snapped doubled area), so each
-    ///   term is at most 2 dz R with R = L² / area2 (planeTermRatio). The gradients' float rounding,
-    ///   the two products' and the two sums' are each at most 2^-24 of terms up to 2 dz R (or 1,
-    ///   the depth at the origin), so together at most 2^-20 R dz + 2^-21. R is at most 2^24 for
-    ///   any triangle of the tested size (L <= 2^12 subpixels: kDepthTestedVoxelPixels times sqrt 2,
-    ///   under 16 pixels; area2 >= 1 subpixel², snapped vertices being integers): 16 dz, the bound
-    ///   for a sliver; a face seen square on, of about a pixel, has R near 2, and its margin is then
-    ///   about the corners' error alone.
-    static double hiddenDepthMargin(double nearestZ, double farthestZ, double cornerError, double planeTermRatio) {
-        const double depthRange = farthestZ - nearestZ + 2.0 * cornerError;
-        return cornerError + 0x1p-20 * planeTermRatio * depthRange + kPlaneRounding;
+        return voxel::cornerError(clipZError_, clipWError_, nearestZ, farthestZ, nearestW);
     }
 
     /// R = L² / area2 of the worst of the faces' triangles (hiddenDepthMargin), from their exact
@@ -299,8 +283,6 @@ private:
         return std::min(worst, kWorst);
     }
 
-    static constexpr double kTransformRounding = 0x1p-20;  // sixteen roundings of 2^-24
-    static constexpr double kPlaneRounding = 0x1p-21;      // the plane sum's roundings of terms up to 1
     /// How far a snapped window vertex lies from the exact one here, per axis, in subpixels: half
     /// a subpixel of snapping and the float transform's error (about a thousandth of a pixel at
     /// 4K, a quarter of a subpixel: kFootprintMarginPixels).
@@ -410,6 +392,7 @@ struct FootprintRun {
     glm::dvec3 lo[kFootprintLanes];   // low corner, model units
     uint8_t emit[kFootprintLanes];    // camera-facing active faces
     uint8_t sampled[kFootprintLanes]; // after test(): those of emit that may cover a sample
+    uint8_t depthPretest[kFootprintLanes];  // after test(), with a depth footprint: DepthPretest
     VoxelCornerLanes corners;
     FaceQuadLanes quads;
     int quadVoxel[kFootprintLanes];  // the run's voxel each quad belongs to
@@ -425,6 +408,7 @@ struct FootprintRun {
     void test(const FaceFootprints& footprints) {
         corners.count = count;
         projectVoxelCorners(footprints.cornerFrame(), corners);
+        if (footprints.hiddenDepthFrame().depth) pretestHiddenDepth(footprints.hiddenDepthFrame(), corners, depthPretest);
         quads.count = 0;
         for (int j = 0; j < count; ++j) {
             sampled[j] = 0;
@@ -524,7 +508,8 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
             const uint8_t emit = run.emit[j];
             bool behind = false;
             ProjectedVoxel* projected = testWithinBlock ? &kept.emplace_back().projected : nullptr;
-            const uint8_t covering = footprints->mayCoverSamples(run.corners, j, emit, run.sampled[j], behind, projected);
+            const uint8_t covering = footprints->mayCoverSamples(run.corners, j, emit, run.sampled[j],
+                                                                 DepthPretest(run.depthPretest[j]), behind, projected);
             (behind ? out.facesBehindDepth : out.facesBetweenSamples) += uint64_t(__builtin_popcount(emit ^ covering));
             if (testWithinBlock) {
                 if (covering)
@@ -537,33 +522,32 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
         }
         run.count = 0;
     };
-    for (size_t i = 0; i < block.voxels.size(); ++i) {
-        const uint32_t packed = block.voxels[i];
-        const glm::uvec3 position = voxelPositionInBlock(packed);
-        uint8_t mask = voxelFaceMask(packed);
-        if (region) {
-            if (glm::any(glm::lessThan(position, region->lo)) || glm::any(glm::greaterThanEqual(position, region->hi)))
+    // Which sides face the camera, a run of voxels at a time in lanes; then, one voxel at a
+    // time, the active ones among them (at most one per axis).
+    const VoxelFacingFrame facingFrame{boxes.blockOrigin, camera, boxes.voxelSize};
+    uint8_t facing[kFootprintLanes];
+    for (size_t first = 0; first < block.voxels.size(); first += kFootprintLanes) {
+        const int count = int(std::min<size_t>(kFootprintLanes, block.voxels.size() - first));
+        cameraFacingSides(facingFrame, block.voxels.data() + first, count, facing);
+        for (int j = 0; j < count; ++j) {
+            const size_t i = first + size_t(j);
+            const uint32_t packed = block.voxels[i];
+            const glm::uvec3 position = voxelPositionInBlock(packed);
+            uint8_t mask = voxelFaceMask(packed);
+            if (region) {
+                if (glm::any(glm::lessThan(position, region->lo)) || glm::any(glm::greaterThanEqual(position, region->hi)))
+                    continue;
+                mask |= regionSideFaces(position, *region);
+            }
+            const uint8_t emit = mask & facing[j];
+            if (!emit) continue;
+            if (!footprints) {
+                append(i, boxes.lowCorner(position), emit);
                 continue;
-            mask |= regionSideFaces(position, *region);
+            }
+            run.add(uint32_t(i), position, boxes.lowCorner(position), emit);
+            if (run.count == kFootprintLanes) testRun();
         }
-        const glm::dvec3 lo = boxes.lowCorner(position);
-        const glm::dvec3 hi = lo + boxes.voxelSize;
-        // Active faces the camera is in front of: at most one per axis.
-        uint8_t facing = 0;
-        if (camera.x > hi.x) facing |= kFacePosX;
-        if (camera.x < lo.x) facing |= kFaceNegX;
-        if (camera.y > hi.y) facing |= kFacePosY;
-        if (camera.y < lo.y) facing |= kFaceNegY;
-        if (camera.z > hi.z) facing |= kFacePosZ;
-        if (camera.z < lo.z) facing |= kFaceNegZ;
-        const uint8_t emit = mask & facing;
-        if (!emit) continue;
-        if (!footprints) {
-            append(i, lo, emit);
-            continue;
-        }
-        run.add(uint32_t(i), position, lo, emit);
-        if (run.count == kFootprintLanes) testRun();
     }
     testRun();
     if (!testWithinBlock) return;

@@ -1,6 +1,7 @@
 #include "voxel/face_footprint_lanes.h"
 
 #include "voxel/face_expansion.h"
+#include "voxel/voxel_model.h"
 
 // Compiled once per instruction set (see raster/tile_raster.cpp for how foreach_target.h works):
 // the loops below are plain loops over lanes of one element type each, which GCC vectorises for
@@ -48,6 +49,21 @@ void projectCorner(const VoxelCornerFrame& f, int n, const double* bx, const dou
 
 }  // namespace
 
+void cameraFacingSidesOnTarget(const VoxelFacingFrame& f, const uint32_t* packed, int count, uint8_t* sides) {
+    const double size = f.voxelSize;
+    for (int i = 0; i < count; ++i) {
+        const uint32_t p = packed[i];
+        // VoxelBoxes::lowCorner's blockOrigin + position * size, then + size, per axis.
+        const double loX = f.blockOrigin.x + double(p & 0xFFu) * size, hiX = loX + size;
+        const double loY = f.blockOrigin.y + double((p >> 8) & 0xFFu) * size, hiY = loY + size;
+        const double loZ = f.blockOrigin.z + double((p >> 16) & 0xFFu) * size, hiZ = loZ + size;
+        const uint32_t bits = uint32_t(f.camera.x > hiX) * kFacePosX | uint32_t(f.camera.x < loX) * kFaceNegX |
+                              uint32_t(f.camera.y > hiY) * kFacePosY | uint32_t(f.camera.y < loY) * kFaceNegY |
+                              uint32_t(f.camera.z > hiZ) * kFacePosZ | uint32_t(f.camera.z < loZ) * kFaceNegZ;
+        sides[i] = uint8_t(bits);
+    }
+}
+
 void projectVoxelCornersOnTarget(const VoxelCornerFrame& f, VoxelCornerLanes& l) {
     const int n = l.count;
     alignas(64) double bx[N], by[N], bz[N], bw[N];
@@ -78,6 +94,44 @@ void projectVoxelCornersOnTarget(const VoxelCornerFrame& f, VoxelCornerLanes& l)
         const int32_t outside = int32_t(l.hiX[i] < -m) | int32_t(l.hiY[i] < -m) | int32_t(l.loX[i] > right) |
                                 int32_t(l.loY[i] > bottom);
         l.projection[i] = uint8_t(crosses[i] ? kCrossesNearPlane : (outside ? kOutsideViewport : kProjected));
+    }
+}
+
+void pretestHiddenDepthOnTarget(const HiddenDepthFrame& f, const VoxelCornerLanes& l, uint8_t* pretest) {
+    const DepthFootprint& d = *f.depth;
+    const int n = l.count;
+    const float* farthest = d.farthestKey.data();
+    const double keySign = double(d.keySign), m = kFootprintMarginPixels;
+    constexpr int kBlock = 8;  // raster::kBlockSizePixels, a constant so that the divisions are shifts
+    for (int i = 0; i < n; ++i) {
+        const int32_t tested = int32_t(l.projection[i] == kProjected) & int32_t(l.hiX[i] - l.loX[i] <= kDepthTestedVoxelPixels) &
+                               int32_t(l.hiY[i] - l.loY[i] <= kDepthTestedVoxelPixels);
+        const double nearestZ = l.nearestZ[i], farthestZ = l.farthestZ[i];
+        const double error = cornerError(f.clipZError, f.clipWError, nearestZ, farthestZ, l.nearestW[i]);
+        const double nearKey = depthKeyOf(nearestZ, keySign), farKey = depthKeyOf(farthestZ, keySign);
+        const double nearestKey = farKey < nearKey ? farKey : nearKey;  // std::min
+        const double key = nearestKey - hiddenDepthMargin(nearestZ, farthestZ, error, 0.0);
+        // face_expansion.cpp's behindFootprint: blocks by truncation, then clamped to the image.
+        // (A lane not tested converts 0, not whatever its box holds.)
+        const double loX = tested ? l.loX[i] : 0.0, loY = tested ? l.loY[i] : 0.0;
+        const double hiX = tested ? l.hiX[i] : 0.0, hiY = tested ? l.hiY[i] : 0.0;
+        int32_t x0 = int32_t(loX - m) / kBlock, y0 = int32_t(loY - m) / kBlock;
+        int32_t x1 = int32_t(hiX + m) / kBlock, y1 = int32_t(hiY + m) / kBlock;
+        x0 = x0 < 0 ? 0 : x0, y0 = y0 < 0 ? 0 : y0;
+        x1 = x1 < d.blocksX - 1 ? x1 : d.blocksX - 1, y1 = y1 < d.blocksY - 1 ? y1 : d.blocksY - 1;
+        const int32_t empty = int32_t(x0 > x1) | int32_t(y0 > y1);
+        const int32_t wide = int32_t(x1 - x0 > 2) | int32_t(y1 - y0 > 2);
+        int32_t behind = 1;
+        for (int dy = 0; dy < 3; ++dy)
+            for (int dx = 0; dx < 3; ++dx) {
+                // Past the range, the range's last block again (an AND does not mind); an empty
+                // range reads block 0, and its answer is not used.
+                int32_t bx = x0 + dx < x1 ? x0 + dx : x1, by = y0 + dy < y1 ? y0 + dy : y1;
+                bx = empty ? 0 : bx, by = empty ? 0 : by;
+                behind &= int32_t(double(farthest[by * d.blocksX + bx]) <= key);
+            }
+        pretest[i] = uint8_t(!tested ? kNotDepthTested
+                                     : (empty ? kInFront : (wide ? kTestDepthOnOwn : (behind ? kMayBeBehind : kInFront))));
     }
 }
 
@@ -150,8 +204,27 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace cuberille::voxel {
 
+HWY_EXPORT(cameraFacingSidesOnTarget);
 HWY_EXPORT(projectVoxelCornersOnTarget);
+
+void cameraFacingSides(const VoxelFacingFrame& frame, const uint32_t* packed, int count, uint8_t* sides) {
+    if (count > 0) HWY_DYNAMIC_DISPATCH(cameraFacingSidesOnTarget)(frame, packed, count, sides);
+}
+
 HWY_EXPORT(searchFaceSamplesOnTarget);
+HWY_EXPORT(pretestHiddenDepthOnTarget);
+
+void pretestHiddenDepth(const HiddenDepthFrame& frame, const VoxelCornerLanes& lanes, uint8_t* pretest) {
+    if (lanes.count <= 0) return;
+    const DepthFootprint& d = *frame.depth;
+    if (d.blockSizePixels != 8 || d.blocksX <= 0 || d.blocksY <= 0 ||
+        d.farthestKey.size() < size_t(d.blocksX) * size_t(d.blocksY)) {
+        // Not the rasterizer's blocks, or no blocks: the one-voxel test decides every voxel.
+        for (int i = 0; i < lanes.count; ++i) pretest[i] = kTestDepthOnOwn;
+        return;
+    }
+    HWY_DYNAMIC_DISPATCH(pretestHiddenDepthOnTarget)(frame, lanes, pretest);
+}
 
 void projectVoxelCorners(const VoxelCornerFrame& frame, VoxelCornerLanes& lanes) {
     if (lanes.count > 0) HWY_DYNAMIC_DISPATCH(projectVoxelCornersOnTarget)(frame, lanes);

@@ -7,7 +7,8 @@
 // at 1280x720 and one sample, expansion was 62% of the process's samples (perf record), the
 // corner projection (eight divides and their bounds in scalar double) a fifth of that and the
 // faces' sample searches a third; a frame looks at about four faces for each one it draws.
-// Here each step is a loop over the run's lanes, one element type each, which GCC vectorises for
+// Before either, which sides of each voxel face the camera, likewise. Here each step is a loop
+// over the run's lanes, one element type each, which GCC vectorises for
 // each instruction set (compiled once per set like the rasterizer's lanes, raster/instruction_set.h).
 //
 // The same decisions as the one-at-a-time tests, bit for bit: every value is computed in double
@@ -23,10 +24,24 @@
 namespace cuberille::voxel {
 
 struct SampleFootprint;
+struct DepthFootprint;
 
 /// Voxels, and faces, per run: the corner lanes (about 160 bytes a voxel) stay in the
 /// first-level cache.
 inline constexpr int kFootprintLanes = 128;
+
+/// What the facing test reads: the block's first voxel corner and a voxel's size at the block's
+/// level (voxel/face_expansion.h, VoxelBoxes), and the camera, model units.
+struct VoxelFacingFrame {
+    glm::dvec3 blockOrigin{0.0}, camera{0.0};
+    double voxelSize = 0.0;
+};
+
+/// For each of `count` packed voxels (voxel_model.h): the sides of its box the camera lies
+/// beyond, as face bits (kFacePosX where the camera is beyond the high x side, and so on; at
+/// most one per axis), whether or not those faces are active. The box is the scalar code's,
+/// low corner origin + position x size and high corner that plus the size.
+void cameraFacingSides(const VoxelFacingFrame& frame, const uint32_t* packed, int count, uint8_t* sides);
 
 /// What the corner projection reads of a block and the frame: the clip position of the block's
 /// first voxel corner and what one voxel step along each axis adds to it, and the viewport.
@@ -59,6 +74,68 @@ struct VoxelCornerLanes {
 /// Projects the run's voxels (count of them). The values of a lane that crosses the near plane
 /// are meaningless; every other lane's are those of the scalar projection.
 void projectVoxelCorners(const VoxelCornerFrame& frame, VoxelCornerLanes& lanes);
+
+/// Sixteen roundings of 2^-24: what bounds the error of the rasterizer's float clip z and w of a
+/// corner, relative to the sum of |matrix entry x coordinate| of the row (cornerError).
+inline constexpr double kTransformRounding = 0x1p-20;
+/// The float depth plane's sum's roundings of terms up to 1 (hiddenDepthMargin).
+inline constexpr double kPlaneRounding = 0x1p-21;
+
+/// How far the rasterizer's float window depth of a corner can lie from the exact z / w found
+/// here: the position rounded to float, the float matrix product (four products, three sums)
+/// and the division are seven or eight roundings of 2^-24 relative to the terms' magnitudes;
+/// 2^-20 of them (sixteen roundings, kTransformRounding) bounds the error of clip z and w, so of
+/// z / w at most (Ez + |z / w| Ew) / w, with E = 2^-20 the sum of |matrix entry x coordinate|
+/// of that row (clipZError, clipWError: over the block's largest coordinates).
+inline double cornerError(double clipZError, double clipWError, double nearestZ, double farthestZ, double nearestW) {
+    const double absNearest = nearestZ < 0.0 ? -nearestZ : nearestZ, absFarthest = farthestZ < 0.0 ? -farthestZ : farthestZ;
+    const double zMagnitude = absNearest < absFarthest ? absFarthest : absNearest;  // std::max
+    return (clipZError + zMagnitude * clipWError) / nearestW;
+}
+
+/// How far outside [nearestZ, farthestZ] the rasterizer's depth at a sample one of the voxel's
+/// faces covers can lie, in window depth. Three sources, each bounded with room to spare:
+/// - Each face corner's float window depth against the exact one: cornerError.
+/// - Exactly evaluated, the depth plane at a covered sample is a convex combination of its
+///   triangle's three vertex depths (the sample lies in the snapped triangle the plane was fit
+///   to), so not outside the corners' range.
+/// - The plane is stored and evaluated in float: z0 + gx X + gy Y, X and Y within the
+///   triangle's sides L of the first vertex (raster/depth.h, setDepthPlane). The gradient is at
+///   most 2 dz L / area2 (dz the vertices' depth range, area2 the snapped doubled area), so each
+///   term is at most 2 dz R with R = L² / area2 (planeTermRatio). The gradients' float rounding,
+///   the two products' and the two sums' are each at most 2^-24 of terms up to 2 dz R (or 1,
+///   the depth at the origin), so together at most 2^-20 R dz + 2^-21. R is at most 2^24 for
+///   any triangle of the tested size (L <= 2^12 subpixels: kDepthTestedVoxelPixels times sqrt 2,
+///   under 16 pixels; area2 >= 1 subpixel², snapped vertices being integers): 16 dz, the bound
+///   for a sliver; a face seen square on, of about a pixel, has R near 2, and its margin is then
+///   about the corners' error alone.
+inline double hiddenDepthMargin(double nearestZ, double farthestZ, double cornerError, double planeTermRatio) {
+    const double depthRange = farthestZ - nearestZ + 2.0 * cornerError;
+    return cornerError + 0x1p-20 * planeTermRatio * depthRange + kPlaneRounding;
+}
+
+/// The depth key (raster/depth.h) of window depth z: clamped to [0, 1] as std::clamp does, signed.
+inline double depthKeyOf(double z, double keySign) { return keySign * (z < 0.0 ? 0.0 : (1.0 < z ? 1.0 : z)); }
+
+/// What the hidden-depth pre-test reads: the frame's depth footprint (its blocks must be the
+/// rasterizer's 8x8) and the block's bounds on the corners' float error (cornerError).
+struct HiddenDepthFrame {
+    const DepthFootprint* depth = nullptr;
+    double clipZError = 0.0, clipWError = 0.0;
+};
+
+/// What the pre-test found of a voxel.
+enum DepthPretest : uint8_t {
+    kNotDepthTested = 0,  // not projected, or wider or taller than kDepthTestedVoxelPixels
+    kInFront = 1,         // not behind the footprint even with the least margin (plane-term ratio 0)
+    kMayBeBehind = 2,     // behind it with the least margin: the voxel's own margin decides
+    kTestDepthOnOwn = 3,  // its box meets more than 3 x 3 of the footprint's blocks
+};
+
+/// The first, cheap half of the hidden-depth test of face_expansion.cpp for each projected voxel
+/// of the run: is its nearest key, less the least margin, at or behind the farthest key of every
+/// footprint block under its box widened by kFootprintMarginPixels?
+void pretestHiddenDepth(const HiddenDepthFrame& frame, const VoxelCornerLanes& lanes, uint8_t* pretest);
 
 /// What a face's search found.
 enum FaceSearch : uint8_t {

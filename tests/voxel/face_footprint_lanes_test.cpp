@@ -115,6 +115,90 @@ TEST(FaceFootprintLanes, CornerProjectionMatchesTheScalarProjectionOnRandomCamer
     EXPECT_GT(outside, 100);
 }
 
+/// The hidden-depth pre-test one voxel at a time, as expansion decided it before the lanes: the
+/// shared margin functions, then every footprint block under the widened box, found by integer
+/// division.
+voxel::DepthPretest pretestOne(const voxel::HiddenDepthFrame& f, const ScalarProjection& p) {
+    if (p.projection != voxel::kProjected || p.hi.x - p.lo.x > voxel::kDepthTestedVoxelPixels ||
+        p.hi.y - p.lo.y > voxel::kDepthTestedVoxelPixels)
+        return voxel::kNotDepthTested;
+    const voxel::DepthFootprint& d = *f.depth;
+    const double error = voxel::cornerError(f.clipZError, f.clipWError, p.nearestZ, p.farthestZ, p.nearestW);
+    auto key = [&](double z) { return double(d.keySign) * std::clamp(z, 0.0, 1.0); };
+    const double nearestKey = std::min(key(p.nearestZ), key(p.farthestZ));
+    const double bound = nearestKey - voxel::hiddenDepthMargin(p.nearestZ, p.farthestZ, error, 0.0);
+    const double m = voxel::kFootprintMarginPixels;
+    const int x0 = std::max(0, int(p.lo.x - m) / d.blockSizePixels), y0 = std::max(0, int(p.lo.y - m) / d.blockSizePixels);
+    const int x1 = std::min(d.blocksX - 1, int(p.hi.x + m) / d.blockSizePixels);
+    const int y1 = std::min(d.blocksY - 1, int(p.hi.y + m) / d.blockSizePixels);
+    if (x0 > x1 || y0 > y1) return voxel::kInFront;
+    if (x1 - x0 > 2 || y1 - y0 > 2) return voxel::kTestDepthOnOwn;
+    for (int by = y0; by <= y1; ++by)
+        for (int bx = x0; bx <= x1; ++bx)
+            if (!(double(d.farthestKey[size_t(by * d.blocksX + bx)]) <= bound)) return voxel::kInFront;
+    return voxel::kMayBeBehind;
+}
+
+TEST(FaceFootprintLanes, HiddenDepthPretestMatchesTheOneVoxelTest) {
+    std::mt19937 rng(6122026);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::uniform_int_distribution<int> coordinate(0, 63);
+    int counts[4] = {};
+    for (int view = 0; view < 300; ++view) {
+        // Voxels of about a pixel to a few pixels, seen from 1 to 3 block widths away; a footprint
+        // whose blocks hold keys around the voxels' own depths, so that many are decided by a
+        // rounding, either key sign.
+        const double size = 1.0 / 64.0;
+        const glm::dvec3 eye = glm::normalize(glm::dvec3(unit(rng), unit(rng), unit(rng))) * (1.0 + 2.0 * std::abs(unit(rng))) + 0.5;
+        const int width = 160 + int(rng() % 400), height = 120 + int(rng() % 300);
+        const glm::dmat4 clipFromModel =
+            glm::perspectiveRH_ZO(glm::radians(40.0), double(width) / height, 0.1, 10.0) * glm::lookAtRH(eye, glm::dvec3(0.5), glm::dvec3(0, 1, 0));
+        VoxelCornerFrame f;
+        f.origin = clipFromModel * glm::dvec4(0.0, 0.0, 0.0, 1.0);
+        for (int axis = 0; axis < 3; ++axis) f.step[axis] = clipFromModel[axis] * size;
+        f.halfWidth = 0.5 * width, f.halfHeight = 0.5 * height, f.widthPixels = width, f.heightPixels = height;
+        VoxelCornerLanes lanes;
+        lanes.count = voxel::kFootprintLanes;
+        for (int i = 0; i < lanes.count; ++i) lanes.x[i] = coordinate(rng), lanes.y[i] = coordinate(rng), lanes.z[i] = coordinate(rng);
+        voxel::projectVoxelCorners(f, lanes);
+        double zLo = 1.0, zHi = 0.0;
+        for (int i = 0; i < lanes.count; ++i)
+            if (lanes.projection[i] == voxel::kProjected) zLo = std::min(zLo, lanes.nearestZ[i]), zHi = std::max(zHi, lanes.farthestZ[i]);
+        voxel::DepthFootprint depth;
+        depth.blocksX = (width + 7) / 8, depth.blocksY = (height + 7) / 8;
+        depth.keySign = view % 2 ? 1.0f : -1.0f;
+        std::uniform_real_distribution<double> z(zLo, zHi);
+        std::vector<double> nearestKeys;
+        for (int i = 0; i < lanes.count; ++i)
+            if (lanes.projection[i] == voxel::kProjected)
+                nearestKeys.push_back(std::min(depth.keySign * std::clamp(lanes.nearestZ[i], 0.0, 1.0),
+                                               depth.keySign * std::clamp(lanes.farthestZ[i], 0.0, 1.0)));
+        for (int b = 0; b < depth.blocksX * depth.blocksY; ++b) {
+            // A third of the blocks hold a voxel's own nearest key, rounded to float, give or take
+            // a few float steps: there the margin (a few 2^-21) decides.
+            float key = float(depth.keySign * z(rng));
+            if (b % 3 == 0 && !nearestKeys.empty()) {
+                key = float(nearestKeys[rng() % nearestKeys.size()]);
+                for (int step = int(rng() % 9) - 4; step != 0; step += step > 0 ? -1 : 1)
+                    key = std::nextafter(key, step > 0 ? 2.0f : -2.0f);
+            }
+            depth.farthestKey.push_back(key);
+        }
+        const voxel::HiddenDepthFrame frame{&depth, 1e-7 * std::abs(unit(rng)), 1e-7 * std::abs(unit(rng))};
+        uint8_t pretest[voxel::kFootprintLanes];
+        voxel::pretestHiddenDepth(frame, lanes, pretest);
+        for (int i = 0; i < lanes.count; ++i) {
+            const ScalarProjection p = projectOne(f, {lanes.x[i], lanes.y[i], lanes.z[i]});
+            const voxel::DepthPretest expected = pretestOne(frame, p);
+            ASSERT_EQ(int(pretest[i]), int(expected)) << "view " << view << " voxel " << i;
+            ++counts[expected];
+        }
+    }
+    EXPECT_GT(counts[voxel::kInFront], 1000);
+    EXPECT_GT(counts[voxel::kMayBeBehind], 1000);
+    EXPECT_GT(counts[voxel::kNotDepthTested], 100);
+}
+
 /// Brute force: whether a sample of some pixel of the image lies in the quad's box widened by
 /// max(margin, 0) and on the inner side of each of its edges moved outwards by
 /// margin (|dx| + |dy|) (expansion's definition of a face that may cover a sample).
