@@ -446,37 +446,43 @@ private:
     }
 };
 
-/// Appends the voxel's faces `emit` as quads of two triangles carrying its normal and colour.
-/// The arrays grow once per voxel and are written in place: push_back's capacity test per
-/// element was most of this function's time, and then resize(n, value)'s fill, whose 12-byte
-/// value GCC 12 assembles on the stack for every element (a store-forwarding stall per vertex:
-/// a third of the function's samples, perf annotate).
-void appendVoxelFaces(const glm::dvec3& lo, const glm::dvec3& hi, uint8_t emit, const glm::vec3& normal,
-                      const glm::vec3& color, FaceMesh& out) {
-    ++out.voxels;
-    const size_t faces = size_t(__builtin_popcount(emit)), firstVertex = out.positions.size();
-    const size_t firstIndex = out.indices.size();
-    out.positions.resize(firstVertex + 4 * faces);
-    out.normals.resize(firstVertex + 4 * faces);
-    out.colors.resize(firstVertex + 4 * faces);
-    out.indices.resize(firstIndex + 6 * faces);
-    glm::vec3* position = out.positions.data() + firstVertex;
-    glm::vec3* vertexNormal = out.normals.data() + firstVertex;
-    glm::vec3* vertexColor = out.colors.data() + firstVertex;
-    uint32_t* index = out.indices.data() + firstIndex;
-    uint32_t base = uint32_t(firstVertex);
-    for (int axis = 0; axis < 3; ++axis)
-        for (int side = 0; side < 2; ++side) {
-            if (!(emit & (1u << (2 * axis + side)))) continue;
-            glm::dvec3 c[4];
-            faceCorners(lo, hi, axis, side == 0, c);
-            for (const glm::dvec3& p : c) *position++ = glm::vec3(p), *vertexNormal++ = normal, *vertexColor++ = color;
-            *index++ = base, *index++ = base + 1, *index++ = base + 2;
-            *index++ = base, *index++ = base + 2, *index++ = base + 3;
-            base += 4;
-        }
-    out.faces += faces;
-}
+/// Where faces go in a FaceMesh: room for `faces` more quads, made once for a voxel or a run.
+struct FaceSlots {
+    glm::vec3 *position, *normal, *color;
+    uint32_t* index;
+    uint32_t firstVertex;
+
+    /// The mesh's arrays grow once and are written in place: push_back's capacity test per
+    /// element was most of the appends' time, and then resize(n, value)'s fill, whose 12-byte
+    /// value GCC 12 assembles on the stack for every element (a store-forwarding stall per
+    /// vertex, a third of their samples: perf annotate).
+    static FaceSlots grow(FaceMesh& out, size_t faces) {
+        const size_t firstVertex = out.positions.size(), firstIndex = out.indices.size();
+        out.positions.resize(firstVertex + 4 * faces);
+        out.normals.resize(firstVertex + 4 * faces);
+        out.colors.resize(firstVertex + 4 * faces);
+        out.indices.resize(firstIndex + 6 * faces);
+        out.faces += faces;
+        return {out.positions.data() + firstVertex, out.normals.data() + firstVertex, out.colors.data() + firstVertex,
+                out.indices.data() + firstIndex, uint32_t(firstVertex)};
+    }
+
+    /// Writes the voxel's faces `emit` as quads of two triangles carrying its normal and colour,
+    /// and moves past them.
+    void write(const glm::dvec3& lo, const glm::dvec3& hi, uint8_t emit, const glm::vec3& n, const glm::vec3& c) {
+        for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side) {
+                if (!(emit & (1u << (2 * axis + side)))) continue;
+                glm::dvec3 corners[4];
+                faceCorners(lo, hi, axis, side == 0, corners);
+                for (const glm::dvec3& p : corners) *position++ = glm::vec3(p), *normal++ = n, *color++ = c;
+                const uint32_t v = firstVertex;
+                *index++ = v, *index++ = v + 1, *index++ = v + 2;
+                *index++ = v, *index++ = v + 2, *index++ = v + 3;
+                firstVertex += 4;
+            }
+    }
+};
 
 }  // namespace
 
@@ -491,10 +497,15 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
     testWithinBlock = testWithinBlock && footprints && depth;
     thread_local std::vector<KeptVoxel> kept;
     kept.clear();
-    auto append = [&](size_t i, const glm::dvec3& lo, uint8_t emit) {
+    auto write = [&](FaceSlots& slots, size_t i, const glm::dvec3& lo, uint8_t emit) {
         const glm::vec3 normal = unpackNormal1010102(block.normals[i]);
         const glm::vec3 color = overrideColor ? *overrideColor : unpackSrgba8Rgb(block.colors[i]);
-        appendVoxelFaces(lo, lo + boxes.voxelSize, emit, normal, color, out);
+        slots.write(lo, lo + boxes.voxelSize, emit, normal, color);
+        ++out.voxels;
+    };
+    auto append = [&](size_t i, const glm::dvec3& lo, uint8_t emit) {
+        FaceSlots slots = FaceSlots::grow(out, size_t(__builtin_popcount(emit)));
+        write(slots, i, lo, emit);
     };
     // With a footprint, the voxels with faces to emit wait in a run, whose tests go through lanes
     // together (testRun); their faces are then appended in the block's order.
@@ -503,22 +514,28 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
     auto testRun = [&] {
         if (run.count == 0) return;
         run.test(*footprints);
+        size_t faces = 0;
         for (int j = 0; j < run.count; ++j) {
-            const uint32_t i = run.index[j];
             const uint8_t emit = run.emit[j];
             bool behind = false;
             ProjectedVoxel* projected = testWithinBlock ? &kept.emplace_back().projected : nullptr;
             const uint8_t covering = footprints->mayCoverSamples(run.corners, j, emit, run.sampled[j],
                                                                  DepthPretest(run.depthPretest[j]), behind, projected);
             (behind ? out.facesBehindDepth : out.facesBetweenSamples) += uint64_t(__builtin_popcount(emit ^ covering));
+            run.emit[j] = covering;
+            faces += size_t(__builtin_popcount(covering));
             if (testWithinBlock) {
                 if (covering)
-                    kept.back().index = i, kept.back().faces = covering;
+                    kept.back().index = run.index[j], kept.back().faces = covering;
                 else
                     kept.pop_back();
-            } else if (covering) {
-                append(i, run.lo[j], covering);
             }
+        }
+        // The run's faces, in its order, into room made once.
+        if (!testWithinBlock && faces) {
+            FaceSlots slots = FaceSlots::grow(out, faces);
+            for (int j = 0; j < run.count; ++j)
+                if (run.emit[j]) write(slots, run.index[j], run.lo[j], run.emit[j]);
         }
         run.count = 0;
     };

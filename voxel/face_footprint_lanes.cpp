@@ -103,35 +103,50 @@ void pretestHiddenDepthOnTarget(const HiddenDepthFrame& f, const VoxelCornerLane
     const float* farthest = d.farthestKey.data();
     const double keySign = double(d.keySign), m = kFootprintMarginPixels;
     constexpr int kBlock = 8;  // raster::kBlockSizePixels, a constant so that the divisions are shifts
+    // Three loops without branches, so that each vectorises: the bound and the block range, the
+    // blocks' keys (gathered), then the verdict.
+    alignas(64) int32_t tested[N], x0[N], y0[N], x1[N], y1[N], behind[N];
+    alignas(64) double bound[N];
+    for (int i = 0; i < n; ++i) tested[i] = int32_t(l.projection[i] == kProjected);
     for (int i = 0; i < n; ++i) {
-        const int32_t tested = int32_t(l.projection[i] == kProjected) & int32_t(l.hiX[i] - l.loX[i] <= kDepthTestedVoxelPixels) &
-                               int32_t(l.hiY[i] - l.loY[i] <= kDepthTestedVoxelPixels);
+        const double loX = l.loX[i], loY = l.loY[i], hiX = l.hiX[i], hiY = l.hiY[i];
+        const int32_t small = int32_t(hiX - loX <= kDepthTestedVoxelPixels) & int32_t(hiY - loY <= kDepthTestedVoxelPixels);
+        const int32_t t = tested[i] & small;
+        tested[i] = t;
         const double nearestZ = l.nearestZ[i], farthestZ = l.farthestZ[i];
         const double error = cornerError(f.clipZError, f.clipWError, nearestZ, farthestZ, l.nearestW[i]);
         const double nearKey = depthKeyOf(nearestZ, keySign), farKey = depthKeyOf(farthestZ, keySign);
         const double nearestKey = farKey < nearKey ? farKey : nearKey;  // std::min
-        const double key = nearestKey - hiddenDepthMargin(nearestZ, farthestZ, error, 0.0);
+        bound[i] = nearestKey - hiddenDepthMargin(nearestZ, farthestZ, error, 0.0);
         // face_expansion.cpp's behindFootprint: blocks by truncation, then clamped to the image.
         // (A lane not tested converts 0, not whatever its box holds.)
-        const double loX = tested ? l.loX[i] : 0.0, loY = tested ? l.loY[i] : 0.0;
-        const double hiX = tested ? l.hiX[i] : 0.0, hiY = tested ? l.hiY[i] : 0.0;
-        int32_t x0 = int32_t(loX - m) / kBlock, y0 = int32_t(loY - m) / kBlock;
-        int32_t x1 = int32_t(hiX + m) / kBlock, y1 = int32_t(hiY + m) / kBlock;
-        x0 = x0 < 0 ? 0 : x0, y0 = y0 < 0 ? 0 : y0;
-        x1 = x1 < d.blocksX - 1 ? x1 : d.blocksX - 1, y1 = y1 < d.blocksY - 1 ? y1 : d.blocksY - 1;
-        const int32_t empty = int32_t(x0 > x1) | int32_t(y0 > y1);
-        const int32_t wide = int32_t(x1 - x0 > 2) | int32_t(y1 - y0 > 2);
-        int32_t behind = 1;
-        for (int dy = 0; dy < 3; ++dy)
-            for (int dx = 0; dx < 3; ++dx) {
+        const int32_t bx0 = int32_t((t ? loX : 0.0) - m) / kBlock, by0 = int32_t((t ? loY : 0.0) - m) / kBlock;
+        const int32_t bx1 = int32_t((t ? hiX : 0.0) + m) / kBlock, by1 = int32_t((t ? hiY : 0.0) + m) / kBlock;
+        x0[i] = bx0 < 0 ? 0 : bx0, y0[i] = by0 < 0 ? 0 : by0;
+        x1[i] = bx1 < d.blocksX - 1 ? bx1 : d.blocksX - 1, y1[i] = by1 < d.blocksY - 1 ? by1 : d.blocksY - 1;
+    }
+    const int32_t blocksX = d.blocksX;
+    for (int i = 0; i < n; ++i) behind[i] = 1;
+    for (int dy = 0; dy < 3; ++dy)
+        for (int dx = 0; dx < 3; ++dx)
+        {
+            alignas(64) int32_t block[N];
+            for (int i = 0; i < n; ++i) {
                 // Past the range, the range's last block again (an AND does not mind); an empty
                 // range reads block 0, and its answer is not used.
-                int32_t bx = x0 + dx < x1 ? x0 + dx : x1, by = y0 + dy < y1 ? y0 + dy : y1;
-                bx = empty ? 0 : bx, by = empty ? 0 : by;
-                behind &= int32_t(double(farthest[by * d.blocksX + bx]) <= key);
+                const int32_t empty = int32_t(x0[i] > x1[i]) | int32_t(y0[i] > y1[i]);
+                const int32_t bx = x0[i] + dx < x1[i] ? x0[i] + dx : x1[i], by = y0[i] + dy < y1[i] ? y0[i] + dy : y1[i];
+                block[i] = (by * blocksX + bx) * (1 - empty);
             }
-        pretest[i] = uint8_t(!tested ? kNotDepthTested
-                                     : (empty ? kInFront : (wide ? kTestDepthOnOwn : (behind ? kMayBeBehind : kInFront))));
+            for (int i = 0; i < n; ++i) behind[i] &= int32_t(double(farthest[block[i]]) <= bound[i]);
+        }
+    for (int i = 0; i < n; ++i) {
+        const int32_t empty = int32_t(x0[i] > x1[i]) | int32_t(y0[i] > y1[i]);
+        const int32_t wide = int32_t(x1[i] - x0[i] > 2) | int32_t(y1[i] - y0[i] > 2);
+        // Not tested: kNotDepthTested; an empty range: kInFront; more than 3 x 3 blocks:
+        // kTestDepthOnOwn; else kMayBeBehind or kInFront.
+        const int32_t verdict = empty ? int32_t(kInFront) : (wide ? int32_t(kTestDepthOnOwn) : (behind[i] ? int32_t(kMayBeBehind) : int32_t(kInFront)));
+        pretest[i] = uint8_t(tested[i] ? verdict : int32_t(kNotDepthTested));
     }
 }
 
