@@ -1,35 +1,67 @@
 #include "raster/vertex.h"
 
+#include <algorithm>
+
 #include "raster/vertex_lanes.h"
 
 namespace cuberille::raster {
 namespace {
 
+/// The varyings of vertices [begin, end), one attribute at a time: each pass is a straight loop
+/// over the vertices with the same expression for every one (the per-vertex layout tests, taken
+/// once per vertex for each attribute, were most of this stage's scalar time on voxel frames,
+/// whose faces bring four vertices each). The values are those of glm's products in their order.
 void writeVaryings(const DrawCall& draw, const VaryingLayout& layout, size_t begin, size_t end, float* out) {
-    const glm::vec3 base(draw.state.constantColor);
-    for (size_t i = begin; i < end; ++i) {
-        float* v = out + i * layout.count;
-        if (layout.normal >= 0) {
-            const glm::vec3 n = draw.normals.size() <= i ? glm::vec3(0.0f, 0.0f, 1.0f)
-                                                         : draw.worldFromObjectNormals * draw.normals[i];
-            v[layout.normal] = n.x, v[layout.normal + 1] = n.y, v[layout.normal + 2] = n.z;
+    const size_t stride = size_t(layout.count);
+    // Vertices [begin, end) of which the first `have` - begin carry the attribute (an array
+    // shorter than the positions leaves the rest to a default).
+    auto present = [&](size_t size) { return std::clamp(size, begin, end); };
+    if (layout.normal >= 0) {
+        const glm::mat3& m = draw.worldFromObjectNormals;
+        const size_t have = present(draw.normals.size());
+        float* v = out + begin * stride + size_t(layout.normal);
+        for (size_t i = begin; i < have; ++i, v += stride) {
+            const glm::vec3 n = m * draw.normals[i];
+            v[0] = n.x, v[1] = n.y, v[2] = n.z;
         }
-        if (layout.color >= 0) {
-            const glm::vec3 c = draw.vertexColors.size() <= i ? base : base * draw.vertexColors[i];
-            v[layout.color] = c.x, v[layout.color + 1] = c.y, v[layout.color + 2] = c.z;
+        for (size_t i = have; i < end; ++i, v += stride) v[0] = 0.0f, v[1] = 0.0f, v[2] = 1.0f;
+    }
+    if (layout.color >= 0) {
+        const glm::vec3 base(draw.state.constantColor);
+        const size_t have = present(draw.vertexColors.size());
+        float* v = out + begin * stride + size_t(layout.color);
+        for (size_t i = begin; i < have; ++i, v += stride) {
+            const glm::vec3 c = base * draw.vertexColors[i];
+            v[0] = c.x, v[1] = c.y, v[2] = c.z;
         }
-        if (layout.alpha >= 0) v[layout.alpha] = draw.state.constantColor.a * draw.vertexAlphas[i];
-        if (layout.texCoord >= 0) v[layout.texCoord] = draw.texCoords[i].x, v[layout.texCoord + 1] = draw.texCoords[i].y;
-        if (layout.position >= 0) {
-            const glm::vec3 p = draw.space == PositionSpace::Window
-                                    ? draw.positions[i]
-                                    : glm::vec3(draw.worldFromObject * glm::vec4(draw.positions[i], 1.0f));
-            v[layout.position] = p.x, v[layout.position + 1] = p.y, v[layout.position + 2] = p.z;
+        for (size_t i = have; i < end; ++i, v += stride) v[0] = base.x, v[1] = base.y, v[2] = base.z;
+    }
+    if (layout.alpha >= 0) {
+        float* v = out + begin * stride + size_t(layout.alpha);
+        for (size_t i = begin; i < end; ++i, v += stride) v[0] = draw.state.constantColor.a * draw.vertexAlphas[i];
+    }
+    if (layout.texCoord >= 0) {
+        float* v = out + begin * stride + size_t(layout.texCoord);
+        for (size_t i = begin; i < end; ++i, v += stride) v[0] = draw.texCoords[i].x, v[1] = draw.texCoords[i].y;
+    }
+    if (layout.position >= 0) {
+        float* v = out + begin * stride + size_t(layout.position);
+        if (draw.space == PositionSpace::Window) {
+            for (size_t i = begin; i < end; ++i, v += stride) v[0] = draw.positions[i].x, v[1] = draw.positions[i].y, v[2] = draw.positions[i].z;
+        } else {
+            const glm::mat4& m = draw.worldFromObject;
+            for (size_t i = begin; i < end; ++i, v += stride) {
+                const glm::vec3 p(m * glm::vec4(draw.positions[i], 1.0f));
+                v[0] = p.x, v[1] = p.y, v[2] = p.z;
+            }
         }
-        if (layout.tangent >= 0) {
-            const glm::vec3 t = draw.worldFromObjectNormals * glm::vec3(draw.tangents[i]);
-            v[layout.tangent] = t.x, v[layout.tangent + 1] = t.y, v[layout.tangent + 2] = t.z;
-            v[layout.tangent + 3] = draw.tangents[i].w;
+    }
+    if (layout.tangent >= 0) {
+        const glm::mat3& m = draw.worldFromObjectNormals;
+        float* v = out + begin * stride + size_t(layout.tangent);
+        for (size_t i = begin; i < end; ++i, v += stride) {
+            const glm::vec3 t = m * glm::vec3(draw.tangents[i]);
+            v[0] = t.x, v[1] = t.y, v[2] = t.z, v[3] = draw.tangents[i].w;
         }
     }
 }

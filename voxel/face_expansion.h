@@ -12,13 +12,16 @@
 
 #include <glm/glm.hpp>
 
+#include "raster/uninitialized_allocator.h"
 #include "voxel/voxel_model.h"
 
 namespace cuberille::voxel {
 
 struct FaceMesh {
-    std::vector<glm::vec3> positions, normals, colors;  // model units; linear colours
-    std::vector<uint32_t> indices;
+    // Sized without writing their new elements (raster/uninitialized_allocator.h): expansion
+    // makes room for a run's faces and then writes every element of it.
+    raster::UninitializedVector<glm::vec3> positions, normals, colors;  // model units; linear colours
+    raster::UninitializedVector<uint32_t> indices;
     uint64_t voxels = 0, faces = 0;
     uint64_t facesBetweenSamples = 0;  // camera-facing active faces left out: they cover no sample
     uint64_t facesBehindDepth = 0;     // ... left out: their voxel lies behind what is drawn (DepthFootprint)
