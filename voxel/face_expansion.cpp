@@ -174,6 +174,13 @@ public:
             // In front even with the least margin (found in lanes): nothing more to learn here
             // unless the block's own test wants the voxel's bounds.
             if (pretest == kInFront && !projected) return sampled;
+            // Behind even with the largest margin any voxel can need: behind with its own, which
+            // is never larger (the margin grows with the plane-term ratio, and rounding keeps the
+            // order), so its ratio need not be found.
+            if (pretest == kBehindWithAnyMargin && !projected) {
+                behind = true;
+                return 0;
+            }
             const double cornerError = this->cornerError(nearestZ, farthestZ, nearestW);
             // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h):
             // monotonic in the depth, so the nearest key is that of the nearest depth (or,
@@ -185,8 +192,8 @@ public:
             // footprint test: a voxel not behind the footprint with the least margin (ratio 0) is
             // not behind it with its own, and needs the ratio only for the block's own test.
             const bool mayBeBehind =
-                pretest == kInFront       ? false
-                : pretest == kMayBeBehind ? true
+                pretest == kInFront                                       ? false
+                : pretest == kMayBeBehind || pretest == kBehindWithAnyMargin ? true
                                           : behindFootprint(lo, hi, nearestKey - hiddenDepthMargin(nearestZ, farthestZ, cornerError, 0.0));
             if (mayBeBehind || projected) {
                 ProjectedVoxel local;
@@ -265,7 +272,7 @@ private:
     /// most 4 d P + 8 d² (d the slack, P the sum of the sides' |dx| + |dy|). Capped at 2^24, the
     /// bound for any triangle of the tested size.
     static double planeTermRatio(const glm::dvec2 (&window)[8], uint8_t faces) {
-        constexpr double kWorst = 0x1p24, s = raster::kSubpixelsPerPixel, d = kSnapSlackSubpixels;
+        constexpr double kWorst = kLargestPlaneTermRatio, s = raster::kSubpixelsPerPixel, d = kSnapSlackSubpixels;
         double worst = 0.0;
         forEachFaceQuad(window, faces, [&](uint8_t, const glm::dvec2(&q)[4]) {
             static constexpr int kTriangles[2][3] = {{0, 1, 2}, {0, 2, 3}};  // the draw's two per face
@@ -404,15 +411,19 @@ struct FootprintRun {
         ++count;
     }
 
-    /// Projects the run's corners, then searches each face of each projected voxel for a sample.
-    void test(const FaceFootprints& footprints) {
+    /// Projects the run's corners, pre-tests their depth, then searches each face of each
+    /// projected voxel for a sample: not those of a voxel surely behind the depth footprint,
+    /// unless every voxel's bounds are wanted (the block's own test, testWithinBlock).
+    void test(const FaceFootprints& footprints, bool testWithinBlock) {
         corners.count = count;
         projectVoxelCorners(footprints.cornerFrame(), corners);
-        if (footprints.hiddenDepthFrame().depth) pretestHiddenDepth(footprints.hiddenDepthFrame(), corners, depthPretest);
+        const bool depth = footprints.hiddenDepthFrame().depth != nullptr;
+        if (depth) pretestHiddenDepth(footprints.hiddenDepthFrame(), corners, depthPretest);
         quads.count = 0;
         for (int j = 0; j < count; ++j) {
             sampled[j] = 0;
             if (corners.projection[j] != kProjected) continue;
+            if (depth && !testWithinBlock && depthPretest[j] == kBehindWithAnyMargin) continue;
             for (int axis = 0; axis < 3; ++axis)
                 for (int side = 0; side < 2; ++side) {
                     const uint8_t bit = uint8_t(1u << (2 * axis + side));
@@ -513,7 +524,7 @@ void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const g
     run.count = 0;
     auto testRun = [&] {
         if (run.count == 0) return;
-        run.test(*footprints);
+        run.test(*footprints, testWithinBlock);
         size_t faces = 0;
         for (int j = 0; j < run.count; ++j) {
             const uint8_t emit = run.emit[j];

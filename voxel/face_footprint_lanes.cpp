@@ -105,8 +105,8 @@ void pretestHiddenDepthOnTarget(const HiddenDepthFrame& f, const VoxelCornerLane
     constexpr int kBlock = 8;  // raster::kBlockSizePixels, a constant so that the divisions are shifts
     // Three loops without branches, so that each vectorises: the bound and the block range, the
     // blocks' keys (gathered), then the verdict.
-    alignas(64) int32_t tested[N], x0[N], y0[N], x1[N], y1[N], behind[N];
-    alignas(64) double bound[N];
+    alignas(64) int32_t tested[N], x0[N], y0[N], x1[N], y1[N], behind[N], surely[N];
+    alignas(64) double bound[N], surelyBound[N];
     for (int i = 0; i < n; ++i) tested[i] = int32_t(l.projection[i] == kProjected);
     for (int i = 0; i < n; ++i) {
         const double loX = l.loX[i], loY = l.loY[i], hiX = l.hiX[i], hiY = l.hiY[i];
@@ -118,6 +118,7 @@ void pretestHiddenDepthOnTarget(const HiddenDepthFrame& f, const VoxelCornerLane
         const double nearKey = depthKeyOf(nearestZ, keySign), farKey = depthKeyOf(farthestZ, keySign);
         const double nearestKey = farKey < nearKey ? farKey : nearKey;  // std::min
         bound[i] = nearestKey - hiddenDepthMargin(nearestZ, farthestZ, error, 0.0);
+        surelyBound[i] = nearestKey - hiddenDepthMargin(nearestZ, farthestZ, error, kLargestPlaneTermRatio);
         // face_expansion.cpp's behindFootprint: blocks by truncation, then clamped to the image.
         // (A lane not tested converts 0, not whatever its box holds.)
         const int32_t bx0 = int32_t((t ? loX : 0.0) - m) / kBlock, by0 = int32_t((t ? loY : 0.0) - m) / kBlock;
@@ -126,7 +127,7 @@ void pretestHiddenDepthOnTarget(const HiddenDepthFrame& f, const VoxelCornerLane
         x1[i] = bx1 < d.blocksX - 1 ? bx1 : d.blocksX - 1, y1[i] = by1 < d.blocksY - 1 ? by1 : d.blocksY - 1;
     }
     const int32_t blocksX = d.blocksX;
-    for (int i = 0; i < n; ++i) behind[i] = 1;
+    for (int i = 0; i < n; ++i) behind[i] = 1, surely[i] = 1;
     for (int dy = 0; dy < 3; ++dy)
         for (int dx = 0; dx < 3; ++dx)
         {
@@ -138,14 +139,19 @@ void pretestHiddenDepthOnTarget(const HiddenDepthFrame& f, const VoxelCornerLane
                 const int32_t bx = x0[i] + dx < x1[i] ? x0[i] + dx : x1[i], by = y0[i] + dy < y1[i] ? y0[i] + dy : y1[i];
                 block[i] = (by * blocksX + bx) * (1 - empty);
             }
-            for (int i = 0; i < n; ++i) behind[i] &= int32_t(double(farthest[block[i]]) <= bound[i]);
+            for (int i = 0; i < n; ++i) {
+                const double key = double(farthest[block[i]]);
+                behind[i] &= int32_t(key <= bound[i]);
+                surely[i] &= int32_t(key <= surelyBound[i]);
+            }
         }
     for (int i = 0; i < n; ++i) {
         const int32_t empty = int32_t(x0[i] > x1[i]) | int32_t(y0[i] > y1[i]);
         const int32_t wide = int32_t(x1[i] - x0[i] > 2) | int32_t(y1[i] - y0[i] > 2);
         // Not tested: kNotDepthTested; an empty range: kInFront; more than 3 x 3 blocks:
-        // kTestDepthOnOwn; else kMayBeBehind or kInFront.
-        const int32_t verdict = empty ? int32_t(kInFront) : (wide ? int32_t(kTestDepthOnOwn) : (behind[i] ? int32_t(kMayBeBehind) : int32_t(kInFront)));
+        // kTestDepthOnOwn; else kBehindWithAnyMargin, kMayBeBehind or kInFront.
+        const int32_t behindVerdict = surely[i] ? int32_t(kBehindWithAnyMargin) : int32_t(kMayBeBehind);
+        const int32_t verdict = empty ? int32_t(kInFront) : (wide ? int32_t(kTestDepthOnOwn) : (behind[i] ? behindVerdict : int32_t(kInFront)));
         pretest[i] = uint8_t(tested[i] ? verdict : int32_t(kNotDepthTested));
     }
 }

@@ -114,6 +114,10 @@ inline double hiddenDepthMargin(double nearestZ, double farthestZ, double corner
     return cornerError + 0x1p-20 * planeTermRatio * depthRange + kPlaneRounding;
 }
 
+/// The largest plane-term ratio R = L² / area2 the margin allows for (hiddenDepthMargin): the
+/// bound for any triangle of the tested size, a sliver's.
+inline constexpr double kLargestPlaneTermRatio = 0x1p24;
+
 /// The depth key (raster/depth.h) of window depth z: clamped to [0, 1] as std::clamp does, signed.
 inline double depthKeyOf(double z, double keySign) { return keySign * (z < 0.0 ? 0.0 : (1.0 < z ? 1.0 : z)); }
 
@@ -130,11 +134,12 @@ enum DepthPretest : uint8_t {
     kInFront = 1,         // not behind the footprint even with the least margin (plane-term ratio 0)
     kMayBeBehind = 2,     // behind it with the least margin: the voxel's own margin decides
     kTestDepthOnOwn = 3,  // its box meets more than 3 x 3 of the footprint's blocks
+    kBehindWithAnyMargin = 4,  // behind it even with the largest margin (kLargestPlaneTermRatio)
 };
 
-/// The first, cheap half of the hidden-depth test of face_expansion.cpp for each projected voxel
-/// of the run: is its nearest key, less the least margin, at or behind the farthest key of every
-/// footprint block under its box widened by kFootprintMarginPixels?
+/// The cheap part of the hidden-depth test of face_expansion.cpp for each projected voxel of the
+/// run: is its nearest key, less the least margin (and less the largest), at or behind the
+/// farthest key of every footprint block under its box widened by kFootprintMarginPixels?
 void pretestHiddenDepth(const HiddenDepthFrame& frame, const VoxelCornerLanes& lanes, uint8_t* pretest);
 
 /// What a face's search found.
