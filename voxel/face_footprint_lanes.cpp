@@ -156,6 +156,40 @@ void pretestHiddenDepthOnTarget(const HiddenDepthFrame& f, const VoxelCornerLane
     }
 }
 
+/// For each sample offset and each lane, the pixels whose sample lies in the lane's box
+/// (samplePixels() of face_expansion.cpp on each axis: clamped first, ceil and floor by
+/// truncation and one correction), the first W x W of them tested against the four edges; `wide`
+/// where the box holds more.
+template <int W>
+void searchWindow(const glm::dvec2* samples, int sampleCount, int widthPixels, int heightPixels, int n,
+                  const double (&a)[4][N], const double (&b)[4][N], const double (&c)[4][N], const double* loX,
+                  const double* loY, const double* hiX, const double* hiY, int32_t* holds, int32_t* wide) {
+    const double width = double(widthPixels), height = double(heightPixels);
+    for (int s = 0; s < sampleCount; ++s) {
+        const double offsetX = samples[s].x, offsetY = samples[s].y;
+        for (int i = 0; i < n; ++i) {
+            auto clamp = [](double v, double lo, double hi) { return v < lo ? lo : (hi < v ? hi : v); };
+            const double fromX = clamp(loX[i] - offsetX, -1.0, width), toX = clamp(hiX[i] - offsetX, -1.0, width);
+            const double fromY = clamp(loY[i] - offsetY, -1.0, height), toY = clamp(hiY[i] - offsetY, -1.0, height);
+            int32_t x0 = int32_t(fromX), x1 = int32_t(toX), y0 = int32_t(fromY), y1 = int32_t(toY);
+            x0 += int32_t(double(x0) < fromX), x1 -= int32_t(double(x1) > toX);
+            y0 += int32_t(double(y0) < fromY), y1 -= int32_t(double(y1) > toY);
+            x0 = x0 < 0 ? 0 : x0, y0 = y0 < 0 ? 0 : y0;
+            x1 = x1 < widthPixels - 1 ? x1 : widthPixels - 1, y1 = y1 < heightPixels - 1 ? y1 : heightPixels - 1;
+            wide[i] |= int32_t(x1 - x0 > W - 1) | int32_t(y1 - y0 > W - 1);
+            int32_t found = 0;
+            for (int dy = 0; dy < W; ++dy)
+                for (int dx = 0; dx < W; ++dx) {
+                    const double sx = double(x0 + dx) + offsetX, sy = double(y0 + dy) + offsetY;
+                    int32_t inside = int32_t(x0 + dx <= x1) & int32_t(y0 + dy <= y1);
+                    for (int e = 0; e < 4; ++e) inside &= int32_t(a[e][i] * sx + b[e][i] * sy + c[e][i] >= 0.0);
+                    found |= inside;
+                }
+            holds[i] |= found;
+        }
+    }
+}
+
 void searchFaceSamplesOnTarget(const glm::dvec2* samples, int sampleCount, int widthPixels, int heightPixels,
                                double margin, double searched, FaceQuadLanes& l) {
     const int n = l.count;
@@ -188,32 +222,14 @@ void searchFaceSamplesOnTarget(const glm::dvec2* samples, int sampleCount, int w
         hiX[i] = faceHiX + widening, hiY[i] = faceHiY + widening;
         holds[i] = 0, wide[i] = 0;
     }
-    const double width = double(widthPixels), height = double(heightPixels);
-    for (int s = 0; s < sampleCount; ++s) {
-        const double offsetX = samples[s].x, offsetY = samples[s].y;
-        for (int i = 0; i < n; ++i) {
-            // samplePixels() of face_expansion.cpp on each axis: the pixels whose sample lies in
-            // the box, clamped first, ceil and floor by truncation and one correction.
-            auto clamp = [](double v, double lo, double hi) { return v < lo ? lo : (hi < v ? hi : v); };
-            const double fromX = clamp(loX[i] - offsetX, -1.0, width), toX = clamp(hiX[i] - offsetX, -1.0, width);
-            const double fromY = clamp(loY[i] - offsetY, -1.0, height), toY = clamp(hiY[i] - offsetY, -1.0, height);
-            int32_t x0 = int32_t(fromX), x1 = int32_t(toX), y0 = int32_t(fromY), y1 = int32_t(toY);
-            x0 += int32_t(double(x0) < fromX), x1 -= int32_t(double(x1) > toX);
-            y0 += int32_t(double(y0) < fromY), y1 -= int32_t(double(y1) > toY);
-            x0 = x0 < 0 ? 0 : x0, y0 = y0 < 0 ? 0 : y0;
-            x1 = x1 < widthPixels - 1 ? x1 : widthPixels - 1, y1 = y1 < heightPixels - 1 ? y1 : heightPixels - 1;
-            wide[i] |= int32_t(x1 - x0 > 2) | int32_t(y1 - y0 > 2);
-            int32_t found = 0;
-            for (int dy = 0; dy < 3; ++dy)
-                for (int dx = 0; dx < 3; ++dx) {
-                    const double sx = double(x0 + dx) + offsetX, sy = double(y0 + dy) + offsetY;
-                    int32_t inside = int32_t(x0 + dx <= x1) & int32_t(y0 + dy <= y1);
-                    for (int e = 0; e < 4; ++e) inside &= int32_t(a[e][i] * sx + b[e][i] * sy + c[e][i] >= 0.0);
-                    found |= inside;
-                }
-            holds[i] |= found;
-        }
-    }
+    // A searched face's box is at most `searched` plus the widening on each side, so it holds at
+    // most floor(that) + 1 samples of one offset a row: three at one sample (2 + 1/8 pixels), two
+    // at more (at most 1 + 1/8). The window of pixels looked at a sample is that wide.
+    const double widest = searched + 2.0 * widening;
+    if (widest < 2.0)
+        searchWindow<2>(samples, sampleCount, widthPixels, heightPixels, n, a, b, c, loX, loY, hiX, hiY, holds, wide);
+    else
+        searchWindow<3>(samples, sampleCount, widthPixels, heightPixels, n, a, b, c, loX, loY, hiX, hiY, holds, wide);
     for (int i = 0; i < n; ++i)
         l.found[i] = uint8_t(big[i] ? kMayCover : (wide[i] ? kSearchOnOwn : (holds[i] ? kMayCover : kNoSample)));
 }

@@ -146,7 +146,8 @@ void pretestHiddenDepth(const HiddenDepthFrame& frame, const VoxelCornerLanes& l
 enum FaceSearch : uint8_t {
     kNoSample = 0,     // no sample position lies in the widened quad
     kMayCover = 1,     // one does, or the face is too large to search (kept without looking)
-    kSearchOnOwn = 2,  // the lanes look at up to 3 x 3 pixels a sample: this face's box holds more
+    kSearchOnOwn = 2,  // the lanes look at up to 3 x 3 pixels a sample (2 x 2 where a searched
+                       // face's box cannot hold more): this face's box holds more
 };
 
 /// A run of face quads (window pixels, corners in order around the face, either winding) and,
