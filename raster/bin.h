@@ -15,6 +15,7 @@
 #include "raster/sample_pattern.h"
 #include "raster/setup.h"
 #include "raster/stats.h"
+#include "raster/uninitialized_allocator.h"
 #include "raster/vertex.h"
 
 namespace cuberille::raster {
@@ -28,8 +29,10 @@ struct TileGrid {
 struct TriangleBatch {
     int drawIndex = 0;
     VaryingLayout layout;  // the draw's: layout.count floats per vertex in `varyings`
-    std::vector<TriangleSetup> triangles;
-    std::vector<float> varyings;
+    // Grown a triangle at a time and written in place by set-up (raster/pipeline.cpp), so sized
+    // without first writing zeros (raster/uninitialized_allocator.h).
+    UninitializedVector<TriangleSetup> triangles;
+    UninitializedVector<float> varyings;
     std::vector<uint32_t> tileOffsets;    // tileCount + 1 entries
     std::vector<uint32_t> tileTriangles;  // triangle indices, grouped by tile
     StageCounters counters;

@@ -39,18 +39,24 @@ ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {
 }
 
 // An accepted triangle into the batch: its set-up and its vertices' varyings in set-up order.
-void appendTriangle(const TriangleSetup& setup, const int (&order)[3], const float* const (&varyings)[3],
-                    const glm::vec4& color, TriangleBatch& batch) {
+/// Completes the batch's newest triangle record `t`, written in place by set-up: its vertices'
+/// varyings in set-up's vertex order, and its flat colour.
+void completeTriangle(TriangleSetup& t, const int (&order)[3], const float* const (&varyings)[3], const glm::vec4& color,
+                      TriangleBatch& batch) {
     const int count = batch.layout.count;
     const size_t at = batch.varyings.size();
     batch.varyings.resize(at + size_t(3 * count));
     float* out = batch.varyings.data() + at;
     for (int v = 0; v < 3; ++v)
         for (int i = 0; i < count; ++i) out[v * count + i] = varyings[order[v]][i];
-    TriangleSetup& t = batch.triangles.emplace_back(setup);
     t.varyingOffset = uint32_t(at);
     t.flatColor = color;
     ++batch.counters.trianglesSetUp;
+}
+
+void appendTriangle(const TriangleSetup& setup, const int (&order)[3], const float* const (&varyings)[3],
+                    const glm::vec4& color, TriangleBatch& batch) {
+    completeTriangle(batch.triangles.emplace_back(setup), order, varyings, color, batch);
 }
 
 void countRejection(SetupResult result, StageCounters& k) {
@@ -153,12 +159,13 @@ void assembleAndSetUp(const DrawCall& call, const TriangleInput& in, size_t firs
         const glm::vec4 color =
             call.triangleColors.size() > tri ? call.triangleColors[tri] : call.state.constantColor;
         if (codes[j] == 0) {
-            TriangleSetup t;
+            // The record is written once, where the back end will read it.
+            TriangleSetup& t = batch.triangles.emplace_back();
             int order[3];
             setupRecord(lanes, setup, j, in.setup, t, order);
             const float* const v[3] = {varyingBase + corner[0] * varyingCount, varyingBase + corner[1] * varyingCount,
                                        varyingBase + corner[2] * varyingCount};
-            appendTriangle(t, order, v, color, batch);
+            completeTriangle(t, order, v, color, batch);
             continue;
         }
         const uint8_t* outcodes = vertices.outcodes.data();
