@@ -397,7 +397,7 @@ struct FootprintRun {
     int count = 0;
     uint32_t index[kFootprintLanes];  // in the block's arrays
     glm::dvec3 lo[kFootprintLanes];   // low corner, model units
-    uint8_t emit[kFootprintLanes];    // camera-facing active faces
+    uint8_t emit[kFootprintLanes];    // camera-facing active faces; after the tests, those kept
     uint8_t sampled[kFootprintLanes]; // after test(): those of emit that may cover a sample
     uint8_t depthPretest[kFootprintLanes];  // after test(), with a depth footprint: DepthPretest
     VoxelCornerLanes corners;
