@@ -38,7 +38,6 @@ ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {
     return c;
 }
 
-// An accepted triangle into the batch: its set-up and its vertices' varyings in set-up order.
 /// Completes the batch's newest triangle record `t`, written in place by set-up: its vertices'
 /// varyings in set-up's vertex order, and its flat colour.
 void completeTriangle(TriangleSetup& t, const int (&order)[3], const float* const (&varyings)[3], const glm::vec4& color,
@@ -54,6 +53,7 @@ void completeTriangle(TriangleSetup& t, const int (&order)[3], const float* cons
     ++batch.counters.trianglesSetUp;
 }
 
+// An accepted triangle into the batch: its set-up and its vertices' varyings in set-up order.
 void appendTriangle(const TriangleSetup& setup, const int (&order)[3], const float* const (&varyings)[3],
                     const glm::vec4& color, TriangleBatch& batch) {
     completeTriangle(batch.triangles.emplace_back(setup), order, varyings, color, batch);

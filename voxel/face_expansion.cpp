@@ -185,16 +185,16 @@ public:
             // The depth key is the window depth clamped to [0, 1], signed (raster/depth.h):
             // monotonic in the depth, so the nearest key is that of the nearest depth (or,
             // reversed, the farthest).
-            auto key = [&](double z) { return double(depth_->keySign) * std::clamp(z, 0.0, 1.0); };
-            const double nearestKey = std::min(key(nearestZ), key(farthestZ));
-            const double farthestKey = std::max(key(nearestZ), key(farthestZ));
+            const double nearKey = depthKeyOf(nearestZ, depth_->keySign), farKey = depthKeyOf(farthestZ, depth_->keySign);
+            const double nearestKey = std::min(nearKey, farKey), farthestKey = std::max(nearKey, farKey);
             // The margin grows with the faces' plane-term ratio, which costs more to find than the
             // footprint test: a voxel not behind the footprint with the least margin (ratio 0) is
             // not behind it with its own, and needs the ratio only for the block's own test.
+            // The pre-test's verdict where it gave one; where it did not, the same test here.
             const bool mayBeBehind =
-                pretest == kInFront                                       ? false
-                : pretest == kMayBeBehind || pretest == kBehindWithAnyMargin ? true
-                                          : behindFootprint(lo, hi, nearestKey - hiddenDepthMargin(nearestZ, farthestZ, cornerError, 0.0));
+                pretest == kTestDepthOnOwn || pretest == kNotDepthTested
+                    ? behindFootprint(lo, hi, nearestKey - hiddenDepthMargin(nearestZ, farthestZ, cornerError, 0.0))
+                    : pretest != kInFront;
             if (mayBeBehind || projected) {
                 ProjectedVoxel local;
                 ProjectedVoxel& v = projected ? *projected : local;

@@ -1,5 +1,6 @@
 #include "voxel/face_footprint_lanes.h"
 
+#include "raster/limits.h"
 #include "voxel/face_expansion.h"
 #include "voxel/voxel_model.h"
 
@@ -102,7 +103,7 @@ void pretestHiddenDepthOnTarget(const HiddenDepthFrame& f, const VoxelCornerLane
     const int n = l.count;
     const float* farthest = d.farthestKey.data();
     const double keySign = double(d.keySign), m = kFootprintMarginPixels;
-    constexpr int kBlock = 8;  // raster::kBlockSizePixels, a constant so that the divisions are shifts
+    constexpr int kBlock = raster::kBlockSizePixels;  // a constant, so that the divisions are shifts
     // Three loops without branches, so that each vectorises: the bound and the block range, the
     // blocks' keys (gathered), then the verdict.
     alignas(64) int32_t tested[N], x0[N], y0[N], x1[N], y1[N], behind[N], surely[N];
@@ -254,7 +255,7 @@ HWY_EXPORT(pretestHiddenDepthOnTarget);
 void pretestHiddenDepth(const HiddenDepthFrame& frame, const VoxelCornerLanes& lanes, uint8_t* pretest) {
     if (lanes.count <= 0) return;
     const DepthFootprint& d = *frame.depth;
-    if (d.blockSizePixels != 8 || d.blocksX <= 0 || d.blocksY <= 0 ||
+    if (d.blockSizePixels != raster::kBlockSizePixels || d.blocksX <= 0 || d.blocksY <= 0 ||
         d.farthestKey.size() < size_t(d.blocksX) * size_t(d.blocksY)) {
         // Not the rasterizer's blocks, or no blocks: the one-voxel test decides every voxel.
         for (int i = 0; i < lanes.count; ++i) pretest[i] = kTestDepthOnOwn;
