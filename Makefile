@@ -84,7 +84,7 @@ tsan: setup
 
 # Fuzz every reader (fuzz/, docs/robustness.md): FUZZ_SECONDS each, corpora kept in build/fuzz/corpus.
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS := fuzz_tri fuzz_ply fuzz_obj fuzz_gltf fuzz_cgs fuzz_cvox fuzz_cvox_blocks fuzz_camera_path fuzz_raw_volume fuzz_hdr fuzz_partial_voxelization
+FUZZ_TARGETS := fuzz_tri fuzz_ply fuzz_obj fuzz_gltf fuzz_cgs fuzz_cvox fuzz_cvox_blocks fuzz_camera_path fuzz_raw_volume fuzz_hdr fuzz_partial_voxelization fuzz_pyramid_range
 fuzz: setup
 	@cmake --preset fuzz >/dev/null
 	@cmake --build --preset fuzz -j $(JOBS)

@@ -16,7 +16,9 @@
 #include "scene/file_names.h"
 #include "scene/input_error.h"
 #include "scene/ply_loader.h"
+#include "lod/pyramid_ranges.h"
 #include "voxel/cvox_file.h"
+#include "voxel/morton.h"
 #include "voxel/partial_voxelization_file.h"
 #include "voxel/voxel_export.h"
 
@@ -162,26 +164,18 @@ std::unique_ptr<voxel::MeshView> openVoxelizeInput(const VoxelizeCommandOptions&
     return view;
 }
 
-// The voxelized model's LOD pyramid and files, the summary and --stats: the last steps of
-// `voxelize`, on one machine or after merging a distributed voxelization's parts.
-int finishVoxelize(const VoxelizeCommandOptions& o, const VoxelizeSettings& v, voxel::VoxelModel model,
-                   const voxel::VoxelizeStats& s, double openMs, double startMs) {
-    if (model.voxelCount() == 0)
-        throw scene::InputError(o.input.string() + ": no voxels: its " + std::to_string(s.triangles) +
-                                " triangles have no area at " + std::to_string(o.resolution) + "^3");
-    lod::PyramidStats ps;
-    lod::buildLodPyramid(model, v.pyramid, &ps);
-    double writeMs = 0;
-    writeModelFiles(model, o.out, o.exportVoxels, writeMs);
+// The summary and --stats: the last steps of `voxelize`, on one machine or after joining a
+// distributed voxelization's ranges. `blocks`: the model's blocks at every level.
+int reportVoxelize(const VoxelizeCommandOptions& o, const VoxelizeSettings& v, const voxel::VoxelizeStats& s,
+                   const lod::PyramidStats& ps, size_t blocks, double openMs, double writeMs, double startMs) {
     const double totalMs = raster::nowMs() - startMs;
-
     if (!o.quiet)
         std::printf("voxelized %s at %u^3 (%s): %llu triangles -> %llu voxels in %llu blocks, %.0f ms "
                     "(open %.0f, rasterize %.0f, merge %.0f, emit %.0f, simplify %.0f, write %.0f); %u LOD levels, "
                     "%zu blocks in all -> %s\n",
                     o.input.string().c_str(), o.resolution, voxel::separabilityName(v.voxelize.separability),
                     (unsigned long long)s.triangles, (unsigned long long)s.voxels, (unsigned long long)s.blocks, totalMs,
-                    openMs, s.rasterizeMs, s.mergeMs, s.emitMs, ps.simplifyMs, writeMs, ps.levels, model.blocks.size(),
+                    openMs, s.rasterizeMs, s.mergeMs, s.emitMs, ps.simplifyMs, writeMs, ps.levels, blocks,
                     o.out.string().c_str());
     if (!o.statsPath.empty()) {
         const double seconds = totalMs / 1000.0;
@@ -217,6 +211,33 @@ int finishVoxelize(const VoxelizeCommandOptions& o, const VoxelizeSettings& v, v
     return 0;
 }
 
+
+void requireVoxels(const VoxelizeCommandOptions& o, uint64_t voxels, uint64_t triangles) {
+    if (voxels == 0)
+        throw scene::InputError(o.input.string() + ": no voxels: its " + std::to_string(triangles) +
+                                " triangles have no area at " + std::to_string(o.resolution) + "^3");
+}
+
+// The voxelized model's LOD pyramid and files, then the summary and --stats.
+int finishVoxelize(const VoxelizeCommandOptions& o, const VoxelizeSettings& v, voxel::VoxelModel model,
+                   const voxel::VoxelizeStats& s, double openMs, double startMs) {
+    requireVoxels(o, model.voxelCount(), s.triangles);
+    lod::PyramidStats ps;
+    lod::buildLodPyramid(model, v.pyramid, &ps);
+    double writeMs = 0;
+    writeModelFiles(model, o.out, o.exportVoxels, writeMs);
+    return reportVoxelize(o, v, s, ps, model.blocks.size(), openMs, writeMs, startMs);
+}
+
+lod::PyramidRangePlan planFromJson(const std::string& text) {
+    const nlohmann::json j = nlohmann::json::parse(text);
+    lod::PyramidRangePlan plan;
+    plan.levels = j.at("levels").get<uint32_t>();
+    plan.splitLevel = j.at("splitLevel").get<uint32_t>();
+    plan.rangeStarts = j.at("rangeStarts").get<std::vector<uint64_t>>();
+    return plan;
+}
+
 }  // namespace
 
 int runVoxelizeCommand(const VoxelizeCommandOptions& o) {
@@ -249,17 +270,19 @@ void voxelizeChunkRun(const VoxelizeCommandOptions& o, size_t firstChunk, size_t
     out.commit();
 }
 
-int finishVoxelizeFromParts(const VoxelizeCommandOptions& o, const std::vector<std::filesystem::path>& parts) {
+std::string planVoxelizeRanges(const VoxelizeCommandOptions& o, const std::vector<std::filesystem::path>& parts,
+                               size_t wantedRanges) {
     const VoxelizeSettings v = voxelizeSettings(o);
-    raster::ThreadLimit threadLimit(o.threads);
-    const double t0 = raster::nowMs();
     const std::unique_ptr<voxel::MeshView> view = openVoxelizeInput(o);
-    const double openMs = raster::nowMs() - t0;
-    std::vector<voxel::PartialVoxelization> read;
-    for (const std::filesystem::path& p : parts) read.push_back(voxel::readPartialVoxelization(p));
     // The parts must hold every chunk once: their runs, in order, tile [0, chunk count).
-    std::vector<std::pair<uint64_t, uint64_t>> runs;
-    for (const voxel::PartialVoxelization& p : read) runs.push_back({p.firstChunk, p.chunkCount});
+    std::vector<std::pair<uint64_t, uint64_t>> runs, blocks;
+    voxel::VoxelModel header;
+    for (const std::filesystem::path& path : parts) {
+        const voxel::PartialVoxelization p = voxel::readPartialVoxelization(path, 0, 0);
+        runs.push_back({p.firstChunk, p.chunkCount});
+        header = p.header;
+        for (const auto& block : voxel::readPartialVoxelizationIndex(path)) blocks.push_back(block);
+    }
     std::sort(runs.begin(), runs.end());
     uint64_t next = 0;
     for (const auto& [first, count] : runs) {
@@ -269,12 +292,64 @@ int finishVoxelizeFromParts(const VoxelizeCommandOptions& o, const std::vector<s
     if (next != view->chunkCount() || runs.empty() || runs.back().first + runs.back().second != next)
         throw scene::InputError(o.input.string() + ": the parts do not hold each of its " +
                                 std::to_string(view->chunkCount()) + " chunks once");
+    const uint32_t levels = lod::pyramidLevels(header.grid.resolution, header.blockSize, v.pyramid);
+    const lod::PyramidRangePlan plan = lod::planPyramidRanges(std::move(blocks), levels, wantedRanges);
+    return nlohmann::json{{"levels", plan.levels}, {"splitLevel", plan.splitLevel}, {"rangeStarts", plan.rangeStarts}}.dump();
+}
+
+std::string voxelizeRange(const VoxelizeCommandOptions& o, const std::vector<std::filesystem::path>& parts,
+                          const std::string& planText, size_t range, const std::filesystem::path& rangeFile) {
+    const VoxelizeSettings v = voxelizeSettings(o);
+    raster::ThreadLimit threadLimit(o.threads);
+    const lod::PyramidRangePlan plan = planFromJson(planText);
+    if (range >= plan.rangeCount()) throw std::invalid_argument("voxelizeRange: no such range in the plan");
     const double m0 = raster::nowMs();
+    std::vector<voxel::PartialVoxelization> read;
+    for (const std::filesystem::path& p : parts)
+        read.push_back(voxel::readPartialVoxelization(p, plan.rangeBegin(range), plan.rangeEnd(range)));
     voxel::VoxelizeStats s;
     voxel::VoxelModel model = voxel::mergePartialVoxelizations(std::move(read), &s);
-    s.mergeMs = raster::nowMs() - m0;
+    const double mergeMs = raster::nowMs() - m0;
+    AtomicOutputFile out(rangeFile);
+    lod::buildPyramidRange(std::move(model), v.pyramid, plan.splitLevel, out.stream());
+    out.commit();
+    return nlohmann::json{{"conservativeVoxels", s.conservativeVoxels}, {"mergeMs", mergeMs}}.dump();
+}
+
+int finishVoxelizeFromRanges(const VoxelizeCommandOptions& o, const std::vector<std::filesystem::path>& parts,
+                             const std::string& planText, const std::vector<std::filesystem::path>& rangeFiles,
+                             const std::vector<std::string>& rangeResults) {
+    const VoxelizeSettings v = voxelizeSettings(o);
+    raster::ThreadLimit threadLimit(o.threads);
+    const double t0 = raster::nowMs();
+    const std::unique_ptr<voxel::MeshView> view = openVoxelizeInput(o);
+    const double openMs = raster::nowMs() - t0;
+    const lod::PyramidRangePlan plan = planFromJson(planText);
+    if (rangeFiles.size() != plan.rangeCount() || rangeResults.size() != plan.rangeCount())
+        throw std::invalid_argument("finishVoxelizeFromRanges: not one range file and result per range of the plan");
+    if (parts.empty()) throw std::invalid_argument("finishVoxelizeFromRanges: no parts");
+    const voxel::VoxelModel header = voxel::readPartialVoxelization(parts[0], 0, 0).header;
+    const lod::PyramidRangeJoin join(header, rangeFiles, v.pyramid, plan);
+    voxel::VoxelizeStats s;
+    s.chunks = view->chunkCount();
     for (size_t i = 0; i < view->chunkCount(); ++i) s.triangles += view->chunkInfo(i).triangleCount;
-    return finishVoxelize(o, v, std::move(model), s, openMs, t0);
+    for (const std::string& r : rangeResults) {
+        const nlohmann::json j = nlohmann::json::parse(r);
+        s.conservativeVoxels += j.at("conservativeVoxels").get<uint64_t>();
+        s.mergeMs += j.at("mergeMs").get<double>();
+    }
+    for (const voxel::VoxelBlock& b : join.layout().blocks)
+        if (b.level == 0) ++s.blocks, s.voxels += b.totalVoxels(), s.sourceTriangles += b.totalTriangles();
+    requireVoxels(o, s.voxels, s.triangles);
+    const double w0 = raster::nowMs();
+    // Both files are complete before either is renamed into place.
+    AtomicOutputFile cvox(o.out);
+    std::unique_ptr<AtomicOutputFile> text;
+    if (!o.exportVoxels.empty()) text = std::make_unique<AtomicOutputFile>(o.exportVoxels);
+    join.write(cvox.stream(), text ? &text->stream() : nullptr);
+    cvox.commit();
+    if (text) text->commit();
+    return reportVoxelize(o, v, s, join.stats(), join.layout().blocks.size(), openMs, raster::nowMs() - w0, t0);
 }
 
 int runIsosurfaceCommand(const IsosurfaceCommandOptions& o) {

@@ -61,15 +61,30 @@ struct InfoOptions {
 int runPackCommand(const PackOptions& options);
 int runVoxelizeCommand(const VoxelizeCommandOptions& options);
 
-/// `voxelize` taken apart (python/cuberille/dask): the input's chunk count; one run of chunks
-/// voxelized into a partial voxelization file (voxel/partial_voxelization_file.h, written
-/// atomically); and the command's last steps from every part — merged (the single-machine model bit
-/// for bit), its LOD pyramid, the .cvox, the summary and --stats. Each checks the options as the
-/// command does and throws scene::InputError with its messages.
+/// `voxelize` taken apart (python/cuberille/dask), so that no process holds the finest level
+/// whole (lod/pyramid_ranges.h):
+///   voxelizeChunkCount   the input's chunks;
+///   voxelizeChunkRun     one run of chunks voxelized into a partial voxelization file
+///                        (voxel/partial_voxelization_file.h, written atomically);
+///   planVoxelizeRanges   the ranges of blocks to merge, from the parts' block indexes (checks
+///                        that the parts hold each chunk once); the plan as JSON;
+///   voxelizeRange        one range's blocks merged from every part (the single-machine blocks
+///                        bit for bit), its pyramid up to the plan's split level, into a range file
+///                        (written atomically); what it counted, as JSON;
+///   finishVoxelizeFromRanges  the command's last steps from the range files, in the plan's
+///                        order: the levels above the split, the .cvox and --export-voxels
+///                        (`cuberille voxelize`'s bytes), the summary and --stats.
+/// Each checks the options as the command does and throws scene::InputError with its messages.
 size_t voxelizeChunkCount(const VoxelizeCommandOptions& options);
 void voxelizeChunkRun(const VoxelizeCommandOptions& options, size_t firstChunk, size_t chunkCount,
                       const std::filesystem::path& part);
-int finishVoxelizeFromParts(const VoxelizeCommandOptions& options, const std::vector<std::filesystem::path>& parts);
+std::string planVoxelizeRanges(const VoxelizeCommandOptions& options, const std::vector<std::filesystem::path>& parts,
+                               size_t wantedRanges);
+std::string voxelizeRange(const VoxelizeCommandOptions& options, const std::vector<std::filesystem::path>& parts,
+                          const std::string& plan, size_t range, const std::filesystem::path& rangeFile);
+int finishVoxelizeFromRanges(const VoxelizeCommandOptions& options, const std::vector<std::filesystem::path>& parts,
+                             const std::string& plan,
+                             const std::vector<std::filesystem::path>& rangeFiles, const std::vector<std::string>& rangeResults);
 
 /// Adds the `voxelize` subcommand, whose options fill `o`.
 CLI::App* addVoxelizeCommand(CLI::App& app, VoxelizeCommandOptions& o);

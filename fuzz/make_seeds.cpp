@@ -14,6 +14,7 @@
 #include <meshoptimizer.h>
 
 #include "lod/lod_pyramid.h"
+#include "lod/pyramid_ranges.h"
 #include "voxel/cvox_file.h"
 #include "voxel/partial_voxelization_file.h"
 #include "voxel/geometry_stream.h"
@@ -214,6 +215,18 @@ int main(int argc, char** argv) {
         std::ostringstream out;
         voxel::writePartialVoxelization(voxel::voxelizeChunks(*mesh, o, 0, mesh->chunkCount()), out);
         put(dir, "fuzz_partial_voxelization", "tet" + std::to_string(resolution) + ".cvxp", out.str());
+    }
+    // The tetrahedron's one range at 128^3 (two levels), split at level 0 (with the copies the
+    // join builds level 1 from) and at level 1 (the range builds both).
+    for (const uint32_t split : {0u, 1u}) {
+        voxel::VoxelizeOptions o;
+        o.resolution = 128;
+        const auto mesh = tetrahedron();
+        std::vector<voxel::PartialVoxelization> parts;
+        parts.push_back(voxel::voxelizeChunks(*mesh, o, 0, mesh->chunkCount()));
+        std::ostringstream out;
+        lod::buildPyramidRange(voxel::mergePartialVoxelizations(std::move(parts)), {}, split, out);
+        put(dir, "fuzz_pyramid_range", "tet128-split" + std::to_string(split) + ".cvxr", out.str());
     }
     fs::remove(fs::temp_directory_path() / "cuberille-seed-tet.obj");
     return 0;

@@ -18,34 +18,6 @@ std::vector<const VoxelBlock*> pointersTo(const std::vector<VoxelBlock>& blocks)
     return p;
 }
 
-/// Child links: the blocks are ordered coarsest first, Morton within a level, so a parent's
-/// children are a consecutive run of the level below, found by walking both levels together.
-void linkChildren(std::vector<VoxelBlock>& blocks) {
-    size_t levelStart = 0;
-    while (levelStart < blocks.size()) {
-        const uint32_t level = blocks[levelStart].level;
-        size_t levelEnd = levelStart;
-        while (levelEnd < blocks.size() && blocks[levelEnd].level == level) ++levelEnd;
-        size_t child = levelEnd;  // the level below starts right after
-        for (size_t p = levelStart; p < levelEnd; ++p) {
-            VoxelBlock& parent = blocks[p];
-            parent.childMask = 0;
-            parent.firstChild = 0;
-            if (level == 0) continue;
-            const uint64_t parentCode = voxel::mortonOf(parent.coord);
-            while (child < blocks.size() && blocks[child].level == level - 1 && voxel::mortonOf(blocks[child].coord) >> 3 < parentCode)
-                ++child;
-            parent.firstChild = uint32_t(child);
-            while (child < blocks.size() && blocks[child].level == level - 1 &&
-                   voxel::mortonOf(blocks[child].coord) >> 3 == parentCode) {
-                parent.childMask |= uint8_t(1u << (voxel::mortonOf(blocks[child].coord) & 7));
-                ++child;
-            }
-        }
-        levelStart = levelEnd;
-    }
-}
-
 /// Faces no camera can see: a face whose neighbour across it, in the same block, holds a voxel
 /// is covered by that voxel wherever it could be seen from, so it is cleared; a voxel inside a
 /// thick shell (all six neighbours present) loses every face and draws nothing (issue 25: a
@@ -99,24 +71,62 @@ uint64_t addSkirts(VoxelBlock& b, uint32_t blockSize) {
 
 }  // namespace
 
+/// Child links: the blocks are ordered coarsest first, Morton within a level, so a parent's
+/// children are a consecutive run of the level below, found by walking both levels together.
+void linkChildren(std::vector<VoxelBlock>& blocks) {
+    size_t levelStart = 0;
+    while (levelStart < blocks.size()) {
+        const uint32_t level = blocks[levelStart].level;
+        size_t levelEnd = levelStart;
+        while (levelEnd < blocks.size() && blocks[levelEnd].level == level) ++levelEnd;
+        size_t child = levelEnd;  // the level below starts right after
+        for (size_t p = levelStart; p < levelEnd; ++p) {
+            VoxelBlock& parent = blocks[p];
+            parent.childMask = 0;
+            parent.firstChild = 0;
+            if (level == 0) continue;
+            const uint64_t parentCode = voxel::mortonOf(parent.coord);
+            while (child < blocks.size() && blocks[child].level == level - 1 && voxel::mortonOf(blocks[child].coord) >> 3 < parentCode)
+                ++child;
+            parent.firstChild = uint32_t(child);
+            while (child < blocks.size() && blocks[child].level == level - 1 &&
+                   voxel::mortonOf(blocks[child].coord) >> 3 == parentCode) {
+                parent.childMask |= uint8_t(1u << (voxel::mortonOf(blocks[child].coord) & 7));
+                ++child;
+            }
+        }
+        levelStart = levelEnd;
+    }
+}
+
+std::vector<VoxelBlock> simplifyLevel(const std::vector<VoxelBlock>& below, uint32_t blockSize, SimplifyMethod method) {
+    const std::vector<const VoxelBlock*> pointers = pointersTo(below);
+    return method == SimplifyMethod::Serial ? simplifySerial(pointers, blockSize) : simplifyParallel(pointers, blockSize);
+}
+
+void finishBlockFaces(VoxelBlock& block, uint32_t blockSize, bool clearHidden, PyramidStats& stats) {
+    if (clearHidden) stats.hiddenFacesCleared += clearHiddenFaces(block, blockSize);
+    stats.skirtFaces += addSkirts(block, blockSize);
+}
+
 uint32_t pyramidLevels(uint32_t resolution, uint32_t blockSize) {
     uint32_t levels = 1;
     for (uint32_t r = resolution; r > blockSize; r /= 2) ++levels;
     return levels;
 }
 
+uint32_t pyramidLevels(uint32_t resolution, uint32_t blockSize, const PyramidOptions& options) {
+    const uint32_t levels = pyramidLevels(resolution, blockSize);
+    return options.maxLevels > 0 ? std::min(levels, options.maxLevels) : levels;
+}
+
 void buildLodPyramid(voxel::VoxelModel& model, const PyramidOptions& options, PyramidStats* statsOut) {
     const double t0 = raster::nowMs();
     PyramidStats stats;
-    uint32_t levels = pyramidLevels(model.grid.resolution, model.blockSize);
-    if (options.maxLevels > 0) levels = std::min(levels, options.maxLevels);
+    const uint32_t levels = pyramidLevels(model.grid.resolution, model.blockSize, options);
     std::vector<std::vector<VoxelBlock>> pyramid(1);
     pyramid[0] = std::move(model.blocks);
-    for (uint32_t l = 1; l < levels; ++l) {
-        const std::vector<const VoxelBlock*> below = pointersTo(pyramid[l - 1]);
-        pyramid.push_back(options.method == SimplifyMethod::Serial ? simplifySerial(below, model.blockSize)
-                                                                   : simplifyParallel(below, model.blockSize));
-    }
+    for (uint32_t l = 1; l < levels; ++l) pyramid.push_back(simplifyLevel(pyramid[l - 1], model.blockSize, options.method));
     model.blocks.clear();
     for (uint32_t l = levels; l-- > 0;) {
         stats.blocksPerLevel.insert(stats.blocksPerLevel.begin(), pyramid[l].size());
@@ -128,12 +138,11 @@ void buildLodPyramid(voxel::VoxelModel& model, const PyramidOptions& options, Py
         stats.voxelsPerLevel.insert(stats.voxelsPerLevel.begin(), voxels);
     }
     linkChildren(model.blocks);
-    std::vector<uint64_t> skirts(model.blocks.size(), 0), hidden(model.blocks.size(), 0);
+    std::vector<PyramidStats> faces(model.blocks.size());
     raster::parallelFor(model.blocks.size(), [&](size_t i) {
-        if (options.clearHiddenFaces) hidden[i] = clearHiddenFaces(model.blocks[i], model.blockSize);
-        skirts[i] = addSkirts(model.blocks[i], model.blockSize);
+        finishBlockFaces(model.blocks[i], model.blockSize, options.clearHiddenFaces, faces[i]);
     });
-    for (size_t i = 0; i < skirts.size(); ++i) stats.skirtFaces += skirts[i], stats.hiddenFacesCleared += hidden[i];
+    for (const PyramidStats& f : faces) stats.skirtFaces += f.skirtFaces, stats.hiddenFacesCleared += f.hiddenFacesCleared;
     stats.levels = levels;
     stats.simplifyMs = raster::nowMs() - t0;
     if (statsOut) *statsOut = stats;

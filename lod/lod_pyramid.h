@@ -42,5 +42,21 @@ void buildLodPyramid(voxel::VoxelModel& model, const PyramidOptions& options, Py
 
 /// Number of levels a model of this resolution gets: down to one block of kBlockSize.
 uint32_t pyramidLevels(uint32_t resolution, uint32_t blockSize);
+/// The levels buildLodPyramid builds under the options (maxLevels applied).
+uint32_t pyramidLevels(uint32_t resolution, uint32_t blockSize, const PyramidOptions& options);
+
+// The pyramid's steps, for building it a range of blocks at a time (lod/pyramid_ranges.h).
+
+/// The level above `below` (blocks of one level in Morton order), by the options' method.
+std::vector<voxel::VoxelBlock> simplifyLevel(const std::vector<voxel::VoxelBlock>& below, uint32_t blockSize,
+                                             SimplifyMethod method);
+
+/// A block's last step, once the level above it is built: hidden faces cleared (when asked) and
+/// skirts added. Adds what it changed to the stats' counts.
+void finishBlockFaces(voxel::VoxelBlock& block, uint32_t blockSize, bool clearHiddenFaces, PyramidStats& stats);
+
+/// Sets every block's child links from the levels and coordinates alone (the blocks may be a
+/// layout without their voxels): they must be ordered coarsest level first, Morton within a level.
+void linkChildren(std::vector<voxel::VoxelBlock>& blocks);
 
 }  // namespace cuberille::lod

@@ -286,8 +286,9 @@ private:
 
 // A `cuberille voxelize` command line read by the tool's own parser, taken apart for the
 // distributed runner (apps/voxel_commands.h): run() voxelizes a run of the input's chunks into a
-// part file, finish() merges every part (the single-machine model bit for bit) and writes what the
-// command writes.
+// part file; plan_ranges() cuts the model's blocks into ranges; merge_range() merges one range
+// from every part and builds its pyramid up to the split level into a range file; finish() joins
+// the ranges into what the command writes (the single-machine files bit for bit).
 class PyVoxelizeCommand {
 public:
     static PyVoxelizeCommand fromArguments(const std::vector<std::string>& arguments) {
@@ -306,10 +307,24 @@ public:
         py::gil_scoped_release release;
         apps::voxelizeChunkRun(o, first, count, part);
     }
-    int finish(const std::vector<std::string>& parts) const {
+    std::string planRanges(const std::vector<std::string>& parts, size_t wantedRanges) const {
         const std::vector<std::filesystem::path> paths(parts.begin(), parts.end());
         py::gil_scoped_release release;
-        return apps::finishVoxelizeFromParts(o_, paths);
+        return apps::planVoxelizeRanges(o_, paths, wantedRanges);
+    }
+    std::string mergeRange(const std::vector<std::string>& parts, const std::string& plan, size_t range,
+                           const std::string& rangeFile, int threadsIfUnset) const {
+        apps::VoxelizeCommandOptions o = o_;
+        if (o.threads == 0) o.threads = threadsIfUnset;
+        const std::vector<std::filesystem::path> paths(parts.begin(), parts.end());
+        py::gil_scoped_release release;
+        return apps::voxelizeRange(o, paths, plan, range, rangeFile);
+    }
+    int finish(const std::vector<std::string>& parts, const std::string& plan, const std::vector<std::string>& ranges,
+               const std::vector<std::string>& results) const {
+        const std::vector<std::filesystem::path> partPaths(parts.begin(), parts.end()), rangePaths(ranges.begin(), ranges.end());
+        py::gil_scoped_release release;
+        return apps::finishVoxelizeFromRanges(o_, partPaths, plan, rangePaths, results);
     }
     const apps::VoxelizeCommandOptions& options() const { return o_; }
 
@@ -436,8 +451,13 @@ PYBIND11_MODULE(_cuberille, m) {
         .def("chunk_count", &PyVoxelizeCommand::chunkCount, "The input's chunks (checks the options and opens it)")
         .def("run", &PyVoxelizeCommand::run, py::arg("first"), py::arg("count"), py::arg("part"),
              py::arg("threads_if_unset") = 0, "Voxelizes chunks [first, first + count) into the part file")
-        .def("finish", &PyVoxelizeCommand::finish, py::arg("parts"),
-             "Merges the parts and writes the .cvox, --export-voxels and --stats; prints the summary")
+        .def("plan_ranges", &PyVoxelizeCommand::planRanges, py::arg("parts"), py::arg("wanted_ranges"),
+             "The ranges of blocks to merge (JSON), from the parts' block indexes; checks each chunk is in one part")
+        .def("merge_range", &PyVoxelizeCommand::mergeRange, py::arg("parts"), py::arg("plan"), py::arg("range"),
+             py::arg("range_file"), py::arg("threads_if_unset") = 0,
+             "Merges one range of blocks from every part and builds its pyramid up to the plan's split level")
+        .def("finish", &PyVoxelizeCommand::finish, py::arg("parts"), py::arg("plan"), py::arg("ranges"), py::arg("results"),
+             "Joins the range files (in the plan's order) and writes the .cvox, --export-voxels and --stats; prints the summary")
         .def_property_readonly("out", [](const PyVoxelizeCommand& c) { return c.options().out.string(); })
         .def_property_readonly("stats", [](const PyVoxelizeCommand& c) { return c.options().statsPath.string(); })
         .def_property_readonly("export_voxels", [](const PyVoxelizeCommand& c) { return c.options().exportVoxels.string(); })

@@ -20,11 +20,17 @@ static_assert(sizeof(SourceTriangle) == 60, "source triangles are stored as they
 
 constexpr uint32_t kFlagColors = 1u << 0, kFlagTriangles = 1u << 1;
 
-uint64_t blockDataBytes(uint64_t voxels, uint64_t triangles) { return voxels * 12 + triangles * kSourceTriangleBytes; }
-
 }  // namespace
 
+uint64_t cvoxBlockDataBytes(uint64_t voxels, uint64_t triangles) { return voxels * 12 + triangles * kSourceTriangleBytes; }
+
 void writeCvox(const VoxelModel& model, std::ostream& out) {
+    writeCvoxHeaderAndTable(model, out);
+    for (const VoxelBlock& b : model.blocks) writeCvoxBlockData(b, out);
+    if (!out) throw std::runtime_error("writing the voxel file failed");
+}
+
+void writeCvoxHeaderAndTable(const VoxelModel& model, std::ostream& out) {
     const uint64_t tableEnd = kHeaderBytes + kBlockEntryBytes * model.blocks.size();
     uint32_t levels = 0;
     for (const VoxelBlock& b : model.blocks) levels = std::max(levels, b.level + 1);
@@ -47,10 +53,10 @@ void writeCvox(const VoxelModel& model, std::ostream& out) {
     for (const VoxelBlock& b : model.blocks) {
         h.put(b.level);
         h.put(b.coord);
-        h.put(uint32_t(b.voxels.size()));
-        h.put(uint32_t(b.triangles.size()));
+        h.put(uint32_t(b.totalVoxels()));
+        h.put(uint32_t(b.totalTriangles()));
         h.put(at);
-        h.put(at + b.voxels.size() * 12);
+        h.put(at + b.totalVoxels() * 12);
         const std::array<uint8_t, 6> tight{uint8_t(b.tightMin.x), uint8_t(b.tightMin.y), uint8_t(b.tightMin.z),
                                            uint8_t(b.tightMax.x), uint8_t(b.tightMax.y), uint8_t(b.tightMax.z)};
         h.putArray(tight.data(), tight.size());
@@ -58,16 +64,17 @@ void writeCvox(const VoxelModel& model, std::ostream& out) {
         h.put(b.firstChild);
         h.put(uint32_t(b.childMask));
         h.put(uint64_t(0));  // reserved, to 64
-        at += blockDataBytes(b.voxels.size(), b.triangles.size());
+        at += cvoxBlockDataBytes(b.totalVoxels(), b.totalTriangles());
     }
     out.write(h.bytes().data(), std::streamsize(h.size()));
-    for (const VoxelBlock& b : model.blocks) {
-        out.write(reinterpret_cast<const char*>(b.voxels.data()), std::streamsize(b.voxels.size() * 4));
-        out.write(reinterpret_cast<const char*>(b.normals.data()), std::streamsize(b.normals.size() * 4));
-        out.write(reinterpret_cast<const char*>(b.colors.data()), std::streamsize(b.colors.size() * 4));
-        out.write(reinterpret_cast<const char*>(b.triangles.data()), std::streamsize(b.triangles.size() * kSourceTriangleBytes));
-    }
     if (!out) throw std::runtime_error("writing the voxel file failed");
+}
+
+void writeCvoxBlockData(const VoxelBlock& b, std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(b.voxels.data()), std::streamsize(b.voxels.size() * 4));
+    out.write(reinterpret_cast<const char*>(b.normals.data()), std::streamsize(b.normals.size() * 4));
+    out.write(reinterpret_cast<const char*>(b.colors.data()), std::streamsize(b.colors.size() * 4));
+    out.write(reinterpret_cast<const char*>(b.triangles.data()), std::streamsize(b.triangles.size() * kSourceTriangleBytes));
 }
 
 CvoxReader::CvoxReader(const std::filesystem::path& path)

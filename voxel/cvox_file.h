@@ -26,6 +26,15 @@ class PositionalFile;
 /// Throws std::runtime_error when the stream fails.
 void writeCvox(const VoxelModel& model, std::ostream& out);
 
+/// writeCvox in two steps, for a model written a block at a time (lod/pyramid_ranges.h): the header
+/// and block table from a layout (each block's counts as totalVoxels()/totalTriangles() give them;
+/// no voxel data needed), then each block's data in table order, either from a loaded block or
+/// as the bytes blockData gives (voxels, normals, colours, then source triangles).
+void writeCvoxHeaderAndTable(const VoxelModel& layout, std::ostream& out);
+void writeCvoxBlockData(const VoxelBlock& block, std::ostream& out);
+/// Bytes of a block's data in the file: 12 per voxel, 60 per source triangle.
+uint64_t cvoxBlockDataBytes(uint64_t voxels, uint64_t triangles);
+
 /// A .cvox opened for reading blocks on demand: the header and block table are read and checked
 /// when it opens (a truncated or corrupted file throws scene::InputError naming the file, the
 /// block or field, and the byte offset); a block's voxels and triangles are read when asked for,

@@ -74,6 +74,57 @@ BlockPartial getBlock(ByteReader& r, const VoxelModel& header) {
     return b;
 }
 
+/// The magic, version and header; returns the block count.
+uint64_t getHeader(ByteReader& r, PartialVoxelization& part) {
+    char magic[4];
+    r.getArray(magic, 4, "magic");
+    if (std::string_view(magic, 4) != std::string_view(kMagic, 4)) r.fail("magic", "not a partial voxelization (CVXP)");
+    if (r.get<uint32_t>("version") != kVersion) r.fail("version", "written by another version");
+    VoxelModel& h = part.header;
+    h.grid.resolution = r.get<uint32_t>("resolution");
+    r.getArray(&h.grid.origin.x, 3, "origin");
+    h.grid.extent = r.get<double>("extent");
+    if (!isValidResolution(h.grid.resolution)) r.fail("resolution", std::to_string(h.grid.resolution) + " is not a valid resolution");
+    if (!(h.grid.extent > 0.0) || !std::isfinite(h.grid.extent) || !std::isfinite(h.grid.origin.x) ||
+        !std::isfinite(h.grid.origin.y) || !std::isfinite(h.grid.origin.z))
+        r.fail("grid", "not a finite grid");
+    h.blockSize = r.get<uint32_t>("block size");
+    if (h.blockSize != std::min(kBlockSize, h.grid.resolution)) r.fail("block size", "not the resolution's");
+    const uint32_t separability = r.get<uint32_t>("separability");
+    if (separability != 0 && separability != 6 && separability != 26)
+        r.fail("separability", "unknown value " + std::to_string(separability));
+    h.separability = Separability(separability);
+    h.hasColors = r.get<uint8_t>("colours") != 0;
+    part.firstChunk = r.get<uint64_t>("first chunk");
+    part.chunkCount = r.get<uint64_t>("chunk count");
+    const uint64_t blocks = r.get<uint64_t>("block count");
+    if (blocks > r.remaining() / 28) r.fail("block count", std::to_string(blocks) + " blocks do not fit in the file");
+    return blocks;
+}
+
+/// The Morton code of the next block's coordinates, without moving past them.
+uint64_t peekBlockMorton(const ByteReader& r, const VoxelModel& header) {
+    ByteReader ahead = r;
+    glm::uvec3 coord;
+    ahead.getArray(&coord.x, 3, "block coordinates");
+    const uint32_t blocksPerSide = header.grid.resolution / header.blockSize;
+    if (coord.x >= blocksPerSide || coord.y >= blocksPerSide || coord.z >= blocksPerSide)
+        ahead.fail("block coordinates", "outside the grid's " + std::to_string(blocksPerSide) + " blocks a side");
+    return mortonOf(coord);
+}
+
+/// Moves past a block by its counts (the layout putBlock writes).
+void skipBlock(ByteReader& r, const VoxelModel& header) {
+    r.skip(12, "block coordinates");
+    const uint64_t leaves = r.get<uint64_t>("leaf count");
+    const uint64_t leafBytes = 4 + 3 * 8 + 8 + 1 + 1 + (header.hasColors ? 3 * 8 : 0);
+    if (leaves > r.remaining() / leafBytes) r.fail("leaf count", std::to_string(leaves) + " leaves do not fit in the file");
+    r.skip(size_t(leaves * leafBytes), "leaves");
+    const uint64_t triangles = r.get<uint64_t>("triangle count");
+    if (triangles > r.remaining() / 68) r.fail("triangle count", std::to_string(triangles) + " triangles do not fit in the file");
+    r.skip(size_t(triangles * 68), "source triangles");
+}
+
 /// A whole file mapped read-only for the reader's lifetime.
 class MappedFile {
 public:
@@ -124,43 +175,41 @@ void writePartialVoxelization(const PartialVoxelization& part, std::ostream& out
     out.write(w.bytes().data(), std::streamsize(w.size()));
 }
 
-PartialVoxelization readPartialVoxelization(const std::filesystem::path& path) {
+PartialVoxelization readPartialVoxelization(const std::filesystem::path& path, uint64_t mortonBegin, uint64_t mortonEnd) {
     // Mapped, not read into a buffer: a part is hundreds of MiB, and a buffer costs its zeroing
     // and a copy (most of the merge's time, measured on the dragon at 2048^3: 463 MiB of parts).
+    // Pages of the blocks stepped over are never touched.
     const MappedFile file(path);
     ByteReader r(file.bytes(), path.string());
-    char magic[4];
-    r.getArray(magic, 4, "magic");
-    if (std::string_view(magic, 4) != std::string_view(kMagic, 4)) r.fail("magic", "not a partial voxelization (CVXP)");
-    if (r.get<uint32_t>("version") != kVersion) r.fail("version", "written by another version");
     PartialVoxelization part;
-    VoxelModel& h = part.header;
-    h.grid.resolution = r.get<uint32_t>("resolution");
-    r.getArray(&h.grid.origin.x, 3, "origin");
-    h.grid.extent = r.get<double>("extent");
-    if (!isValidResolution(h.grid.resolution)) r.fail("resolution", std::to_string(h.grid.resolution) + " is not a valid resolution");
-    if (!(h.grid.extent > 0.0) || !std::isfinite(h.grid.extent) || !std::isfinite(h.grid.origin.x) ||
-        !std::isfinite(h.grid.origin.y) || !std::isfinite(h.grid.origin.z))
-        r.fail("grid", "not a finite grid");
-    h.blockSize = r.get<uint32_t>("block size");
-    if (h.blockSize != std::min(kBlockSize, h.grid.resolution)) r.fail("block size", "not the resolution's");
-    const uint32_t separability = r.get<uint32_t>("separability");
-    if (separability != 0 && separability != 6 && separability != 26)
-        r.fail("separability", "unknown value " + std::to_string(separability));
-    h.separability = Separability(separability);
-    h.hasColors = r.get<uint8_t>("colours") != 0;
-    part.firstChunk = r.get<uint64_t>("first chunk");
-    part.chunkCount = r.get<uint64_t>("chunk count");
-    const uint64_t blocks = r.get<uint64_t>("block count");
-    if (blocks > r.remaining() / 28) r.fail("block count", std::to_string(blocks) + " blocks do not fit in the file");
-    part.blocks.reserve(blocks);
+    const uint64_t blocks = getHeader(r, part);
+    uint64_t previous = 0;
     for (uint64_t i = 0; i < blocks; ++i) {
-        part.blocks.push_back(getBlock(r, h));
-        if (i > 0 && mortonOf(part.blocks[i].coord) <= mortonOf(part.blocks[i - 1].coord))
-            r.fail("block coordinates", "block " + std::to_string(i) + " out of order");
+        const uint64_t morton = peekBlockMorton(r, part.header);
+        if (i > 0 && morton <= previous) r.fail("block coordinates", "block " + std::to_string(i) + " out of order");
+        previous = morton;
+        if (morton >= mortonBegin && morton < mortonEnd) part.blocks.push_back(getBlock(r, part.header));
+        else skipBlock(r, part.header);
     }
     if (r.remaining() != 0) r.fail("end", std::to_string(r.remaining()) + " bytes after the last block");
     return part;
+}
+
+std::vector<std::pair<uint64_t, uint64_t>> readPartialVoxelizationIndex(const std::filesystem::path& path) {
+    const MappedFile file(path);
+    ByteReader r(file.bytes(), path.string());
+    PartialVoxelization part;
+    const uint64_t blocks = getHeader(r, part);
+    std::vector<std::pair<uint64_t, uint64_t>> index;
+    for (uint64_t i = 0; i < blocks; ++i) {
+        const uint64_t morton = peekBlockMorton(r, part.header);
+        if (i > 0 && morton <= index.back().first) r.fail("block coordinates", "block " + std::to_string(i) + " out of order");
+        const size_t before = r.remaining();
+        skipBlock(r, part.header);
+        index.push_back({morton, before - r.remaining()});
+    }
+    if (r.remaining() != 0) r.fail("end", std::to_string(r.remaining()) + " bytes after the last block");
+    return index;
 }
 
 }  // namespace cuberille::voxel

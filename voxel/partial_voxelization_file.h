@@ -21,6 +21,16 @@
 namespace cuberille::voxel {
 
 void writePartialVoxelization(const PartialVoxelization& part, std::ostream& out);
-PartialVoxelization readPartialVoxelization(const std::filesystem::path& path);
+
+/// The part's blocks whose Morton code (of their finest-level block coordinates) lies in
+/// [mortonBegin, mortonEnd): a distributed voxelization merges the model a range of blocks at a
+/// time (lod/pyramid_ranges.h), each range from every part. The blocks outside are stepped over by
+/// their counts, not read; the part's header and chunk run are read whatever the range.
+PartialVoxelization readPartialVoxelization(const std::filesystem::path& path, uint64_t mortonBegin = 0,
+                                            uint64_t mortonEnd = UINT64_MAX);
+
+/// Each block of a part as (Morton code, bytes in the file), in the part's (Morton) order: what
+/// planning the ranges weighs (lod::planPyramidRanges), read without reading the blocks.
+std::vector<std::pair<uint64_t, uint64_t>> readPartialVoxelizationIndex(const std::filesystem::path& path);
 
 }  // namespace cuberille::voxel

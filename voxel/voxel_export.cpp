@@ -10,24 +10,33 @@
 namespace cuberille::voxel {
 
 void writeVoxelExport(const VoxelModel& model, std::ostream& out) {
-    char line[256];
-    std::snprintf(line, sizeof line, "# cuberille voxels %u %.17g %.17g %.17g %.17g\n", model.grid.resolution,
-                  model.grid.origin.x, model.grid.origin.y, model.grid.origin.z, model.grid.extent);
-    out << line;
+    writeVoxelExportHeader(model.grid, out);
     std::string text;
     for (const VoxelBlock& b : model.blocks) {
         if (b.level != 0) continue;
-        for (size_t v = 0; v < b.voxels.size(); ++v) {
-            const glm::uvec3 p = model.gridPosition(b, v);
-            const int n = std::snprintf(line, sizeof line, "%u %u %u\n", p.x, p.y, p.z);
-            text.append(line, size_t(n));
-        }
+        appendVoxelExportLines(b, model.blockSize, text);
         if (text.size() > (1u << 20)) {
             out << text;
             text.clear();
         }
     }
     out << text;
+}
+
+void writeVoxelExportHeader(const VoxelGrid& grid, std::ostream& out) {
+    char line[256];
+    std::snprintf(line, sizeof line, "# cuberille voxels %u %.17g %.17g %.17g %.17g\n", grid.resolution, grid.origin.x,
+                  grid.origin.y, grid.origin.z, grid.extent);
+    out << line;
+}
+
+void appendVoxelExportLines(const VoxelBlock& b, uint32_t blockSize, std::string& text) {
+    char line[64];
+    for (uint32_t packed : b.voxels) {
+        const glm::uvec3 p = b.coord * blockSize + voxelPositionInBlock(packed);
+        const int n = std::snprintf(line, sizeof line, "%u %u %u\n", p.x, p.y, p.z);
+        text.append(line, size_t(n));
+    }
 }
 
 VoxelExport readVoxelExport(const std::filesystem::path& path) {

@@ -15,6 +15,10 @@
 namespace cuberille::voxel {
 
 void writeVoxelExport(const VoxelModel& model, std::ostream& out);
+/// writeVoxelExport a block at a time (lod/pyramid_ranges.h): the first line, then each level-0
+/// block's lines in the file's block order (only the block's coordinates and voxels are read).
+void writeVoxelExportHeader(const VoxelGrid& grid, std::ostream& out);
+void appendVoxelExportLines(const VoxelBlock& block, uint32_t blockSize, std::string& text);
 
 struct VoxelExport {
     VoxelGrid grid;

@@ -252,10 +252,13 @@ def test_a_voxelization_in_runs_of_chunks_writes_the_tools_model_bit_for_bit(exa
     assert (ours.returncode, ours.stderr) == (tool.returncode, tool.stderr) == (2, tool.stderr)
 
 
-def test_a_worker_killed_mid_voxelization_leaves_the_tools_model_and_no_part(examples, cli, client, tmp_path):
-    """A worker killed after the first run of chunks finished, while the others are voxelized: Dask
-    runs its tasks again (a part is written atomically, so a killed writer leaves at most a
-    temporary file in the parts folder, which goes with it), and the model is the tool's bytes."""
+@pytest.mark.parametrize("phase", ["chunks", "ranges"])
+def test_a_worker_killed_mid_voxelization_leaves_the_tools_model_and_no_part(examples, cli, client, tmp_path, phase):
+    """A worker killed after the first run of chunks finished, while the others are voxelized, or
+    after the first range of blocks was merged, while the others are: Dask runs its tasks again (a
+    part or range file is written atomically, so a killed writer leaves at most a temporary file
+    in the parts folder, which goes with it), and the model is the tool's bytes. At 512^3 the
+    knot's blocks split at level 1, so the client builds the two levels above from the ranges."""
     assert run_cli(cli, "pack", examples / "knot.obj", "-o", tmp_path / "knot.cgs", "--chunk-triangles", "400",
                    "--quiet").returncode == 0
     options = ["--resolution", "512", "--threads", "1"]
@@ -271,9 +274,10 @@ def test_a_worker_killed_mid_voxelization_leaves_the_tools_model_and_no_part(exa
             os.kill(victim, signal.SIGKILL)
             killed.append(victim)
 
+    killer = {"progress": kill_one_worker} if phase == "chunks" else {"merge_progress": kill_one_worker}
     report = cuberille.dask.voxelize([tmp_path / "knot.cgs", *options, "-o", tmp_path / "dask" / "m.cvox", "--quiet"],
-                                     client, chunks_per_task=1, progress=kill_one_worker)
-    assert report.tasks > 4
+                                     client, chunks_per_task=1, **killer)
+    assert report.tasks > 4 and report.range_tasks > 4
     assert killed and killed[0] not in client.run(os.getpid).values()  # the worker died (and its nanny restarted it)
     assert files_of(tmp_path / "dask") == files_of(tmp_path / "cli")  # the model whole, no part or parts folder left
     client.wait_for_workers(2)

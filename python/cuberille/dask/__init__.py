@@ -33,8 +33,11 @@ How the work is split, and why the files are the same as the tool's:
 - A voxelization (`voxelize`) is cut into runs of the input's chunks (a .cgs: each worker reads
   only its chunks); each run's partial voxelization (every touched voxel's integer sums and its
   blocks' source triangles with their order keys) is written to a part file beside the output;
-  the client merges the parts (integer sums: any split gives the single-machine model bit for bit),
-  builds the LOD pyramid and writes the .cvox (apps/voxel_commands.h).
+  then the model's blocks are cut into ranges of whole subtrees of the LOD pyramid, and each range
+  is a task: its blocks merged from every part (integer sums: any split gives the single-machine
+  blocks bit for bit) and its pyramid built up to the split level, into a range file; the client
+  builds the few levels above and writes the .cvox, copying the rest from the range files
+  (lod/pyramid_ranges.h, apps/voxel_commands.h): no process holds the finest level.
 - Every file is written under a temporary name and renamed (apps/atomic_file.h), so a task retried
   after its worker died rewrites whole files; the temporary files a killed worker left are removed
   once every task has finished (`_remove_leftovers`). Outputs go where the command names them: the
@@ -92,10 +95,12 @@ class FlyReport:
 
 
 class VoxelizeReport:
-    """What voxelize() did: the model written, the input's chunks, the tasks, workers and wall time."""
+    """What voxelize() did: the model written, the input's chunks, the tasks voxelizing runs of
+    them, the tasks merging ranges of blocks, the workers and the wall time."""
 
-    def __init__(self, out, chunks, tasks, workers, seconds):
-        self.out, self.chunks, self.tasks, self.workers, self.seconds = out, chunks, tasks, workers, seconds
+    def __init__(self, out, chunks, tasks, range_tasks, workers, seconds):
+        self.out, self.chunks, self.tasks, self.range_tasks = out, chunks, tasks, range_tasks
+        self.workers, self.seconds = workers, seconds
 
 
 def render(arguments, client, *, frames_per_task=None, progress=None):
@@ -214,14 +219,18 @@ def fly(arguments, client, *, frames_per_task=None, progress=None):
                      workers, time.perf_counter() - started, warnings)
 
 
-def voxelize(arguments, client, *, chunks_per_task=None, progress=None):
+def voxelize(arguments, client, *, chunks_per_task=None, progress=None, merge_progress=None):
     """Runs `cuberille voxelize ARGUMENTS` (the mesh and options, as on the command line) on the
-    client's cluster: the input's chunks in runs (`chunks_per_task`; by default four runs a
-    worker), each voxelized on a worker into a part file in a folder beside the output; then here
-    the parts merged into the model `cuberille voxelize` writes, bit for bit, its LOD pyramid built
-    and its files written. The merge and the pyramid hold the finest level in this process, as the
-    tool does (docs/scale-out.md). Raises InputError as the tool refuses. `progress`, if given, is
-    called with (chunks done, chunks in all)."""
+    client's cluster, writing the files `cuberille voxelize` writes, bit for bit. Two rounds of
+    tasks, their files in a hidden folder beside the output: the input's chunks in runs
+    (`chunks_per_task`; by default four runs a worker), each voxelized into a part file; then the
+    model's blocks in ranges of whole subtrees of the LOD pyramid (four a worker), each merged
+    from every part and its pyramid built up to the split level into a range file. Here, the
+    levels above the split are built from the ranges' top blocks and the .cvox written, the rest
+    copied a block at a time from the range files: no process holds the finest level
+    (docs/scale-out.md). Raises InputError as the tool refuses. `progress`, if given, is called
+    with (chunks done, chunks in all) as runs finish, `merge_progress` with (ranges done, ranges in
+    all) as ranges do."""
     started = time.perf_counter()
     arguments = [os.fspath(a) for a in arguments]
     command = _cuberille.VoxelizeCommand.from_arguments(arguments)
@@ -237,11 +246,16 @@ def voxelize(arguments, client, *, chunks_per_task=None, progress=None):
         futures = [client.submit(_voxelize_run, arguments, first, n, part, threads, pure=False,
                                  key=f"cuberille-voxelize-{first}-{_stamp()}") for (first, n), part in zip(runs, parts)]
         _gather(client, futures, chunks, progress, lambda r: r["count"])
-        command.finish(parts)
+        plan = command.plan_ranges(parts, 4 * workers)
+        ranges = [os.path.join(parts_folder, f"range-{k:06d}.cvxr") for k in range(len(json.loads(plan)["rangeStarts"]))]
+        futures = [client.submit(_voxelize_range, arguments, parts, plan, k, path, threads, pure=False,
+                                 key=f"cuberille-voxelize-range-{k}-{_stamp()}") for k, path in enumerate(ranges)]
+        results = {r["range"]: r["result"] for _, r in _gather(client, futures, len(ranges), merge_progress)}
+        command.finish(parts, plan, ranges, [results[k] for k in range(len(ranges))])
     finally:
         shutil.rmtree(parts_folder, ignore_errors=True)
     _remove_leftovers([f for f in (command.out, command.stats, command.export_voxels) if f])
-    return VoxelizeReport(command.out, chunks, len(runs), workers, time.perf_counter() - started)
+    return VoxelizeReport(command.out, chunks, len(runs), len(ranges), workers, time.perf_counter() - started)
 
 
 # What runs on the workers: module-level functions, so Dask sends them by name and each worker
@@ -300,6 +314,13 @@ def _voxelize_run(arguments, first, count, part, threads):
     try:
         _cuberille.VoxelizeCommand.from_arguments(arguments).run(first, count, part, threads)
         return {"first": first, "count": count}
+    except InputError as e:
+        return {"error": str(e)}
+
+
+def _voxelize_range(arguments, parts, plan, k, path, threads):
+    try:
+        return {"range": k, "result": _cuberille.VoxelizeCommand.from_arguments(arguments).merge_range(parts, plan, k, path, threads)}
     except InputError as e:
         return {"error": str(e)}
 

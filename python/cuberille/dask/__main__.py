@@ -99,9 +99,11 @@ def main(argv):
                 return 0
             if command == "voxelize":
                 report = cd.voxelize(rest, client, chunks_per_task=own["frames_per_task"],
-                                     progress=None if quiet else cd._print_progress("chunks"))
+                                     progress=None if quiet else cd._print_progress("chunks"),
+                                     merge_progress=None if quiet else cd._print_progress("block ranges"))
                 if not quiet:
-                    print(f"  {report.chunks} chunks in {report.tasks} task{'s' if report.tasks != 1 else ''} on "
+                    print(f"  {report.chunks} chunks in {report.tasks} task{'s' if report.tasks != 1 else ''}, "
+                          f"{report.range_tasks} block range{'s' if report.range_tasks != 1 else ''} merged, on "
                           f"{report.workers} worker{'s' if report.workers != 1 else ''}; {report.seconds:.2f} s")
                 return 0
             jobs = [a for a in rest if a != "--quiet"]
