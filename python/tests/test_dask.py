@@ -127,6 +127,25 @@ def test_a_batch_writes_the_files_the_cli_writes_and_a_bad_job_fails_alone(examp
     assert json.loads(dask_files["box.json"]).keys() == json.loads(cli_files["box.json"]).keys()
 
 
+def test_the_command_line_runs_on_a_running_scheduler(examples, cli, client, tmp_path):
+    """`--scheduler ADDRESS`: the command line joins a cluster that is already running (here the
+    module's two-worker cluster, as a user's `dask scheduler` would be) instead of starting one,
+    and a turntable and a voxelization write the tool's files."""
+    (tmp_path / "cli").mkdir(), (tmp_path / "dask").mkdir()
+    address = client.scheduler.address
+    turntable = [examples / "knot.obj", "--turntable", "4", "--width", "64", "--height", "48"]
+    voxelize = [examples / "knot.obj", "--resolution", "256"]
+    assert run_cli(cli, "render", *turntable, "--out", tmp_path / "cli" / "t.png", "--quiet").returncode == 0
+    assert run_cli(cli, "voxelize", *voxelize, "-o", tmp_path / "cli" / "m.cvox", "--quiet").returncode == 0
+    for command, arguments, out in (("render", turntable, ["--out", tmp_path / "dask" / "t.png"]),
+                                    ("voxelize", voxelize, ["-o", tmp_path / "dask" / "m.cvox"])):
+        done = subprocess.run([sys.executable, "-m", "cuberille.dask", command, *map(str, arguments + out),
+                               "--scheduler", address], capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        assert "2 workers" in done.stdout, done.stdout
+    assert files_of(tmp_path / "dask") == files_of(tmp_path / "cli")
+
+
 def test_the_command_line_gives_the_tools_files_and_exit_codes(examples, cli, tmp_path):
     (tmp_path / "cli").mkdir(), (tmp_path / "dask").mkdir()
     arguments = [examples / "torus.ply", "--turntable", "4", "--width", "64", "--height", "48"]
