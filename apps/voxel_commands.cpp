@@ -18,7 +18,6 @@
 #include "scene/ply_loader.h"
 #include "lod/pyramid_ranges.h"
 #include "voxel/cvox_file.h"
-#include "voxel/morton.h"
 #include "voxel/partial_voxelization_file.h"
 #include "voxel/voxel_export.h"
 
@@ -210,7 +209,6 @@ int reportVoxelize(const VoxelizeCommandOptions& o, const VoxelizeSettings& v, c
     }
     return 0;
 }
-
 
 void requireVoxels(const VoxelizeCommandOptions& o, uint64_t voxels, uint64_t triangles) {
     if (voxels == 0)

@@ -22,6 +22,13 @@ public:
     void upload(const scene::Scene& scene);
     /// Renders one frame and waits for it (glFinish); returns milliseconds.
     double renderFrame(const scene::Scene& scene);
+    /// A depth-only pass of the same view, as a shadow map or a visibility buffer's depth is
+    /// drawn: colour writes off, a position-only program with an empty fragment stage, every mesh
+    /// an opaque caster with the scene's culling; no resolve. Returns milliseconds; the frame's
+    /// covered pixels (depth below the far plane, at 1 sample) are depthCoverage().
+    double renderDepthFrame(const scene::Scene& scene);
+    /// At 1 sample, after renderDepthFrame: per pixel, bottom row first, whether depth was written.
+    std::vector<bool> depthCoverage() const;
     static bool available();
     /// The last frame's resolved pixels: RGBA 8-bit, bottom row first (OpenGL's order).
     const std::vector<unsigned char>& pixels() const;

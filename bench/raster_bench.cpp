@@ -59,6 +59,43 @@ OurFrame renderOurs(raster::Pipeline& p, const scene::Scene& s, int w, int h, in
     return f;
 }
 
+// A depth-only pass of the scene's view, as shadow maps and the visibility buffer draw theirs
+// (rt/shadow_map.cpp): no colour attachment, every mesh an opaque ConstantColor draw with colour
+// writes off and the scene's culling; nothing to resolve.
+OurFrame renderOursDepth(raster::Pipeline& p, const scene::Scene& s, int w, int h, int msaa) {
+    const auto t0 = std::chrono::steady_clock::now();
+    raster::FramebufferDesc d;
+    d.widthPixels = w, d.heightPixels = h, d.samples = msaa, d.colorAttachment = false;
+    p.beginFrame(d);
+    for (const scene::Mesh& m : s.meshes) {
+        raster::DrawCall draw;
+        draw.space = raster::PositionSpace::Clip;
+        draw.clipFromObject = s.camera.clipFromWorld(float(w) / h);
+        draw.positions = m.positions;
+        draw.indices = m.indices;
+        draw.state.shading = raster::ShadingModel::ConstantColor;
+        draw.state.cull = m.doubleSided ? raster::CullMode::None : s.cull;
+        draw.state.colorWriteMask = 0;
+        p.draw(draw);
+    }
+    p.endFrame();
+    OurFrame f{std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(), p.stats().times};
+    f.stages.resolveMs = 0.0;
+    return f;
+}
+
+// The depth-only evidence, at 1 sample: the share of pixels both renderers covered or both left
+// empty (rasterization rules and depth precision decide the rest), in percent.
+double depthCoverageAgreement(const raster::Pipeline& p, const std::vector<bool>& theirs, int w, int h) {
+    std::vector<float> depth;
+    raster::resolveDepthPlane(p.framebuffer(), depth);
+    size_t same = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            same += (depth[size_t(y) * w + x] < 1.0f) == theirs[size_t(h - 1 - y) * w + x];
+    return 100.0 * double(same) / (double(w) * h);
+}
+
 // How alike the two renderers' images are, as PSNR in dB over the linear RGB values both write
 // (the peer's framebuffer holds them as 8-bit UNORM, bottom row first): the evidence that the
 // peer did the same work. Equal shading leaves rasterization rules and rounding: around 40 dB
@@ -183,7 +220,7 @@ void runEffectTable(int width, int height, int frames, int warmup) {
 int main(int argc, char** argv) {
     CLI::App app{"Frame time against llvmpipe, side by side"};
     int threads = 0, frames = 7, warmup = 3, width = 1920, height = 1080;
-    bool verbose = false, noPeer = false, effects = false;
+    bool verbose = false, noPeer = false, effects = false, depthOnly = false;
     std::string scenes = "field,subpixel,fill", msaaList = "1,4";
     app.add_option("--threads", threads, "Threads for both renderers (0 = all cores)");
     app.add_option("--frames", frames, "Timed frames per measurement (median reported)");
@@ -194,6 +231,9 @@ int main(int argc, char** argv) {
     app.add_option("--height", height);
     app.add_option("--scenes", scenes, "Comma-separated built-in scenes or model files (.gltf .glb .ply .obj)");
     app.add_flag("--effects", effects, "Also print what each shading effect costs (field geometry)");
+    app.add_flag("--depth-only", depthOnly,
+                 "Time depth-only passes (shadow maps, visibility buffers): colour writes off, every mesh opaque; "
+                 "the last column is the share of pixels both cover alike (1 sample)");
     app.add_option("--msaa", msaaList, "Comma-separated sample counts");
     std::string instructionSet = "best";
     app.add_option("--simd", instructionSet, "Cuberille's instruction set: best, or one of the names in the header line (also CUBERILLE_SIMD)");
@@ -217,8 +257,9 @@ int main(int argc, char** argv) {
     for (const std::string& name : raster::availableInstructionSets()) sets += (sets.empty() ? "" : ", ") + name;
     std::printf("# %dx%d, %d thread%s, median of %d warm frames; Cuberille on %s (this CPU runs %s)\n", width, height,
                 effectiveThreads, effectiveThreads > 1 ? "s" : "", frames, raster::activeInstructionSet().c_str(), sets.c_str());
-    std::printf("%-9s %4s %10s | %8s %8s %8s %8s %10s | %10s | %7s | %5s\n", "scene", "msaa", "triangles",
-                "vertex", "front", "back", "resolve", "cuberille", "llvmpipe", "ratio", "PSNR");
+    std::printf("%s%-9s %4s %10s | %8s %8s %8s %8s %10s | %10s | %7s | %5s\n", depthOnly ? "# depth only\n" : "", "scene",
+                "msaa", "triangles", "vertex", "front", "back", "resolve", "cuberille", "llvmpipe", "ratio",
+                depthOnly ? "same%" : "PSNR");
     for (const std::string& entry : bench::splitList(scenes)) {
         // Model files: load time first (parse, decode, pose), then the same frame comparison.
         const auto loadStart = std::chrono::steady_clock::now();
@@ -233,11 +274,15 @@ int main(int argc, char** argv) {
             const int msaa = std::stoi(m);
             raster::Pipeline pipeline;
             raster::Image image;
-            for (int i = 0; i < warmup; ++i) renderOurs(pipeline, s, width, height, msaa, image);
+            auto frame = [&] {
+                return depthOnly ? renderOursDepth(pipeline, s, width, height, msaa)
+                                 : renderOurs(pipeline, s, width, height, msaa, image);
+            };
+            for (int i = 0; i < warmup; ++i) frame();
             std::vector<double> ours;
             std::vector<OurFrame> frameLog;
             for (int i = 0; i < frames; ++i) {
-                frameLog.push_back(renderOurs(pipeline, s, width, height, msaa, image));
+                frameLog.push_back(frame());
                 ours.push_back(frameLog.back().totalMs);
             }
             const double ourMedian = bench::median(ours);
@@ -252,9 +297,13 @@ int main(int argc, char** argv) {
             } else {
                 bench::LlvmpipePeer peer(width, height, msaa);
                 peer.upload(s);
-                for (int i = 0; i < warmup; ++i) peer.renderFrame(s);  // includes shader JIT
-                for (int i = 0; i < frames; ++i) theirs.push_back(peer.renderFrame(s));
-                agreementDb = peerAgreementDb(image, peer.pixels());
+                auto peerFrame = [&] { return depthOnly ? peer.renderDepthFrame(s) : peer.renderFrame(s); };
+                for (int i = 0; i < warmup; ++i) peerFrame();  // includes shader JIT
+                for (int i = 0; i < frames; ++i) theirs.push_back(peerFrame());
+                if (!depthOnly)
+                    agreementDb = peerAgreementDb(image, peer.pixels());
+                else if (msaa == 1)
+                    agreementDb = depthCoverageAgreement(pipeline, peer.depthCoverage(), width, height);
             }
             const double theirMedian = bench::median(theirs);
             if (verbose) {
