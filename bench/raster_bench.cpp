@@ -314,7 +314,8 @@ int main(int argc, char** argv) {
                 std::printf("\n");
             }
 
-            std::printf("%-9s %4d %10zu | %8.1f %8.1f %8.1f %8.1f %10.1f | %10.1f | %6.2fx | %5.1f\n",
+            std::printf(depthOnly ? "%-9s %4d %10zu | %8.1f %8.1f %8.1f %8.1f %10.1f | %10.1f | %6.2fx | %7.3f\n"
+                                  : "%-9s %4d %10zu | %8.1f %8.1f %8.1f %8.1f %10.1f | %10.1f | %6.2fx | %5.1f\n",
                         name.c_str(), msaa, s.triangleCount(), typical.stages.vertexMs,
                         typical.stages.frontEndMs, typical.stages.backEndMs,
                         typical.stages.resolveMs, ourMedian, theirMedian, theirMedian / ourMedian, agreementDb);
