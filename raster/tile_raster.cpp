@@ -29,9 +29,17 @@ namespace cuberille::raster {
 namespace HWY_NAMESPACE {
 namespace {
 
-/// Triangles whose clamped pixel bounds hold at most this many pixels skip the coarse stage:
-/// sub-pixel geometry (voxel faces, dense scans) is the common case, not the exception.
-constexpr int kSmallTrianglePixels = 2;
+/// Triangles whose clamped pixel bounds hold at most this many pixels skip the coarse stage and
+/// go straight to the fine stage over their bounds: small geometry (dense scans, tessellated
+/// shapes, voxel faces) is the common case, not the exception, and for it the coarse stage's
+/// classification and hierarchical-Z bound per 8x8 block cost more than the few pixels they
+/// could skip. Nothing it does can change the result for such a triangle: a block it would cull
+/// as hidden fails the per-sample LESS test pixel by pixel, and its bounds are too small to cover
+/// a whole block, the one case where the coarse stage tightens the bound. Measured (raster_bench
+/// --no-peer, 1920x1080, AVX-512, three alternating runs): 2 -> 16 pixels took the back end of
+/// `field` from 33-43 to 26-31 ms at 1 sample and 93-102 to 85-89 ms at 4, the dragon's from
+/// 23-24 to 19 ms and 83-87 to 69-73 ms; 31 pixels measured as 16 within noise.
+constexpr int kSmallTrianglePixels = 16;
 /// Below this many pixels of bounds in the tile, a triangle's pixels do not wait for a queue of
 /// their own: a batch of one or two pixels does not pay for the batch loop. Where the draw has a
 /// cross-triangle path (CrossTriangleQueue: the fused Lambert model) they join the tile's shared
@@ -49,6 +57,10 @@ inline float depthKeyOf(float z, float sign) { return sign * (z < 0.0f ? 0.0f : 
 /// (raster_bench, 1920x1080, AVX-512): rows for every partial block made `field` at 4 samples
 /// 83 -> 96 ms and `subpixel` 185 -> 229 ms in the back end.
 constexpr int kMinPixelsForPartialRows = kBlockSizePixels * kBlockSizePixels / 2;
+// A small triangle's bounds may be wider than a block: the fine stage must take them a pixel at a
+// time (the row path's lanes are one block row), and its shade queue must hold them.
+static_assert(kSmallTrianglePixels < kMinPixelsForPartialRows, "small triangles' bounds must not take the row path");
+static_assert(kSmallTrianglePixels <= ShadeQueue::kCapacity, "a small triangle's pixels must fit one shade queue");
 
 /// Everything the per-pixel path needs for one (tile, draw) pair.
 struct TileTarget {
@@ -353,7 +365,8 @@ private:
     }
 
     // Fine stage: per-sample masks, stepping the edge values along each row. At most one block
-    // (or a small triangle's two pixels) at a time, so the shade queue never overflows.
+    // (or a small triangle's bounds, kSmallTrianglePixels) at a time, so the shade queue never
+    // overflows.
     void rasterizePartial(const PixelRect& r) {
         if constexpr (S == 1)
             if (isPlainPass()) return rasterizePartialPlain(r);
