@@ -276,10 +276,10 @@ std::string planVoxelizeRanges(const VoxelizeCommandOptions& o, const std::vecto
     std::vector<std::pair<uint64_t, uint64_t>> runs, blocks;
     voxel::VoxelModel header;
     for (const std::filesystem::path& path : parts) {
-        const voxel::PartialVoxelization p = voxel::readPartialVoxelization(path, 0, 0);
-        runs.push_back({p.firstChunk, p.chunkCount});
-        header = p.header;
-        for (const auto& block : voxel::readPartialVoxelizationIndex(path)) blocks.push_back(block);
+        const voxel::PartialVoxelizationIndex index = voxel::readPartialVoxelizationIndex(path);
+        runs.push_back({index.part.firstChunk, index.part.chunkCount});
+        header = index.part.header;
+        blocks.insert(blocks.end(), index.blocks.begin(), index.blocks.end());
     }
     std::sort(runs.begin(), runs.end());
     uint64_t next = 0;
@@ -326,7 +326,7 @@ int finishVoxelizeFromRanges(const VoxelizeCommandOptions& o, const std::vector<
     if (rangeFiles.size() != plan.rangeCount() || rangeResults.size() != plan.rangeCount())
         throw std::invalid_argument("finishVoxelizeFromRanges: not one range file and result per range of the plan");
     if (parts.empty()) throw std::invalid_argument("finishVoxelizeFromRanges: no parts");
-    const voxel::VoxelModel header = voxel::readPartialVoxelization(parts[0], 0, 0).header;
+    const voxel::VoxelModel header = voxel::readPartialVoxelizationIndex(parts[0]).part.header;
     const lod::PyramidRangeJoin join(header, rangeFiles, v.pyramid, plan);
     voxel::VoxelizeStats s;
     s.chunks = view->chunkCount();

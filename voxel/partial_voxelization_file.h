@@ -29,8 +29,13 @@ void writePartialVoxelization(const PartialVoxelization& part, std::ostream& out
 PartialVoxelization readPartialVoxelization(const std::filesystem::path& path, uint64_t mortonBegin = 0,
                                             uint64_t mortonEnd = UINT64_MAX);
 
-/// Each block of a part as (Morton code, bytes in the file), in the part's (Morton) order: what
-/// planning the ranges weighs (lod::planPyramidRanges), read without reading the blocks.
-std::vector<std::pair<uint64_t, uint64_t>> readPartialVoxelizationIndex(const std::filesystem::path& path);
+/// A part's header and chunk run (no blocks), and each block as (Morton code, bytes in the file)
+/// in the part's (Morton) order: what planning the ranges weighs (lod::planPyramidRanges), read
+/// without reading the blocks.
+struct PartialVoxelizationIndex {
+    PartialVoxelization part;
+    std::vector<std::pair<uint64_t, uint64_t>> blocks;
+};
+PartialVoxelizationIndex readPartialVoxelizationIndex(const std::filesystem::path& path);
 
 }  // namespace cuberille::voxel

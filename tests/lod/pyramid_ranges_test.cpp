@@ -57,8 +57,9 @@ Joined joinRanges(const std::vector<std::filesystem::path>& parts, const lod::Py
     std::vector<std::pair<uint64_t, uint64_t>> index;
     voxel::VoxelModel header;
     for (const auto& p : parts) {
-        for (const auto& b : voxel::readPartialVoxelizationIndex(p)) index.push_back(b);
-        header = voxel::readPartialVoxelization(p, 0, 0).header;
+        const voxel::PartialVoxelizationIndex partIndex = voxel::readPartialVoxelizationIndex(p);
+        index.insert(index.end(), partIndex.blocks.begin(), partIndex.blocks.end());
+        header = partIndex.part.header;
         EXPECT_TRUE(voxel::readPartialVoxelization(p, 0, 0).blocks.empty());
     }
     Joined j;
@@ -201,7 +202,7 @@ TEST(PyramidRanges, RangeFilesOutOfOrderOrCutShortAreRefusedNamingTheFile) {
     const auto parts = partFiles(*view, o, {{0, view->chunkCount()}});
     const Joined j = joinRanges(parts, {}, 3);
     ASSERT_EQ(j.plan.rangeCount(), 3u);
-    const voxel::VoxelModel header = voxel::readPartialVoxelization(parts[0], 0, 0).header;
+    const voxel::VoxelModel header = voxel::readPartialVoxelizationIndex(parts[0]).part.header;
     std::vector<std::filesystem::path> reversed(j.rangeFiles.rbegin(), j.rangeFiles.rend());
     try {
         lod::PyramidRangeJoin(header, reversed, {}, j.plan);
