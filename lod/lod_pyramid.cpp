@@ -104,9 +104,13 @@ std::vector<VoxelBlock> simplifyLevel(const std::vector<VoxelBlock>& below, uint
     return method == SimplifyMethod::Serial ? simplifySerial(pointers, blockSize) : simplifyParallel(pointers, blockSize);
 }
 
-void finishBlockFaces(VoxelBlock& block, uint32_t blockSize, bool clearHidden, PyramidStats& stats) {
-    if (clearHidden) stats.hiddenFacesCleared += clearHiddenFaces(block, blockSize);
-    stats.skirtFaces += addSkirts(block, blockSize);
+void finishBlockFaces(std::span<VoxelBlock> blocks, uint32_t blockSize, bool clearHidden, PyramidStats& stats) {
+    std::vector<uint64_t> hidden(blocks.size(), 0), skirts(blocks.size(), 0);
+    raster::parallelFor(blocks.size(), [&](size_t i) {
+        if (clearHidden) hidden[i] = clearHiddenFaces(blocks[i], blockSize);
+        skirts[i] = addSkirts(blocks[i], blockSize);
+    });
+    for (size_t i = 0; i < blocks.size(); ++i) stats.hiddenFacesCleared += hidden[i], stats.skirtFaces += skirts[i];
 }
 
 uint32_t pyramidLevels(uint32_t resolution, uint32_t blockSize) {
@@ -138,11 +142,7 @@ void buildLodPyramid(voxel::VoxelModel& model, const PyramidOptions& options, Py
         stats.voxelsPerLevel.insert(stats.voxelsPerLevel.begin(), voxels);
     }
     linkChildren(model.blocks);
-    std::vector<PyramidStats> faces(model.blocks.size());
-    raster::parallelFor(model.blocks.size(), [&](size_t i) {
-        finishBlockFaces(model.blocks[i], model.blockSize, options.clearHiddenFaces, faces[i]);
-    });
-    for (const PyramidStats& f : faces) stats.skirtFaces += f.skirtFaces, stats.hiddenFacesCleared += f.hiddenFacesCleared;
+    finishBlockFaces(model.blocks, model.blockSize, options.clearHiddenFaces, stats);
     stats.levels = levels;
     stats.simplifyMs = raster::nowMs() - t0;
     if (statsOut) *statsOut = stats;

@@ -15,6 +15,7 @@
 // a parent's face mask is still exactly the union of its children's interior faces.
 
 #include <cstdint>
+#include <span>
 
 #include "voxel/voxel_model.h"
 
@@ -51,9 +52,9 @@ uint32_t pyramidLevels(uint32_t resolution, uint32_t blockSize, const PyramidOpt
 std::vector<voxel::VoxelBlock> simplifyLevel(const std::vector<voxel::VoxelBlock>& below, uint32_t blockSize,
                                              SimplifyMethod method);
 
-/// A block's last step, once the level above it is built: hidden faces cleared (when asked) and
-/// skirts added. Adds what it changed to the stats' counts.
-void finishBlockFaces(voxel::VoxelBlock& block, uint32_t blockSize, bool clearHiddenFaces, PyramidStats& stats);
+/// The blocks' last step, once the level above them is built: hidden faces cleared (when asked)
+/// and skirts added, block by block in parallel. Adds what it changed to the stats' counts.
+void finishBlockFaces(std::span<voxel::VoxelBlock> blocks, uint32_t blockSize, bool clearHiddenFaces, PyramidStats& stats);
 
 /// Sets every block's child links from the levels and coordinates alone (the blocks may be a
 /// layout without their voxels): they must be ordered coarsest level first, Morton within a level.

@@ -6,7 +6,6 @@
 #include <string>
 
 #include "raster/clock.h"
-#include "raster/parallel.h"
 #include "scene/input_error.h"
 #include "voxel/binary_io.h"
 #include "voxel/cvox_file.h"
@@ -74,11 +73,17 @@ void writeRangeFile(const std::vector<VoxelBlock*>& finished, const std::vector<
     if (!out) throw std::runtime_error("writing the range file failed");
 }
 
+/// A block with the entry's level, coordinates and bounds, and no data.
+VoxelBlock layoutOf(const RangeEntry& e) {
+    VoxelBlock b;
+    b.level = e.level, b.coord = e.coord, b.tightMin = e.tightMin, b.tightMax = e.tightMax;
+    return b;
+}
+
 /// A block's data read back into its arrays; what simplification relies on is checked: every
 /// voxel inside its block.
 VoxelBlock loadBlock(const voxel::PositionalFile& file, const RangeEntry& e, uint32_t blockSize) {
-    VoxelBlock b;
-    b.level = e.level, b.coord = e.coord, b.tightMin = e.tightMin, b.tightMax = e.tightMax;
+    VoxelBlock b = layoutOf(e);
     b.voxels.resize(e.voxels), b.normals.resize(e.voxels), b.colors.resize(e.voxels), b.triangles.resize(e.triangles);
     const std::string where = file.name() + ": block data";
     file.readAt(e.offset, reinterpret_cast<char*>(b.voxels.data()), e.voxels * 4, where);
@@ -149,16 +154,13 @@ PyramidStats buildPyramidRange(voxel::VoxelModel range, const PyramidOptions& op
         copies = pyramid[splitLevel];
         for (VoxelBlock& b : copies) b.triangles.clear();  // simplification reads voxels only
     }
-    std::vector<VoxelBlock*> finished, copied;
-    for (uint32_t l = splitLevel + 1; l-- > 0;)
-        for (VoxelBlock& b : pyramid[l]) finished.push_back(&b);
-    for (VoxelBlock& b : copies) copied.push_back(&b);
-    std::vector<PyramidStats> faces(finished.size());
-    raster::parallelFor(finished.size(), [&](size_t i) {
-        finishBlockFaces(*finished[i], range.blockSize, options.clearHiddenFaces, faces[i]);
-    });
     PyramidStats stats;
-    for (const PyramidStats& f : faces) stats.skirtFaces += f.skirtFaces, stats.hiddenFacesCleared += f.hiddenFacesCleared;
+    std::vector<VoxelBlock*> finished, copied;
+    for (uint32_t l = splitLevel + 1; l-- > 0;) {
+        finishBlockFaces(pyramid[l], range.blockSize, options.clearHiddenFaces, stats);
+        for (VoxelBlock& b : pyramid[l]) finished.push_back(&b);
+    }
+    for (VoxelBlock& b : copies) copied.push_back(&b);
     writeRangeFile(finished, copied, splitLevel, range.blockSize, stats, out);
     return stats;
 }
@@ -230,20 +232,14 @@ PyramidRangeJoin::PyramidRangeJoin(const voxel::VoxelModel& header, const std::v
     for (size_t l = above.size(); l-- > 0;)
         for (VoxelBlock& b : above[l]) layout_.blocks.push_back(std::move(b));
     loadedBlocks_ = layout_.blocks.size();
-    std::vector<PyramidStats> faces(loadedBlocks_);
-    raster::parallelFor(loadedBlocks_, [&](size_t i) {
-        finishBlockFaces(layout_.blocks[i], header.blockSize, options.clearHiddenFaces, faces[i]);
-    });
-    for (const PyramidStats& f : faces) stats_.skirtFaces += f.skirtFaces, stats_.hiddenFacesCleared += f.hiddenFacesCleared;
+    finishBlockFaces(std::span(layout_.blocks).first(loadedBlocks_), header.blockSize, options.clearHiddenFaces, stats_);
     for (uint32_t l = split + 1; l-- > 0;)
         for (size_t r = 0; r < finished.size(); ++r)
             for (const RangeEntry& e : finished[r][l]) {
-                VoxelBlock b;
-                b.level = e.level, b.coord = e.coord, b.tightMin = e.tightMin, b.tightMax = e.tightMax;
+                VoxelBlock b = layoutOf(e);
                 b.layoutVoxels = e.voxels, b.layoutTriangles = e.triangles;
-                const VoxelBlock& previous = layout_.blocks.empty() ? b : layout_.blocks.back();
-                if (layout_.blocks.size() > loadedBlocks_ && previous.level == b.level &&
-                    voxel::mortonOf(previous.coord) >= voxel::mortonOf(b.coord))
+                if (layout_.blocks.size() > loadedBlocks_ && layout_.blocks.back().level == b.level &&
+                    voxel::mortonOf(layout_.blocks.back().coord) >= voxel::mortonOf(b.coord))
                     throw scene::InputError(files_[r]->name() + ": block table: blocks out of Morton order with the "
                                             "ranges before it (the range files must be given in the plan's order)");
                 layout_.blocks.push_back(std::move(b));
