@@ -297,6 +297,21 @@ GLint minFilterOf(raster::MinFilter f) {
     return GL_LINEAR_MIPMAP_LINEAR;
 }
 
+/// The same view as Cuberille's clip-space draws, with OpenGL's [-1, 1] depth.
+glm::mat4 glClipFromWorld(const scene::Scene& scene, int width, int height) {
+    return glm::perspectiveRH_NO(glm::radians(scene.camera.verticalFovDegrees), float(width) / height,
+                                 scene.camera.nearPlane, scene.camera.farPlane) *
+           scene.camera.viewFromWorld();
+}
+
+/// Back faces culled as Scene::draw culls them: by the scene's mode, never on a double-sided mesh.
+void setCulling(const scene::Scene& scene, const scene::Mesh& mesh) {
+    if (mesh.doubleSided || scene.cull == raster::CullMode::None)
+        glDisable(GL_CULL_FACE);
+    else
+        glEnable(GL_CULL_FACE);
+}
+
 }  // namespace
 
 struct LlvmpipePeer::Impl {
@@ -448,11 +463,7 @@ void LlvmpipePeer::upload(const scene::Scene& scene) {
 double LlvmpipePeer::renderFrame(const scene::Scene& scene) {
     Impl& m = *impl_;
     const auto t0 = std::chrono::steady_clock::now();
-    // The same view as the clip-space draws, with OpenGL's [-1, 1] depth.
-    const glm::mat4 clipFromWorld =
-        glm::perspectiveRH_NO(glm::radians(scene.camera.verticalFovDegrees), float(m.width) / m.height,
-                              scene.camera.nearPlane, scene.camera.farPlane) *
-        scene.camera.viewFromWorld();
+    const glm::mat4 clipFromWorld = glClipFromWorld(scene, m.width, m.height);
     if (m.fbo) p_glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     glClearColor(scene.background.r, scene.background.g, scene.background.b, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -506,10 +517,7 @@ double LlvmpipePeer::renderFrame(const scene::Scene& scene) {
             p_glActiveTexture(GL_TEXTURE0 + unit);
             glBindTexture(GL_TEXTURE_2D, m.textures.at(slots[unit]->texture.get()));
         }
-        if (mesh.doubleSided || scene.cull == raster::CullMode::None)
-            glDisable(GL_CULL_FACE);
-        else
-            glEnable(GL_CULL_FACE);
+        setCulling(scene, mesh);
         const bool blend = mesh.alphaMode == raster::AlphaMode::Blend;
         if (blend) {
             glEnable(GL_BLEND);
@@ -555,10 +563,7 @@ double LlvmpipePeer::renderDepthFrame(const scene::Scene& scene) {
         m.depthClipFromWorld = p_glGetUniformLocation(m.depthProgram, "clipFromWorld");
     }
     const auto t0 = std::chrono::steady_clock::now();
-    const glm::mat4 clipFromWorld =
-        glm::perspectiveRH_NO(glm::radians(scene.camera.verticalFovDegrees), float(m.width) / m.height,
-                              scene.camera.nearPlane, scene.camera.farPlane) *
-        scene.camera.viewFromWorld();
+    const glm::mat4 clipFromWorld = glClipFromWorld(scene, m.width, m.height);
     if (m.fbo) p_glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     glDepthMask(GL_TRUE);
@@ -570,10 +575,7 @@ double LlvmpipePeer::renderDepthFrame(const scene::Scene& scene) {
     p_glEnableVertexAttribArray(0);
     for (size_t i = 0; i < m.meshes.size(); ++i) {
         const MeshBuffers& b = m.meshes[i];
-        if (scene.meshes[i].doubleSided || scene.cull == raster::CullMode::None)
-            glDisable(GL_CULL_FACE);
-        else
-            glEnable(GL_CULL_FACE);
+        setCulling(scene, scene.meshes[i]);
         p_glBindBuffer(GL_ARRAY_BUFFER, b.positions);
         p_glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
         p_glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, b.indices);
