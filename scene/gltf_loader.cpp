@@ -244,13 +244,15 @@ private:
             }
             return 0.0f;
         }
+        // An unsigned scalar's element i; callers check the component type first.
         uint32_t index(size_t i) const {
             const unsigned char* p = data + i * stride;
             switch (componentType) {
                 case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return p[0];
                 case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t v; std::memcpy(&v, p, 2); return v; }
-                default: { uint32_t v; std::memcpy(&v, p, 4); return v; }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: { uint32_t v; std::memcpy(&v, p, 4); return v; }
             }
+            return 0;
         }
     };
 
@@ -584,6 +586,12 @@ private:
             std::vector<uint32_t> order;  // vertex indices in primitive order
             if (prim.indices >= 0) {
                 const AccessorView iv = view(prim.indices, where);
+                // glTF 2.0 §3.7.2.1: indices are unsigned scalars; `index` reads no other kind.
+                if (iv.components != 1 || (iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+                                           iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+                                           iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
+                    fail(where + ", accessor " + std::to_string(prim.indices),
+                         "indices must be unsigned byte, short or int scalars");
                 order.resize(iv.count);
                 for (size_t i = 0; i < iv.count; ++i) {
                     order[i] = iv.index(i);

@@ -716,6 +716,39 @@ TEST(GltfLoader, QuantizedPositionsReadAsTheirNormalisedValues) {
     EXPECT_EQ(s.meshes[0].positions, kQuad);
 }
 
+// glTF 2.0 §3.7.2.1 allows unsigned byte, short and int scalars as indices. Any other kind —
+// signed bytes whose elements are one byte long were a heap overflow found by fuzz_gltf — is bad
+// input naming the accessor, for each kind, with the elements sized exactly to the buffer view's end.
+TEST(GltfLoader, IndicesOfAnyKindButUnsignedScalarsAreRefused) {
+    const std::vector<std::pair<int, std::string>> kinds = {
+        {5120, "SCALAR"}, {5122, "SCALAR"}, {5126, "SCALAR"}, {5121, "VEC2"}, {5123, "VEC3"}, {5125, "MAT4"}};
+    for (const auto& [componentType, type] : kinds) {
+        testing::GltfBuilder b;
+        const int positions = b.positions(kQuad);
+        const size_t componentBytes = componentType == 5120 || componentType == 5121 ? 1
+                                      : componentType == 5122 || componentType == 5123 ? 2 : 4;
+        const size_t components = type == "SCALAR" ? 1 : type == "VEC2" ? 2 : type == "VEC3" ? 3 : 16;
+        const std::vector<uint8_t> zeros(6 * componentBytes * components, 0);
+        const int indices = b.push("accessors", {{"bufferView", b.view(zeros.data(), zeros.size())},
+                                                 {"componentType", componentType}, {"count", 6}, {"type", type}});
+        const nlohmann::json primitive = {{"attributes", {{"POSITION", positions}}}, {"indices", indices}};
+        b.push("nodes", {{"mesh", b.push("meshes", {{"primitives", {primitive}}})}});
+        b.json()["scenes"] = {{{"nodes", {0}}}};
+        b.json()["scene"] = 0;
+        const std::filesystem::path path = testing::uniqueTempPath("signed-indices.gltf");
+        b.write(path);
+        try {
+            loadGltf(path, [](const std::string&) {});
+            ADD_FAILURE() << "indices of component type " << componentType << " " << type << " were accepted";
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("accessor 1: indices must be unsigned byte, short or int scalars"), std::string::npos)
+                << componentType << " " << type << ": " << what;
+            EXPECT_NE(what.find(path.filename().string()), std::string::npos) << what;
+        }
+    }
+}
+
 TEST(GltfLoader, ARequiredExtensionItCannotReadIsRefusedAndAUsedOneWarnsOnce) {
     testing::GltfBuilder b;
     const int accessor = b.positions(kQuad);
