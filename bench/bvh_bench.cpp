@@ -28,6 +28,7 @@
 #include "rt/lazy_refit.h"
 #include "rt/ray_query.h"
 #include "rt/uniform_grid.h"
+#include "rt/wide_bvh.h"
 #include "scene/model_scene.h"
 
 namespace {
@@ -402,6 +403,27 @@ void benchModel(RTCDevice device, const std::string& name) {
                 name.c_str(), grid.cells.x, grid.cells.y, grid.cells.z, grid.triangleRefs.size(), gridMs, sahMs, sahMs / gridMs,
                 gridClosest, oursClosest, embreeClosest, embreeClosest / gridClosest, gridShadow, oursShadow, embreeShadow,
                 embreeShadow / gridShadow, differ);
+
+    // The eight-wide tree collapsed from the SAH one (rt/wide_bvh.h): single rays, a vector slab
+    // test per node; its hits must be the binary tree's, bit for bit.
+    rt::WideBvh wide;
+    const double collapseMs = medianMs(3, [&] { wide = rt::collapseToWideBvh(sah); });
+    std::vector<rt::RayHit> fromWide(rayCount);
+    const double wideClosest = raysPerSecondM(rayCount, [&](size_t i) { fromWide[i] = rt::closestHit(wide, primary[i]); });
+    size_t wideDiffer = 0;
+    for (size_t i = 0; i < rayCount; ++i)
+        wideDiffer += fromWide[i].triangle != fromBvh[i].triangle || fromWide[i].t != fromBvh[i].t ||
+                      fromWide[i].u != fromBvh[i].u || fromWide[i].v != fromBvh[i].v;
+    std::vector<uint8_t> wideOccluded(rayCount), bvhOccluded(rayCount);
+    const double wideShadow = raysPerSecondM(rayCount, [&](size_t i) { wideOccluded[i] = rt::anyHit(wide, shadow[i]); });
+    raster::parallelFor(rayCount, [&](size_t i) { bvhOccluded[i] = rt::anyHit(sah, g->view(), shadow[i]); });
+    for (size_t i = 0; i < rayCount; ++i) wideDiffer += wideOccluded[i] != bvhOccluded[i];
+    std::printf("%-9s wide BVH (%d children, %zu nodes, %zu triangle groups with %.0f%% of lanes used, collapse %.1f ms) | closest %.2f M/s (binary %.2f: %.2fx, Embree %.2f: "
+                "%.2fx slower) | shadow %.2f M/s (binary %.2f: %.2fx, Embree %.2f: %.2fx slower) | answers unlike the binary tree's: %zu\n",
+                name.c_str(), rt::kWideBvhWidth, wide.nodes.size(), wide.triangleGroups.size(),
+                100.0 * double(g->triangles()) / double(rt::kTriangleGroupWidth * wide.triangleGroups.size()), collapseMs, wideClosest, oursClosest, wideClosest / oursClosest, embreeClosest,
+                embreeClosest / wideClosest, wideShadow, oursShadow, wideShadow / oursShadow, embreeShadow, embreeShadow / wideShadow,
+                wideDiffer);
     benchCoherentRays(device, name, *g, sah, grid);
 }
 

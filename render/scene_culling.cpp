@@ -23,7 +23,8 @@ void SceneFrustumCull::gather(const scene::Scene& s) {
 SceneFrustumCull::SceneFrustumCull(const scene::Scene& s, rt::BvhUpdateMethod method) {
     const double t0 = raster::nowMs();
     gather(s);
-    bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, method);
+    // The cull walks the binary tree and traces no rays: no wide copy.
+    bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, method, rt::BvhBuildOptions{}, 0.4, rt::RayQueryTree::Binary);
     pending_.buildMs = raster::nowMs() - t0;
     pending_.rebuilt = true;
 }

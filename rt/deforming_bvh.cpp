@@ -5,13 +5,15 @@
 namespace cuberille::rt {
 
 DeformingBvh::DeformingBvh(const TriangleMeshView& mesh, BvhUpdateMethod method, const BvhBuildOptions& build,
-                           double rebuildThreshold)
+                           double rebuildThreshold, RayQueryTree queries)
     : method_(method),
       build_(build),
       threshold_(rebuildThreshold),
-      mesh_(mesh) {
+      mesh_(mesh),
+      queries_(queries) {
     bvh_ = std::make_unique<Bvh>(buildBvh(mesh, build_));
     startLazy();
+    if (usesWide()) wide_ = collapseToWideBvh(*bvh_);
 }
 
 // Every box of a new tree is current, so the lazy updater starts with none stale: the pose is
@@ -26,6 +28,7 @@ void DeformingBvh::rebuild() {
     lazy_.reset();
     *bvh_ = buildBvh(mesh_, build_);
     startLazy();
+    if (usesWide()) wide_ = collapseToWideBvh(*bvh_);
     ++rebuilds_;
 }
 
@@ -41,6 +44,7 @@ BvhUpdateReport DeformingBvh::update(const TriangleMeshView& mesh) {
         case BvhUpdateMethod::Refit:
             report.degradation = refitBvh(*bvh_, mesh);
             report.measured = true;
+            if (usesWide() && !(report.degradation > threshold_)) refreshWideBvh(wide_, *bvh_);  // else rebuilt below
             break;
         case BvhUpdateMethod::Lazy:
             if (++frame_ % kLazyCriterionInterval == 0) {
@@ -62,10 +66,14 @@ BvhUpdateReport DeformingBvh::update(const TriangleMeshView& mesh) {
 }
 
 RayHit DeformingBvh::closestHit(const Ray& ray) const {
-    return lazy_ ? lazy_->closestHit(ray) : rt::closestHit(*bvh_, mesh_, ray);
+    if (lazy_) return lazy_->closestHit(ray);
+    return usesWide() ? rt::closestHit(wide_, ray) : rt::closestHit(*bvh_, mesh_, ray);
 }
 
-bool DeformingBvh::anyHit(const Ray& ray) const { return lazy_ ? lazy_->anyHit(ray) : rt::anyHit(*bvh_, mesh_, ray); }
+bool DeformingBvh::anyHit(const Ray& ray) const {
+    if (lazy_) return lazy_->anyHit(ray);
+    return usesWide() ? rt::anyHit(wide_, ray) : rt::anyHit(*bvh_, mesh_, ray);
+}
 
 const Bvh& DeformingBvh::bvh() const {
     if (lazy_) lazy_->refreshAll();

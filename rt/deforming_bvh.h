@@ -2,6 +2,11 @@
 // A hierarchy that follows a deforming mesh from frame to frame: refitted (fully, or lazily after
 // Larsson) while Lauterbach's degradation stays under the threshold, rebuilt when it passes it,
 // or rebuilt every frame. Each update reports what it did and what it cost.
+//
+// Ray queries go through the eight-wide tree collapsed from the binary one (rt/wide_bvh.h), kept
+// current after each refit or rebuild, except under the lazy method, whose point is to refresh
+// only the boxes rays reach: that walks the binary tree. Users that only walk the binary tree (the
+// frustum cull) ask for no wide tree and pay nothing for it.
 
 #include <memory>
 #include <optional>
@@ -11,6 +16,7 @@
 #include "rt/bvh_refit.h"
 #include "rt/lazy_refit.h"
 #include "rt/ray_query.h"
+#include "rt/wide_bvh.h"
 
 namespace cuberille::rt {
 
@@ -20,11 +26,17 @@ namespace cuberille::rt {
 /// method refits the whole tree instead, and Lauterbach's criterion is decided on that.
 constexpr int kLazyCriterionInterval = 8;
 
+/// Which tree answers a DeformingBvh's ray queries (the lazy method always uses the binary one).
+enum class RayQueryTree : uint8_t {
+    Wide,    // collapsed from the binary tree: vector tests of eight boxes and four triangles
+    Binary,  // the binary tree itself: no copy, for users that never trace rays
+};
+
 class DeformingBvh {
 public:
     /// Builds over the first pose. `rebuildThreshold` is Lauterbach's 0.4 by default.
     DeformingBvh(const TriangleMeshView& mesh, BvhUpdateMethod method, const BvhBuildOptions& build = {},
-                 double rebuildThreshold = 0.4);
+                 double rebuildThreshold = 0.4, RayQueryTree queries = RayQueryTree::Wide);
 
     /// The next pose: same indices, moved positions (which must stay alive until the next update).
     BvhUpdateReport update(const TriangleMeshView& mesh);
@@ -39,6 +51,7 @@ public:
 private:
     void rebuild();
     void startLazy();
+    bool usesWide() const { return queries_ == RayQueryTree::Wide && method_ != BvhUpdateMethod::Lazy; }
 
     BvhUpdateMethod method_;
     BvhBuildOptions build_;
@@ -46,6 +59,8 @@ private:
     TriangleMeshView mesh_;
     std::unique_ptr<Bvh> bvh_;  // stable address: the lazy updater holds it
     std::optional<LazyRefit> lazy_;
+    RayQueryTree queries_;
+    WideBvh wide_;  // when usesWide()
     int rebuilds_ = 0;
     int frame_ = 0;
 };

@@ -34,16 +34,9 @@ void expectSameAsBruteForce(const Bvh& bvh, const TriangleMeshView& mesh, const 
 TEST(RayQuery, ClosestAndAnyHitEqualBruteForceOnRandomScenes) {
     for (const uint32_t seed : {1u, 2u, 3u}) {
         const OwnedMesh soup = testing::randomSoup(3000, seed, 0.3f);
-        std::mt19937 rng(seed + 100);
-        std::uniform_real_distribution<float> unit(-1.5f, 1.5f), range(0.0f, 3.0f);
         for (const BvhBuildMethod method : kMethods) {
             const Bvh bvh = buildBvh(soup.view(), {.method = method});
-            for (int i = 0; i < 2000; ++i) {
-                Ray ray{{unit(rng), unit(rng), unit(rng)}, {unit(rng), unit(rng), unit(rng)}};
-                if (i % 3 == 0) ray.tMax = range(rng);  // shadow-ray style: a finite segment
-                if (i % 5 == 0) ray.tMin = range(rng) * 0.1f;
-                expectSameAsBruteForce(bvh, soup.view(), ray);
-            }
+            testing::forEachRandomRay(seed + 100, 2000, [&](const Ray& ray) { expectSameAsBruteForce(bvh, soup.view(), ray); });
         }
     }
 }
@@ -62,17 +55,7 @@ TEST(RayQuery, OriginsOnSurfacesEqualBruteForce) {
     // Shadow rays start on the surface they leave: at t = 0 they may hit it, and both must agree.
     const OwnedMesh sphere = testing::uvSphere(16, 32);
     const Bvh bvh = buildBvh(sphere.view());
-    std::mt19937 rng(9);
-    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), weight(0.0f, 1.0f);
-    for (int i = 0; i < 3000; ++i) {
-        const uint32_t t = uint32_t(rng() % sphere.view().triangleCount());
-        float a = weight(rng), b = weight(rng);
-        if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
-        const TriangleMeshView m = sphere.view();
-        const glm::vec3 p = m.vertex(t, 0) + a * (m.vertex(t, 1) - m.vertex(t, 0)) + b * (m.vertex(t, 2) - m.vertex(t, 0));
-        for (const float tMin : {0.0f, 1e-4f})
-            expectSameAsBruteForce(bvh, m, Ray{p, {unit(rng), unit(rng), unit(rng)}, tMin});
-    }
+    testing::forEachRayFromSurface(sphere.view(), 9, 3000, [&](const Ray& ray) { expectSameAsBruteForce(bvh, sphere.view(), ray); });
 }
 
 TEST(RayQuery, NoRayEscapesAClosedMeshThroughAnEdgeOrVertex) {

@@ -81,6 +81,36 @@ void forEachLatticeRay(F&& f) {
                         }
 }
 
+/// `count` random rays in [-1.5, 1.5]^3 with random directions, every third a finite segment
+/// (shadow-ray style) and every fifth starting past a tMin; f(ray) for each.
+template <class F>
+void forEachRandomRay(uint32_t seed, int count, F&& f) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.5f, 1.5f), range(0.0f, 3.0f);
+    for (int i = 0; i < count; ++i) {
+        Ray ray{{unit(rng), unit(rng), unit(rng)}, {unit(rng), unit(rng), unit(rng)}};
+        if (i % 3 == 0) ray.tMax = range(rng);
+        if (i % 5 == 0) ray.tMin = range(rng) * 0.1f;
+        f(ray);
+    }
+}
+
+/// `count` rays leaving random points on the mesh's triangles in random directions, each with
+/// tMin 0 (it may hit its own triangle at t = 0) and 1e-4; f(ray) for each.
+template <class F>
+void forEachRayFromSurface(const TriangleMeshView& m, uint32_t seed, int count, F&& f) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), weight(0.0f, 1.0f);
+    for (int i = 0; i < count; ++i) {
+        const uint32_t t = uint32_t(rng() % m.triangleCount());
+        float a = weight(rng), b = weight(rng);
+        if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
+        const glm::vec3 p = m.vertex(t, 0) + a * (m.vertex(t, 1) - m.vertex(t, 0)) + b * (m.vertex(t, 2) - m.vertex(t, 0));
+        const glm::vec3 d(unit(rng), unit(rng), unit(rng));
+        for (const float tMin : {0.0f, 1e-4f}) f(Ray{p, d, tMin});
+    }
+}
+
 /// A closed UV sphere of radius r around c.
 inline OwnedMesh uvSphere(int rings, int segments, glm::vec3 c = glm::vec3(0.0f), float r = 1.0f) {
     OwnedMesh m;

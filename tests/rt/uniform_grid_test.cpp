@@ -56,14 +56,7 @@ TEST(UniformGrid, ClosestAndAnyHitEqualBruteForceOnRandomScenes) {
         for (const float lambda : {kGridCellsPerTriangle, 1.0f, 40.0f}) {
             const OwnedMesh soup = testing::randomSoup(3000, seed, seed == 3 ? 1.5f : 0.3f);  // seed 3: long slivers across cells
             const UniformGrid grid = buildUniformGrid(soup.view(), lambda);
-            std::mt19937 rng(seed + 100);
-            std::uniform_real_distribution<float> unit(-1.5f, 1.5f), range(0.0f, 3.0f);
-            for (int i = 0; i < 1500; ++i) {
-                Ray ray{{unit(rng), unit(rng), unit(rng)}, {unit(rng), unit(rng), unit(rng)}};
-                if (i % 3 == 0) ray.tMax = range(rng);
-                if (i % 5 == 0) ray.tMin = range(rng) * 0.1f;
-                expectSameAsBruteForce(grid, soup.view(), ray);
-            }
+            testing::forEachRandomRay(seed + 100, 1500, [&](const Ray& ray) { expectSameAsBruteForce(grid, soup.view(), ray); });
         }
     }
 }
@@ -103,17 +96,8 @@ TEST(UniformGrid, FlatAndFarFromTheOriginScenesEqualBruteForce) {
 
 TEST(UniformGrid, OriginsOnSurfacesEqualBruteForce) {
     const OwnedMesh sphere = testing::uvSphere(16, 32);
-    const TriangleMeshView m = sphere.view();
-    const UniformGrid grid = buildUniformGrid(m);
-    std::mt19937 rng(9);
-    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), weight(0.0f, 1.0f);
-    for (int i = 0; i < 3000; ++i) {
-        const uint32_t t = uint32_t(rng() % m.triangleCount());
-        float a = weight(rng), b = weight(rng);
-        if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
-        const glm::vec3 p = m.vertex(t, 0) + a * (m.vertex(t, 1) - m.vertex(t, 0)) + b * (m.vertex(t, 2) - m.vertex(t, 0));
-        for (const float tMin : {0.0f, 1e-4f}) expectSameAsBruteForce(grid, m, Ray{p, {unit(rng), unit(rng), unit(rng)}, tMin});
-    }
+    const UniformGrid grid = buildUniformGrid(sphere.view());
+    testing::forEachRayFromSurface(sphere.view(), 9, 3000, [&](const Ray& ray) { expectSameAsBruteForce(grid, sphere.view(), ray); });
 }
 
 // Packets (Wald et al. §2) give each ray exactly brute force's closest hit and any hit: camera packets of 8x8 and 4x4
