@@ -227,7 +227,8 @@ std::vector<rt::Ray> cameraRays(const Geometry& g, int size, int side) {
     return rays;
 }
 
-void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry& g, const rt::Bvh& sah, const rt::UniformGrid& grid) {
+void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry& g, const rt::Bvh& sah, const rt::WideBvh& wide,
+                       const rt::UniformGrid& grid) {
     constexpr int kSize = 1024;
     const size_t count = size_t(kSize) * kSize;
     EmbreeScene embree(device, g, RTC_BUILD_QUALITY_MEDIUM, false);
@@ -252,6 +253,10 @@ void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry
     {
         const double mrays = raysPerSecondM(count, [&](size_t i) { hits[i] = rt::closestHit(sah, g.view(), single[i]); });
         report("BVH, single rays", mrays, {}, differing(hits));
+    }
+    {
+        const double mrays = raysPerSecondM(count, [&](size_t i) { hits[i] = rt::closestHit(wide, single[i]); });
+        report("wide BVH, single rays", mrays, {}, differing(hits));
     }
     {
         std::vector<uint8_t> hit(count);
@@ -322,6 +327,9 @@ void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry
     std::vector<uint8_t> bvhOccluded(shadowCount), occluded(shadowCount);
     const double bvhRate = raysPerSecondM(shadowCount, [&](size_t i) { bvhOccluded[i] = rt::anyHit(sah, g.view(), shadow[i]); });
     const double embreeRate = raysPerSecondM(shadowCount, [&](size_t i) { occluded[i] = embree.occluded(shadow[i]); });
+    const double wideRate = raysPerSecondM(shadowCount, [&](size_t i) { occluded[i] = rt::anyHit(wide, shadow[i]); });
+    size_t wideDiffer = 0;
+    for (size_t i = 0; i < shadowCount; ++i) wideDiffer += occluded[i] != bvhOccluded[i];
     const double gridRate = raysPerSecondM(shadowCount, [&](size_t i) { occluded[i] = rt::anyHit(grid, g.view(), shadow[i]); });
     const double packetMs = medianMs(3, [&] {
         raster::parallelFor(tileStart.size() - 1, [&](size_t t) {
@@ -331,9 +339,10 @@ void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry
     });
     size_t differ = 0;
     for (size_t i = 0; i < shadowCount; ++i) differ += occluded[i] != bvhOccluded[i];
-    std::printf("%-9s shadow rays from the camera's %zu hits, any hit, M rays/s: BVH %.2f, Embree %.2f, grid single %.2f, grid "
-                "packets (a tile's hits) %.2f | packets unlike the BVH: %zu\n",
-                name.c_str(), shadowCount, bvhRate, embreeRate, gridRate, double(shadowCount) / packetMs / 1000.0, differ);
+    std::printf("%-9s shadow rays from the camera's %zu hits, any hit, M rays/s: BVH %.2f, wide BVH %.2f, Embree %.2f, grid single "
+                "%.2f, grid packets (a tile's hits) %.2f | wide BVH and packets unlike the BVH: %zu, %zu\n",
+                name.c_str(), shadowCount, bvhRate, wideRate, embreeRate, gridRate, double(shadowCount) / packetMs / 1000.0, wideDiffer,
+                differ);
 }
 
 void benchModel(RTCDevice device, const std::string& name) {
@@ -424,7 +433,7 @@ void benchModel(RTCDevice device, const std::string& name) {
                 100.0 * double(g->triangles()) / double(rt::kTriangleGroupWidth * wide.triangleGroups.size()), collapseMs, wideClosest, oursClosest, wideClosest / oursClosest, embreeClosest,
                 embreeClosest / wideClosest, wideShadow, oursShadow, wideShadow / oursShadow, embreeShadow, embreeShadow / wideShadow,
                 wideDiffer);
-    benchCoherentRays(device, name, *g, sah, grid);
+    benchCoherentRays(device, name, *g, sah, wide, grid);
 }
 
 // ---- part 2: a skinned animation ------------------------------------------------------------
