@@ -197,13 +197,16 @@ TEST(LazyRefit, ConcurrentQueriesGiveTheSameHitsAsSerialOnes) {
 
 
 TEST(DeformingBvh, RebuildsWhenTheCriterionFiresAndAnswersLikeBruteForceThroughout) {
-    // An exploding soup under each update method: refit and lazy rebuild once the degradation
-    // passes their threshold (and not before), every method answers every ray as brute force does.
+    // An exploding soup under each update method, its rays answered by the wide tree (refreshed or
+    // collapsed again after each update) or by the binary one: refit and lazy rebuild once the
+    // degradation passes their threshold (and not before), and every ray is answered as brute
+    // force answers it.
     const auto [soup, velocity] = explodingSoup(testing::uvSphere(16, 32), 3);
+    for (const RayQueryTree queries : {RayQueryTree::Wide, RayQueryTree::Binary}) {
     for (const BvhUpdateMethod method : {BvhUpdateMethod::Refit, BvhUpdateMethod::Lazy, BvhUpdateMethod::Rebuild}) {
-        SCOPED_TRACE(int(method));
+        SCOPED_TRACE(int(method) + 10 * int(queries));
         OwnedMesh moved = soup;
-        DeformingBvh bvh(moved.view(), method);
+        DeformingBvh bvh(moved.view(), method, {}, 0.4, queries);
         for (const Ray& ray : randomRays(100, 99)) {  // the first pose, before any update
             ASSERT_EQ(bvh.closestHit(ray).triangle, closestHitBruteForce(moved.view(), ray).triangle);
             ASSERT_EQ(bvh.anyHit(ray), anyHitBruteForce(moved.view(), ray));
@@ -225,6 +228,7 @@ TEST(DeformingBvh, RebuildsWhenTheCriterionFiresAndAnswersLikeBruteForceThrougho
         else EXPECT_GT(rebuilt, 0) << "an exploding mesh must trigger a rebuild";
         EXPECT_EQ(rebuilt, bvh.rebuilds());
         expectWellFormed(bvh.bvh(), moved.view());
+    }
     }
 }
 
