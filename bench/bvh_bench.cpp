@@ -451,8 +451,9 @@ void benchAnimation(RTCDevice device, const std::string& name, int frames) {
     std::printf("\n# animation %s: %zu triangles, %d frames 0.1 s apart; ms per frame (median), degradation max\n",
                 name.c_str(), poses[0].triangles(), frames);
     rt::Bvh refitted = rt::buildBvh(poses[0].view()), lazyTree = refitted;
+    rt::WideBvh wide = rt::collapseToWideBvh(refitted);
     rt::LazyRefit lazy(lazyTree);
-    std::vector<double> refit, lazyUpdate, rebuild, gridRebuild, embreeRefit, embreeRebuild;
+    std::vector<double> refit, refresh, lazyUpdate, rebuild, collapse, gridRebuild, embreeRefit, embreeRebuild;
     double worst = 0.0;
     EmbreeScene dynamic(device, poses[0], RTC_BUILD_QUALITY_REFIT, true);
     dynamic.commit();
@@ -461,11 +462,17 @@ void benchAnimation(RTCDevice device, const std::string& name, int frames) {
         worst = std::max(worst, rt::refitBvh(refitted, poses[size_t(f)].view()));
         refit.push_back(raster::nowMs() - t0);
         t0 = raster::nowMs();
+        rt::refreshWideBvh(wide, refitted);
+        refresh.push_back(raster::nowMs() - t0);
+        t0 = raster::nowMs();
         lazy.update(poses[size_t(f)].view());
         lazyUpdate.push_back(raster::nowMs() - t0);
         t0 = raster::nowMs();
         const rt::Bvh fresh = rt::buildBvh(poses[size_t(f)].view());
         rebuild.push_back(raster::nowMs() - t0);
+        t0 = raster::nowMs();
+        const rt::WideBvh freshWide = rt::collapseToWideBvh(fresh);
+        collapse.push_back(raster::nowMs() - t0);
         t0 = raster::nowMs();
         const rt::UniformGrid grid = rt::buildUniformGrid(poses[size_t(f)].view());
         gridRebuild.push_back(raster::nowMs() - t0);
@@ -477,9 +484,10 @@ void benchAnimation(RTCDevice device, const std::string& name, int frames) {
         full.commit();
         embreeRebuild.push_back(raster::nowMs() - t0);
     }
-    std::printf("refit %.2f  lazy %.3f  rebuild %.2f  grid rebuild %.2f | embree refit %.2f  rebuild %.2f | refit/embree %.2f  "
-                "rebuild/embree %.2f | degradation max %.3f (rebuild past 0.4)\n",
-                bench::median(refit), bench::median(lazyUpdate), bench::median(rebuild), bench::median(gridRebuild), bench::median(embreeRefit),
+    std::printf("refit %.2f (+ wide refresh %.2f)  lazy %.3f  rebuild %.2f (+ wide collapse %.2f)  grid rebuild %.2f | embree refit "
+                "%.2f  rebuild %.2f | refit/embree %.2f  rebuild/embree %.2f | degradation max %.3f (rebuild past 0.4)\n",
+                bench::median(refit), bench::median(refresh), bench::median(lazyUpdate), bench::median(rebuild), bench::median(collapse),
+                bench::median(gridRebuild), bench::median(embreeRefit),
                 bench::median(embreeRebuild), bench::median(refit) / bench::median(embreeRefit),
                 bench::median(rebuild) / bench::median(embreeRebuild), worst);
 }

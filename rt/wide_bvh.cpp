@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "raster/parallel.h"
+
 namespace cuberille::rt {
 namespace {
 
@@ -113,23 +115,32 @@ private:
 }  // namespace
 
 void refreshWideBvh(WideBvh& wide, const Bvh& binary) {
-    for (size_t n = 0; n < wide.nodes.size(); ++n)
-        for (int i = 0; i < kWideBvhWidth; ++i) {
-            const uint32_t source = wide.childSource[n * kWideBvhWidth + size_t(i)];
-            if (source == WideBvhNode::kNoChild) continue;
-            for (int axis = 0; axis < 3; ++axis) {
-                wide.nodes[n].lo[axis][i] = binary.nodes[source].lo[axis];
-                wide.nodes[n].hi[axis][i] = binary.nodes[source].hi[axis];
+    // Every node and group is written from its own sources alone: chunks run in any order and
+    // give the same tree. On two threads BrainStem's refresh takes 0.56 ms, against 0.90-0.97
+    // serial, beside its 0.9 ms refit (bvh_bench's animation).
+    constexpr size_t kChunk = 4096;
+    raster::parallelFor((wide.nodes.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
+        for (size_t n = chunk * kChunk; n < std::min(wide.nodes.size(), (chunk + 1) * kChunk); ++n)
+            for (int i = 0; i < kWideBvhWidth; ++i) {
+                const uint32_t source = wide.childSource[n * kWideBvhWidth + size_t(i)];
+                if (source == WideBvhNode::kNoChild) continue;
+                for (int axis = 0; axis < 3; ++axis) {
+                    wide.nodes[n].lo[axis][i] = binary.nodes[source].lo[axis];
+                    wide.nodes[n].hi[axis][i] = binary.nodes[source].hi[axis];
+                }
             }
-        }
-    for (size_t g = 0; g < wide.triangleGroups.size(); ++g)
-        for (int lane = 0; lane < kTriangleGroupWidth; ++lane) {
-            const uint32_t slot = wide.laneSource[g * kTriangleGroupWidth + size_t(lane)];
-            if (slot == WideBvhTriangles::kNoTriangle) continue;
-            const glm::vec3* v = &binary.leafVertices[3 * size_t(slot)];
-            WideBvhTriangles& t = wide.triangleGroups[g];
-            for (int axis = 0; axis < 3; ++axis) t.a[axis][lane] = v[0][axis], t.b[axis][lane] = v[1][axis], t.c[axis][lane] = v[2][axis];
-        }
+    });
+    raster::parallelFor((wide.triangleGroups.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
+        for (size_t g = chunk * kChunk; g < std::min(wide.triangleGroups.size(), (chunk + 1) * kChunk); ++g)
+            for (int lane = 0; lane < kTriangleGroupWidth; ++lane) {
+                const uint32_t slot = wide.laneSource[g * kTriangleGroupWidth + size_t(lane)];
+                if (slot == WideBvhTriangles::kNoTriangle) continue;
+                const glm::vec3* v = &binary.leafVertices[3 * size_t(slot)];
+                WideBvhTriangles& t = wide.triangleGroups[g];
+                for (int axis = 0; axis < 3; ++axis)
+                    t.a[axis][lane] = v[0][axis], t.b[axis][lane] = v[1][axis], t.c[axis][lane] = v[2][axis];
+            }
+    });
 }
 
 WideBvh collapseToWideBvh(const Bvh& binary) {
