@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "rt/bvh_build.h"
 #include "rt/bvh_refit.h"
 #include "rt/wide_bvh.h"
 #include "tests/rt/rt_test_support.h"
+#include "tests/thread_counts.h"
 
 namespace cuberille::rt {
 namespace {
@@ -188,6 +190,35 @@ TEST(WideBvh, RefreshAfterARefitKeepsTheTreeWithCurrentBoxesAndVertices) {
     EXPECT_EQ(wide.triangleGroups.size(), groups);
     expectWellFormed(wide, binary, soup.view());
     testing::forEachRandomRay(12, 2000, [&](const Ray& ray) { expectSameAsBruteForce(wide, soup.view(), ray); });
+}
+
+TEST(WideBvh, TheSameTreeAtAnyThreadCount) {
+    // The collapse is serial and the refresh writes each node and group from its own sources, so
+    // the bytes are the same whatever the threads (a refresh large enough for several chunks).
+    OwnedMesh soup = testing::randomSoup(40000, 13, 0.05f);
+    Bvh binary = buildBvh(soup.view());
+    const WideBvh collapsed = collapseToWideBvh(binary);
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> unit(-0.1f, 0.1f);
+    for (glm::vec3& p : soup.positions) p += glm::vec3(unit(rng), unit(rng), unit(rng));
+    refitBvh(binary, soup.view());
+    std::vector<WideBvh> refreshed;
+    for (const cuberille::testing::ThreadCount count : cuberille::testing::kThreadCounts) {
+        const cuberille::testing::ThreadCountScope scope(count);
+        WideBvh wide = collapsed;
+        refreshWideBvh(wide, binary);
+        if (count.exact) {
+            EXPECT_GT(scope.ran(), 1) << "the refresh ran on one of " << count.threads << " threads";  // TBB may use one
+        }
+        refreshed.push_back(std::move(wide));
+    }
+    for (size_t k = 1; k < refreshed.size(); ++k) {
+        ASSERT_EQ(refreshed[k].nodes.size(), refreshed[0].nodes.size());
+        EXPECT_EQ(std::memcmp(refreshed[k].nodes.data(), refreshed[0].nodes.data(), refreshed[0].nodes.size() * sizeof(WideBvhNode)), 0);
+        EXPECT_EQ(std::memcmp(refreshed[k].triangleGroups.data(), refreshed[0].triangleGroups.data(),
+                              refreshed[0].triangleGroups.size() * sizeof(WideBvhTriangles)),
+                  0);
+    }
 }
 
 TEST(WideBvh, TraversalVisitsFewerNodesThanTheBinaryTree) {
