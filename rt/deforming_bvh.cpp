@@ -44,7 +44,6 @@ BvhUpdateReport DeformingBvh::update(const TriangleMeshView& mesh) {
         case BvhUpdateMethod::Refit:
             report.degradation = refitBvh(*bvh_, mesh);
             report.measured = true;
-            if (usesWide() && !(report.degradation > threshold_)) refreshWideBvh(wide_, *bvh_);  // else rebuilt below
             break;
         case BvhUpdateMethod::Lazy:
             if (++frame_ % kLazyCriterionInterval == 0) {
@@ -60,6 +59,8 @@ BvhUpdateReport DeformingBvh::update(const TriangleMeshView& mesh) {
     if (report.measured && report.degradation > threshold_) {
         rebuild();
         report.rebuilt = true;
+    } else if (method_ == BvhUpdateMethod::Refit && usesWide()) {
+        refreshWideBvh(wide_, *bvh_);  // a rebuild collapses the new tree instead
     }
     report.milliseconds = raster::nowMs() - t0;
     return report;

@@ -75,7 +75,8 @@ struct WideBvh {
 };
 
 /// The wide tree over the same leaves as `binary`, whose leafVertices must be current (after a
-/// build or a refit): it copies the vertices into its triangle groups. Deterministic: children are taken in a fixed order, nodes laid out depth-first.
+/// build or a refit): it copies the vertices into its triangle groups. Deterministic: children
+/// are taken in a fixed order, nodes laid out depth-first.
 WideBvh collapseToWideBvh(const Bvh& binary);
 
 /// Brings the boxes and vertices up to date with `binary` after it was refitted (rt/bvh_refit.h):
