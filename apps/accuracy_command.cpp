@@ -88,7 +88,9 @@ AccuracyPlan planAccuracy(const AccuracyOptions& options) {
     report.machine = machineDescription();
     report.threads = o.threads > 0 ? o.threads : raster::hardwareThreads();
     report.traits = probeScene(o);
-    plan.sweep = accuracySweep(report.traits, o.soft);
+    if (o.ambientOcclusionRays > 0 && !report.traits.threeD)
+        throw scene::InputError("--ao: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + o.scene);
+    plan.sweep = accuracySweep(report.traits, o.soft, o.ambientOcclusionRays);
     std::set<std::vector<std::string>> planned;  // identical command lines run once
     for (size_t i = 0; i + 1 < plan.sweep.size(); ++i) {
         const AccuracySetting& s = plan.sweep[i];
@@ -203,6 +205,10 @@ CLI::App* addAccuracyCommand(CLI::App& app, AccuracyOptions& o) {
     a->add_option("--time", o.timeSeconds, "glTF: the animation's pose at this time, in seconds")->capture_default_str();
     a->add_option("--animation", o.animation, "glTF: the animation posed, by name or index (default: the first)");
     a->add_flag("--soft", o.soft, "Soft shadows in every shadowed setting and the truth");
+    a->add_option("--ao", o.ambientOcclusionRays,
+                  "3D scenes: ambient occlusion in every setting, N rays a pixel in the balanced preset, and its "
+                  "rays a pixel swept as a knob (the truth traces " + std::to_string(kTruthOcclusionRays) +
+                  " at each of its samples)");
     a->add_flag("--quiet", o.quiet, "Print nothing on success");
     return a;
 }
@@ -237,6 +243,7 @@ struct Knobs {
     bool reversedDepth = false;
     uint32_t voxelResolution = 0;  // 0: the model's finest
     int supersample = 1;
+    int occlusionRays = 0;  // --ao, for 3D scenes; 0: none
 };
 
 std::string formatNumber(double v) {
@@ -256,6 +263,7 @@ std::vector<std::string> knobArgs(const Knobs& k, const SceneTraits& t, bool sof
             a.insert(a.end(), {"--shadow-map-size", std::to_string(k.mapSizeTexels)});
         if (soft && k.shadows != "none") a.push_back("--soft");
     }
+    if (t.threeD && k.occlusionRays > 0) a.insert(a.end(), {"--ao", std::to_string(k.occlusionRays)});
     if (t.voxel) a.insert(a.end(), {"--pixel-error", formatNumber(k.pixelError)});
     if ((t.threeD || t.voxel) && k.reversedDepth) a.insert(a.end(), {"--depth", "reversed"});
     if (t.voxel && k.voxelResolution) a.insert(a.end(), {"--voxel-resolution", std::to_string(k.voxelResolution)});
@@ -264,8 +272,9 @@ std::vector<std::string> knobArgs(const Knobs& k, const SceneTraits& t, bool sof
 
 }  // namespace
 
-std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft) {
-    const Knobs balanced;
+std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft, int ambientOcclusionRays) {
+    Knobs balanced;
+    balanced.occlusionRays = ambientOcclusionRays;
     std::vector<AccuracySetting> sweep;
     auto add = [&](const std::string& knob, const std::string& value, double order, const Knobs& k) {
         sweep.push_back({knob, value, order, knobArgs(k, t, soft), false});
@@ -298,6 +307,12 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft) {
                 add(std::string(mode) + " shadow-map size", std::to_string(size), size, k);
             }
     }
+    if (t.threeD && ambientOcclusionRays > 0)
+        for (int n : kOcclusionRaysSwept) {
+            Knobs k = balanced;
+            k.occlusionRays = n;
+            add("ambient occlusion rays", std::to_string(n), n, k);
+        }
     if (t.threeD || t.voxel)
         for (bool reversed : {false, true}) {
             Knobs k = balanced;
@@ -316,22 +331,25 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft) {
             k.pixelError = e;
             add("LOD pixel error", formatNumber(e), e, k);
         }
-    Knobs fast;
+    Knobs fast = balanced;
     fast.msaa = 1;
     fast.textureFilter = "nearest";
     fast.shadows = "map";
     fast.mapSizeTexels = 1024;
     fast.pixelError = 4.0f;
+    fast.occlusionRays = std::min(ambientOcclusionRays, 1);
     add("preset", "fast", 0, fast);
     add("preset", "balanced", 1, balanced);
-    Knobs exact;
+    Knobs exact = balanced;
     exact.msaa = 16;
     exact.shadows = "raytraced";
     exact.pixelError = 0.25f;
     exact.reversedDepth = true;
+    exact.occlusionRays = ambientOcclusionRays > 0 ? kTruthOcclusionRays : 0;
     add("preset", "exact", 2, exact);
     sweep.push_back({"defaults", "defaults", 0, {}, true});  // what `render` does with no knob given
     Knobs truth;
+    truth.occlusionRays = ambientOcclusionRays > 0 ? kTruthOcclusionRays : 0;
     truth.supersample = 16;
     truth.msaa = 1;
     truth.shadows = "raytraced";
@@ -560,6 +578,9 @@ void checkMonotone(const std::vector<AccuracyRow>& rows, std::vector<std::string
         {"hybrid shadow-map size", true,
          "the hybrid's error is the few marked-pixel misses of its map, which change with where texel centres "
          "fall rather than shrink with them"},
+        {"ambient occlusion rays", true,
+         "each pixel's rays are a fixed stratified set turned by its own angle, so a few more rays can move one "
+         "pixel's estimate away from the truth; the error of the image falls as 1/N only in expectation"},
         {"voxel resolution", true,
          "a coarser level's colours and normals are averages, which can land nearer the supersampled truth over a "
          "region than a finer level's"},

@@ -35,6 +35,9 @@ struct AccuracyOptions {
     float timeSeconds = 0.0f;
     std::string animation;  // --animation, passed to every render
     bool soft = false;    // soft shadows in every shadowed setting and the truth
+    /// --ao N: ambient occlusion in every setting of a 3D scene, N rays a pixel in the balanced
+    /// preset, swept as a knob of its own; 0: none.
+    int ambientOcclusionRays = 0;
     std::filesystem::path executable;  // the cuberille binary; empty: this process's own
     bool quiet = false;
 };
@@ -126,7 +129,14 @@ CLI::App* addAccuracyCommand(CLI::App& app, AccuracyOptions& o);
 AccuracyOptions parseAccuracyArguments(const std::vector<std::string>& arguments);
 
 /// The sweep for a scene's traits, ground truth last (exposed for tests).
-std::vector<AccuracySetting> accuracySweep(const SceneTraits& traits, bool soft);
+std::vector<AccuracySetting> accuracySweep(const SceneTraits& traits, bool soft, int ambientOcclusionRays = 0);
+
+/// The ground truth's ambient occlusion rays a pixel (with --ao): each of its 256 samples a pixel
+/// traces them, so a final pixel averages 16,384 rays, whose noise (below 1/16,384 for the
+/// stratified set, turned differently at each sample) is far under one 8-bit level.
+inline constexpr int kTruthOcclusionRays = 64;
+/// The values the "ambient occlusion rays" knob takes.
+inline constexpr int kOcclusionRaysSwept[] = {1, 4, 16, 64};
 
 /// What applies to the scene, from a 64 x 36 render with ray-traced shadows (3D scenes):
 /// textures sampled, a light that casts shadows. `options.executable` must be set.

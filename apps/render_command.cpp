@@ -106,7 +106,13 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
                     (unsigned long long)c.counters.nodesVisited, c.cullMs, c.rebuilt ? "build" : "refit", c.buildMs,
                     c.degradation);
     }
-    if (r.shadows) {
+    if (r.shadows && r.shadows->occlusionRun) {
+        const rt::AmbientOcclusionStats& ao = r.shadows->occlusion;
+        std::printf("  ambient occlusion: %d rays a pixel within %g, %llu pixels, %llu rays; %.1f ms\n",
+                    r.shadows->occlusionRaysPerPixel, ao.distance, (unsigned long long)ao.pixels,
+                    (unsigned long long)ao.rays, ao.ms);
+    }
+    if (r.shadows && r.shadows->mode != rt::ShadowMode::None) {
         const rt::ShadowStats& st = r.shadows->shadows;
         std::printf("  shadows (%s%s): %d light%s, %llu receiver pixels, %llu marked (%.2f%%), %llu rays; %.1f ms "
                     "(bvh %.1f, surfaces %.1f, maps %.1f, masks %.1f)\n",

@@ -128,6 +128,14 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
                        "drawn again when the camera moves), scene (every caster: drawn once for a turntable or a "
                        "batch of views) or auto (scene for --turntable, else view)")
         ->capture_default_str();
+    render->add_option("--ao", o.ambientOcclusion.raysPerPixel,
+                       "Ambient occlusion: N rays a pixel from the surface it sees (cosine-weighted), darkening the "
+                       "ambient and environment light where geometry within --ao-distance hides the sky; 0: none")
+        ->capture_default_str();
+    render->add_option("--ao-distance", o.ambientOcclusion.maxDistance,
+                       "With --ao: how far the rays look, in world units (0: a tenth of the model's bounding-box "
+                       "diagonal)")
+        ->capture_default_str();
     render->add_option("--environment", o.environment,
                        "Image-based lighting: neutral (the built-in studio) or an equirectangular radiance map (.hdr, "
                        ".exr); it replaces the ambient term and, for a model without lights of its own, the default "

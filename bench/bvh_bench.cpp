@@ -23,6 +23,7 @@
 #include "bench/procedural_meshes.h"
 #include "raster/clock.h"
 #include "raster/parallel.h"
+#include "rt/ambient_occlusion.h"
 #include "rt/bvh_build.h"
 #include "rt/bvh_refit.h"
 #include "rt/lazy_refit.h"
@@ -227,6 +228,39 @@ std::vector<rt::Ray> cameraRays(const Geometry& g, int size, int side) {
     return rays;
 }
 
+/// Ambient occlusion rays (rt/ambient_occlusion.h) from the camera's hits: 8 a hit, cosine-weighted
+/// about the normal facing the camera, turned per hit, reaching a tenth of the model's diagonal
+/// (the renderer's default), any hit: short rays that start on the surface, where most of the
+/// work is the nodes around their origin.
+void benchOcclusionRays(const Geometry& g, const rt::WideBvh& wide, const EmbreeScene& embree, const std::vector<rt::Ray>& camera,
+                        const std::vector<rt::RayHit>& hits, float offset, const std::string& name) {
+    rt::Aabb box;
+    for (const glm::vec3& p : g.positions) box.grow(p);
+    const float distance = rt::kDefaultOcclusionDistanceOfBounds * glm::length(box.extent());
+    const std::vector<glm::vec3> directions = rt::occlusionDirections(8);
+    std::vector<rt::Ray> rays;
+    for (size_t i = 0; i < camera.size(); ++i) {
+        if (!hits[i].hit()) continue;
+        const uint32_t* v = &g.indices[3 * size_t(hits[i].triangle)];
+        glm::vec3 n = glm::normalize(glm::cross(g.positions[v[1]] - g.positions[v[0]], g.positions[v[2]] - g.positions[v[0]]));
+        if (glm::dot(n, camera[i].direction) > 0.0f) n = -n;
+        const rt::Surface surface{camera[i].origin + camera[i].direction * hits[i].t, n};
+        rt::openShare(surface, directions, rt::occlusionTurnRadians(int(i), 0), distance, offset, [&](const rt::Ray& r) {
+            rays.push_back(r);
+            return false;
+        });
+    }
+    std::vector<uint8_t> ours(rays.size()), theirs(rays.size());
+    const double wideRate = raysPerSecondM(rays.size(), [&](size_t i) { ours[i] = rt::anyHit(wide, rays[i]); });
+    const double embreeRate = raysPerSecondM(rays.size(), [&](size_t i) { theirs[i] = embree.occluded(rays[i]); });
+    size_t occluded = 0, differ = 0;
+    for (size_t i = 0; i < rays.size(); ++i) occluded += ours[i], differ += ours[i] != theirs[i];
+    std::printf("%-9s ambient occlusion rays from the camera's hits (8 a hit, reach %.3g, %.1f%% occluded), any hit, M rays/s: "
+                "wide BVH %.2f, Embree %.2f | unlike Embree: %zu of %zu\n",
+                name.c_str(), distance, 100.0 * double(occluded) / double(std::max<size_t>(rays.size(), 1)), wideRate, embreeRate,
+                differ, rays.size());
+}
+
 void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry& g, const rt::Bvh& sah, const rt::WideBvh& wide,
                        const rt::UniformGrid& grid) {
     constexpr int kSize = 1024;
@@ -343,6 +377,7 @@ void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry
                 "%.2f, grid packets (a tile's hits) %.2f | wide BVH and packets unlike the BVH: %zu, %zu\n",
                 name.c_str(), shadowCount, bvhRate, wideRate, embreeRate, gridRate, double(shadowCount) / packetMs / 1000.0, wideDiffer,
                 differ);
+    benchOcclusionRays(g, wide, embree, single, reference, offset, name);
 }
 
 void benchModel(RTCDevice device, const std::string& name) {

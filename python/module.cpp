@@ -85,6 +85,8 @@ render::FrameSettings frameSettings(int width, int height, int msaa, const py::k
         else if (k == "shadow_map_size") f.shadows.mapSizeTexels = value.cast<int>();
         else if (k == "soft_samples") f.shadows.softSamplesPerSide = value.cast<int>();
         else if (k == "shadow_focus") f.shadows.focus = render::parseMapFocus(value.cast<std::string>());
+        else if (k == "ao") f.ambientOcclusion.raysPerPixel = value.cast<int>();
+        else if (k == "ao_distance") f.ambientOcclusion.maxDistance = value.cast<float>();
         else if (k == "environment") f.environment = py::str(value).cast<std::string>();  // a name or a path-like
         else if (k == "environment_intensity") f.environmentIntensity = value.cast<float>();
         else if (k == "background") {

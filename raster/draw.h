@@ -69,6 +69,10 @@ struct Lighting {
     /// Image-based lighting (raster/environment_light.h), added unshadowed (times occlusion) to
     /// the lit models besides the ambient term; null: none. Must outlive the frame.
     const EnvironmentLight* environment = nullptr;
+    /// Per pixel (y x width + x), a factor on the ambient and environment terms, multiplied in
+    /// where a material's occlusion texture is: the ambient occlusion the ray stage found
+    /// (rt/ambient_occlusion.h). Null: none. Must outlive the frame.
+    const float* ambientVisibility = nullptr;
     /// With an environment: a light of `lights` stands for its dominant direction, so the shade
     /// stage takes the irradiance without it (EnvironmentLight::shIrradianceLessDominant).
     bool environmentLessDominantLight = false;

@@ -149,7 +149,8 @@ public:
         if (environment_) environmentSh_ = &environment_->irradianceHarmonics(state.lighting.environmentLessDominantLight);
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 && !environment_ &&
                         state.lighting.lights[0].type == LightType::Directional &&
-                        state.lighting.lights[0].visibility == nullptr && layout.texCoord < 0 &&
+                        state.lighting.lights[0].visibility == nullptr && state.lighting.ambientVisibility == nullptr &&
+                        layout.texCoord < 0 &&
                         layout.alpha < 0 && !hasEmissive_;
     }
 
@@ -181,6 +182,8 @@ public:
             float occlusion[ShadeQueue::kCapacity];
             std::fill_n(occlusion, q.count, 1.0f);
             if (textured && s_.textures.occlusion) occlusionFromTexture(q.count, a, occlusion, counters);
+            if (const float* open = s_.lighting.ambientVisibility)
+                for (int i = 0; i < q.count; ++i) occlusion[i] *= open[q.pixelIndex[i]];
             if constexpr (kModel == ShadingModel::Lambert)
                 lambert(q, a, occlusion, counters);
             else

@@ -14,6 +14,7 @@
 #include <glm/glm.hpp>
 
 #include "raster/framebuffer.h"
+#include "rt/ambient_occlusion.h"
 #include "rt/deforming_bvh.h"
 #include "rt/shadows.h"
 #include "scene/camera.h"
@@ -71,6 +72,8 @@ struct FrameSettings {
     int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
     bool debugCamera = false; // voxel models: show the frame's selection from behind and above
     rt::ShadowOptions shadows; // --shadows, --soft, --light-radius, --shadow-map-size, --soft-samples
+    /// --ao N, --ao-distance D: ambient occlusion by N rays a pixel (rt/ambient_occlusion.h).
+    rt::AmbientOcclusionOptions ambientOcclusion;
     /// --environment neutral|FILE: image-based lighting from the built-in studio or an
     /// equirectangular radiance map (scene/environment_map.h); empty: none. It replaces the
     /// ambient term, and the default key light of a model without lights of its own.

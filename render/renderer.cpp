@@ -72,6 +72,10 @@ std::vector<uint8_t> displayPixels(const LoadedScene& scene, const FrameSettings
 
 namespace {
 
+/// --ao's bound: past 1024 rays a pixel the estimate's noise (stratified, below 1/N) is far under
+/// one 8-bit level, and a 1080p frame would trace two billion rays.
+constexpr int kMaxOcclusionRaysPerPixel = 1024;
+
 // An option a scene cannot use is refused, not silently ignored.
 void validate(const State& s, const FrameSettings& o) {
     using scene::InputError;
@@ -86,6 +90,14 @@ void validate(const State& s, const FrameSettings& o) {
         throw InputError("--light-radius: must be a finite number, 0 or more");
     const bool tri = s.kind == scene::FileKind::TriangleList, voxel = s.kind == scene::FileKind::VoxelModel;
     const bool threeD = !tri && !voxel, gltf = scene::isGltfKind(s.kind);
+    const rt::AmbientOcclusionOptions& ao = o.ambientOcclusion;
+    if (ao.raysPerPixel < 0 || ao.raysPerPixel > kMaxOcclusionRaysPerPixel)
+        throw InputError("--ao: " + std::to_string(ao.raysPerPixel) + " is outside 0.." +
+                         std::to_string(kMaxOcclusionRaysPerPixel) + " (rays per pixel)");
+    if (!(ao.maxDistance >= 0.0f) || !std::isfinite(ao.maxDistance))
+        throw InputError("--ao-distance: must be a finite number, 0 or more (0: a tenth of the model's size)");
+    if (ao.raysPerPixel > 0 && !threeD)
+        throw InputError("--ao: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if ((sh.mode != rt::ShadowMode::None || o.view == View::ShadowPixels) && !threeD)
         throw InputError("--shadows and --view shadow-pixels: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.view == View::Normals && !threeD)
@@ -496,6 +508,12 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                         {"mapMs", st.mapMs},
                         {"maskMs", st.maskMs},
                         {"totalMs", sh.totalMs}};
+        if (sh.occlusionRun)
+            j["ambientOcclusion"] = {{"raysPerPixel", sh.occlusionRaysPerPixel},
+                                     {"distance", sh.occlusion.distance},
+                                     {"pixels", sh.occlusion.pixels},
+                                     {"rays", sh.occlusion.rays},
+                                     {"ms", sh.occlusion.ms}};
         if (sh.mode == rt::ShadowMode::Auto)
             j["shadows"]["auto"] = {{"hybridLights", st.autoHybrid},
                                     {"raytracedLights", st.autoRayTraced},

@@ -9,24 +9,26 @@
 
 namespace cuberille::render {
 
-SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& options, rt::BvhUpdateMethod bvhUpdate)
-    : options_(options) {
-    if (options.mode == rt::ShadowMode::None) return;
-    bool anyLight = false;
-    for (int l = 0; l < s.lighting.lightCount; ++l) anyLight = anyLight || rt::castsShadows(s.lighting.lights[l]);
-    if (!anyLight) return;
+SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& options, rt::BvhUpdateMethod bvhUpdate,
+                           const rt::AmbientOcclusionOptions& occlusion)
+    : options_(options), occlusion_(occlusion) {
+    if (options.mode != rt::ShadowMode::None)
+        for (int l = 0; l < s.lighting.lightCount; ++l) shadowed_ = shadowed_ || rt::castsShadows(s.lighting.lights[l]);
+    if (!shadowed_ && occlusion.raysPerPixel == 0) return;
     double t0 = raster::nowMs();
     gatherCasters(s);
     if (indices_.empty()) return;
     active_ = true;
     visibility_.setCasters({positions_, indices_}, ranges_);
     pending_.castersMs = raster::nowMs() - t0;
-    if (options.mode == rt::ShadowMode::Hybrid || options.mode == rt::ShadowMode::RayTraced || options.mode == rt::ShadowMode::Auto) {
+    const bool rays = options_.mode == rt::ShadowMode::Hybrid || options_.mode == rt::ShadowMode::RayTraced ||
+                      options_.mode == rt::ShadowMode::Auto;
+    if ((shadowed_ && rays) || occlusion.raysPerPixel > 0) {
         t0 = raster::nowMs();
         bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, bvhUpdate);
         pending_.bvhBuildMs = raster::nowMs() - t0;
     }
-    if (options.mode == rt::ShadowMode::Hybrid) {
+    if (shadowed_ && options_.mode == rt::ShadowMode::Hybrid) {
         t0 = raster::nowMs();
         findAdjacency();
         pending_.adjacencyMs = raster::nowMs() - t0;
@@ -73,7 +75,7 @@ void SceneShadows::update(const scene::Scene& s) {
         pending_.degradation = report.degradation;
     }
     adjacencyFound_ = false;  // the last pose's
-    if (options_.mode == rt::ShadowMode::Hybrid) findAdjacency();
+    if (shadowed_ && options_.mode == rt::ShadowMode::Hybrid) findAdjacency();
     pending_.bvhUpdateMs = raster::nowMs() - t1;
 }
 
@@ -103,10 +105,22 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
                                               stats.adjacencyMs += raster::nowMs() - t;
                                               return &adjacency_;
                                           }};
-    rt::computeShadows(surfaces, s.lighting, shadowCasters, options_, gpu_, masks_);
-    stats.shadows = masks_.stats;
-    for (int l = 0; l < lighting.lightCount; ++l)
-        if (!masks_.visibility[size_t(l)].empty()) lighting.lights[l].visibility = masks_.visibility[size_t(l)].data();
+    if (shadowed_) {
+        rt::computeShadows(surfaces, s.lighting, shadowCasters, options_, gpu_, masks_);
+        stats.shadows = masks_.stats;
+        for (int l = 0; l < lighting.lightCount; ++l)
+            if (!masks_.visibility[size_t(l)].empty()) lighting.lights[l].visibility = masks_.visibility[size_t(l)].data();
+    }
+    if (occlusion_.raysPerPixel > 0) {
+        const float distance = occlusion_.maxDistance > 0.0f
+                                   ? occlusion_.maxDistance
+                                   : rt::kDefaultOcclusionDistanceOfBounds * glm::length(bounds_.extent());
+        rt::computeAmbientOcclusion(surfaces, *bvh_, distance, rt::surfaceRayOffset(bounds_), occlusion_, occlusionMask_,
+                                    stats.occlusion);
+        stats.occlusionRun = true;
+        stats.occlusionRaysPerPixel = occlusion_.raysPerPixel;
+        lighting.ambientVisibility = occlusionMask_.data();
+    }
     return lighting;
 }
 

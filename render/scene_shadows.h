@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "rt/ambient_occlusion.h"
 #include "rt/bvh.h"
 #include "rt/deforming_bvh.h"
 #include "rt/screen_surfaces.h"
@@ -36,6 +37,9 @@ struct ShadowFrameStats {
     /// per pose (at construction, reported with the first frame, and in each update()).
     double castersMs = 0.0;
     double surfacesMs = 0.0;  // the visibility buffer and surface reconstruction
+    bool occlusionRun = false;  // --ao: the ambient occlusion mask was found this frame
+    int occlusionRaysPerPixel = 0;
+    rt::AmbientOcclusionStats occlusion;  // its rays and time (in totalMs too)
     double totalMs = 0.0;     // the whole stage this frame; the BVH build (at construction) is not in it
 };
 
@@ -43,10 +47,14 @@ class SceneShadows {
 public:
     /// `bvhUpdate`: how update() makes the casters' hierarchy follow each new pose
     /// (rt/deforming_bvh.h); with Lazy the shadow rays refresh the lower boxes they reach.
+    /// `occlusion`: ambient occlusion by rays from the same surfaces through the same BVH, with
+    /// or without shadows.
     SceneShadows(const scene::Scene& scene, const rt::ShadowOptions& options,
-                 rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit);
+                 rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit,
+                 const rt::AmbientOcclusionOptions& occlusion = {});
 
-    /// Whether the stage runs at all: a mode other than none, casters and a shadow-casting light.
+    /// Whether the stage runs at all: casters, and a mode other than none with a shadow-casting
+    /// light, or ambient occlusion.
     bool active() const { return active_; }
 
     /// The next pose of an animated scene (the same meshes and triangles, moved): the casters
@@ -67,7 +75,10 @@ private:
     void findAdjacency();
 
     rt::ShadowOptions options_;
-    bool active_ = false;
+    rt::AmbientOcclusionOptions occlusion_;
+    bool shadowed_ = false;  // some light casts shadows in a mode other than none
+    bool active_ = false;    // shadowed_ or occlusion_, with casters
+    std::vector<float> occlusionMask_;  // per pixel, reused from frame to frame
     std::vector<glm::vec3> positions_;
     std::vector<uint32_t> indices_;
     std::vector<rt::CasterRange> ranges_;

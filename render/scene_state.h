@@ -48,6 +48,7 @@ struct LoadedScene::State {
     // Kept between frames while the settings that shaped them hold (render/loaded_scene.h).
     std::optional<SceneShadows> shadows;
     rt::ShadowOptions shadowsOptions;
+    rt::AmbientOcclusionOptions occlusionOptions;
     rt::BvhUpdateMethod shadowsMethod = rt::BvhUpdateMethod::Refit;
     bool shadowsPoseStale = false;  // the pose changed since they were built or updated
     std::optional<SceneFrustumCull> culling;

@@ -73,6 +73,18 @@ struct ScreenSurfaces {
         const uint32_t t = triangle[pixel];
         if (t != kNone) __builtin_prefetch(&planes[t]);
     }
+    /// Calls f(x, pixel, surface) for each pixel of row y with a surface to shade (surfaceAt), the
+    /// planes asked for kPlanePrefetchPixels ahead: the loop every reader of the buffer runs.
+    template <class F>
+    void forEachSurfaceInRow(int y, F&& f) const {
+        const CameraRow row = cameraRow(y);
+        for (int x = 0; x < width; ++x) {
+            const size_t i = row.firstPixel + size_t(x);
+            if (x + kPlanePrefetchPixels < width) prefetchPlane(i + kPlanePrefetchPixels);
+            Surface surface;
+            if (covered(i) && surfaceAt(row, x, surface)) f(x, i, surface);
+        }
+    }
     /// Far enough ahead to cover a miss to memory (a few hundred cycles) at the few dozen cycles a
     /// pixel takes; measured on the dragon, 8 to 32 pixels ahead made no difference.
     static constexpr int kPlanePrefetchPixels = 16;

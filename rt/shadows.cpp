@@ -10,6 +10,7 @@
 
 #include "raster/clock.h"
 #include "raster/parallel.h"
+#include "rt/ambient_occlusion.h"
 #include "rt/ray_query.h"
 #include "rt/shadow_map.h"
 #include "rt/shadow_mode_choice.h"
@@ -141,10 +142,6 @@ int pyramidLevels(int size) {
     return levels;
 }
 
-void perpendicularBasis(const glm::vec3& w, glm::vec3& u, glm::vec3& v) {
-    u = glm::normalize(glm::cross(std::abs(w.x) > 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0), w));
-    v = glm::cross(w, u);
-}
 
 // ---- one light's shadow stage ------------------------------------------------------------
 
@@ -155,8 +152,7 @@ public:
                  LightShadowStorage& storage)
         : light_(light), casters_(casters), options_(options), gpu_(gpu), map_(storage.map), faces_(storage.faces),
           scratch_(storage.scratch), marksOptions_(storage.marksOptions) {
-        const float radius = 0.5f * glm::length(casters.bounds.extent());
-        rayOffset_ = 1e-4f * std::max(radius, 1e-3f);
+        rayOffset_ = surfaceRayOffset(casters.bounds);
         if (options.soft) disk_ = diskSamples(std::max(1, options.softSamplesPerSide));
     }
 
@@ -381,7 +377,7 @@ private:
             return occluded(origin, in.toLight, in.distance) ? 0.0f : 1.0f;
         }
         glm::vec3 u, v;
-        perpendicularBasis(in.toLight, u, v);
+        tangentFrame(in.toLight, u, v);
         int lit = 0;
         for (const glm::vec2& s : disk_) {
             glm::vec3 direction;
@@ -694,6 +690,11 @@ uint64_t nextCastersVersion() {
     return next.fetch_add(1, std::memory_order_relaxed);
 }
 
+float surfaceRayOffset(const Aabb& casterBounds) {
+    const float radius = 0.5f * glm::length(casterBounds.extent());
+    return kSurfaceRayOffsetOfRadius * std::max(radius, 1e-3f);
+}
+
 bool castsShadows(const raster::Light& light) {
     return light.intensity.x > 0.0f || light.intensity.y > 0.0f || light.intensity.z > 0.0f;
 }
@@ -778,17 +779,11 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
         const glm::vec3 toSun = -glm::normalize(light.direction);  // used for directional lights only
         raster::parallelFor(size_t(surfaces.height), [&](size_t y) {
             std::array<uint64_t, 3>& c = rowCounts[y];
-            const ScreenSurfaces::CameraRow row = surfaces.cameraRow(int(y));
-            for (int x = 0; x < surfaces.width; ++x) {
-                const size_t i = y * surfaces.width + x;
-                if (x + ScreenSurfaces::kPlanePrefetchPixels < surfaces.width)
-                    surfaces.prefetchPlane(i + ScreenSurfaces::kPlanePrefetchPixels);
-                Surface surface;
-                if (!surfaces.covered(i) || !surfaces.surfaceAt(row, x, surface)) continue;
+            surfaces.forEachSurfaceInRow(int(y), [&](int, size_t i, const Surface& surface) {
                 const Incidence in = incidence(light, toSun, surface.position, surface.normal);
                 if (!in.reaches) {
                     mask[i] = 0.0f;  // the shading gives this light nothing here anyway
-                    continue;
+                    return;
                 }
                 ++c[0];
                 bool marked = false;
@@ -797,7 +792,7 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
                     ++c[1];
                     out.marked[i] = 1;
                 }
-            }
+            });
         });
         for (const auto& c : rowCounts) {
             out.stats.receiverPixels += c[0];

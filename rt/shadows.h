@@ -127,6 +127,15 @@ ShadowMasks computeShadows(const ScreenSurfaces& surfaces, const raster::Lightin
 void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& lighting, const ShadowCasters& casters,
                     const ShadowOptions& options, raster::Pipeline& gpu, ShadowMasks& out);
 
+/// How far off the surface seen at a pixel its rays start (shadow and occlusion rays), along its
+/// normal, as a share of the casters' bounding radius. The surface point is recovered from the
+/// visibility buffer in float (rt/screen_surfaces.h: a plane met by the camera ray, a few
+/// roundings of coordinates up to the scene's size, so an error of some ulps of the radius); a
+/// ray started on the surface could meet its own triangle again. 1e-4 of the radius is far above
+/// those ulps (2^-24 each) and below any gap a model's geometry shows at a pixel.
+inline constexpr float kSurfaceRayOffsetOfRadius = 1e-4f;
+float surfaceRayOffset(const Aabb& casterBounds);
+
 /// Whether a light casts shadows at all in this stage (a light of zero intensity does not).
 bool castsShadows(const raster::Light& light);
 

@@ -33,6 +33,8 @@ CASES = [
                                shadows="raytraced"),
      ["--width", "160", "--height", "120", "--msaa", "4", "--environment", "neutral", "--environment-intensity", "1.5",
       "--ground", "--shadows", "raytraced"]),
+    ("knot.obj", dict(width=160, height=120, ground=True, ao=8, ao_distance=0.5),
+     ["--width", "160", "--height", "120", "--ground", "--ao", "8", "--ao-distance", "0.5"]),
 ]
 
 
@@ -58,6 +60,22 @@ def test_a_loaded_scene_renders_each_frame_as_a_fresh_load_does(examples):
     again = scene.render(time=0.5, **settings)
     assert np.array_equal(first, again)
     assert np.array_equal(first, cuberille.render(path, time=0.5, **settings))
+
+
+def test_ambient_occlusion_only_takes_ambient_light_away(examples):
+    """--ao multiplies the ambient term by the open share of each pixel's hemisphere: no pixel gets
+    brighter (one 8-bit level allowed: with occlusion the shade stage leaves its fused one-light
+    path, which rounds differently), the knot's crossings and its contact with the ground get
+    darker, and the stage reports its rays."""
+    scene = cuberille.Scene(str(examples / "knot.obj"))
+    settings = dict(width=160, height=120, ground=True)
+    plain = scene.render(**settings).astype(int)
+    occluded = scene.render(ao=16, **settings).astype(int)
+    assert (occluded[..., :3] - plain[..., :3]).max() <= 1
+    darker = (plain[..., :3] - occluded[..., :3]).max(axis=-1) >= 2
+    assert darker.mean() > 0.02, darker.mean()
+    occlusion = scene.stats["ambientOcclusion"]
+    assert occlusion["rays"] == 16 * occlusion["pixels"] > 0
 
 
 def test_linear_returns_the_renderers_floats(examples):

@@ -229,6 +229,36 @@ TEST(AccuracySweep, CoversTheKnobsThatApplyAroundTheBalancedPreset) {
     for (const std::string& a : v.back().args) EXPECT_NE(a, "--shadows");  // no shadow knob for voxels
 }
 
+TEST(AccuracySweep, AmbientOcclusionIsSweptInEverySettingWhenAsked) {
+    SceneTraits threeD;
+    threeD.threeD = threeD.shadowed = true;
+    for (const AccuracySetting& s : accuracySweep(threeD, false))
+        EXPECT_EQ(std::find(s.args.begin(), s.args.end(), "--ao"), s.args.end()) << s.knob << " " << s.value;
+    const std::vector<AccuracySetting> sweep = accuracySweep(threeD, false, 8);
+    std::vector<std::string> rays;
+    for (const AccuracySetting& s : sweep) {
+        if (s.knob == "defaults") continue;  // what render does with no option: no occlusion
+        const auto ao = std::find(s.args.begin(), s.args.end(), "--ao");
+        ASSERT_NE(ao, s.args.end()) << s.knob << " " << s.value;
+        ASSERT_NE(ao + 1, s.args.end());
+        if (s.knob == "ambient occlusion rays") {
+            rays.push_back(ao[1]);
+            EXPECT_EQ(ao[1], s.value);
+        } else if (s.knob == "ground truth" || (s.knob == "preset" && s.value == "exact")) {
+            EXPECT_EQ(ao[1], std::to_string(kTruthOcclusionRays)) << s.knob;
+        } else if (s.knob == "preset" && s.value == "fast") {
+            EXPECT_EQ(ao[1], "1");
+        } else {
+            EXPECT_EQ(ao[1], "8") << s.knob << " " << s.value << ": the balanced preset's rays";
+        }
+    }
+    EXPECT_EQ(rays, (std::vector<std::string>{"1", "4", "16", "64"}));
+    SceneTraits voxel;
+    voxel.voxel = true;
+    for (const AccuracySetting& s : accuracySweep(voxel, false, 8))
+        EXPECT_EQ(std::find(s.args.begin(), s.args.end(), "--ao"), s.args.end()) << "voxel models take no --ao";
+}
+
 TEST(AccuracyProbe, FindsTexturesAndShadowCastingLightsInTheDemoScene) {
     const fs::path dir = tempDir("probe");
     AccuracyOptions o;

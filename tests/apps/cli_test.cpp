@@ -517,6 +517,9 @@ TEST_F(Cli, ShadowOptionsAreCheckedWithExitTwoAndNothingWritten) {
         {"render " + obj.string() + " --shadows map --light-radius -1", "--light-radius"},
         {"render " + obj.string() + " --view shadow-pixels", "--view shadow-pixels"},
         {"render " + tri.string() + " --shadows hybrid", "--shadows"},
+        {"render " + obj.string() + " --ao -1", "--ao"},
+        {"render " + obj.string() + " --ao 4 --ao-distance -1", "--ao-distance"},
+        {"render " + tri.string() + " --ao 4", "--ao: only for 3D scenes"},
     };
     expectRefusedWithoutOutput(cases, out);
 }

@@ -19,20 +19,9 @@
 namespace cuberille::rt {
 namespace {
 
+using testing::addBox;
+using testing::append;
 using testing::OwnedMesh;
-
-void addBox(OwnedMesh& m, glm::vec3 lo, glm::vec3 hi) {
-    const uint32_t b = uint32_t(m.positions.size());
-    for (int c = 0; c < 8; ++c) m.positions.push_back({(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z});
-    const uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& f : faces) m.indices.insert(m.indices.end(), {b + f[0], b + f[1], b + f[2], b + f[0], b + f[2], b + f[3]});
-}
-
-void append(OwnedMesh& m, const OwnedMesh& other) {
-    const uint32_t b = uint32_t(m.positions.size());
-    m.positions.insert(m.positions.end(), other.positions.begin(), other.positions.end());
-    for (uint32_t i : other.indices) m.indices.push_back(b + i);
-}
 
 /// A ground plane with a floating box, a thin pole and a sphere: hard edges, a thin caster and a
 /// curved receiver and caster.
