@@ -111,7 +111,6 @@ void forEachRayFromSurface(const TriangleMeshView& m, uint32_t seed, int count, 
     }
 }
 
-/// A closed UV sphere of radius r around c.
 /// An axis-aligned box's twelve triangles, appended to m.
 inline void addBox(OwnedMesh& m, glm::vec3 lo, glm::vec3 hi) {
     const uint32_t b = uint32_t(m.positions.size());
@@ -126,6 +125,7 @@ inline void append(OwnedMesh& m, const OwnedMesh& other) {
     for (uint32_t i : other.indices) m.indices.push_back(b + i);
 }
 
+/// A closed UV sphere of radius r around c.
 inline OwnedMesh uvSphere(int rings, int segments, glm::vec3 c = glm::vec3(0.0f), float r = 1.0f) {
     OwnedMesh m;
     m.positions.push_back(c + glm::vec3(0, 0, r));
