@@ -55,7 +55,7 @@ pipeline-docs: build
 # process each, JOBS at a time (serially in one process they took half as long again). The
 # instruction-set comparison is left out: it draws on the same threads as the thread-count tests, once
 # per instruction set, and took 229 s under TSan, the longest of the subset.
-TSAN_TESTS := ^(Determinism\.SameImage(For|Across).*|.*\.SameVoxelsForAnyThreadCount|Simplify\.SerialAndParallelGiveIdenticalPyramids|VoxelDeterminism\..*|BlockLoader\..*|BlockPool\..*|Streaming\..*|LazyRefit\..*|BvhBuild\.SameTreeForAnyThreadCount|BvhRefit\.SameBoxesAndDegradationForAnyThreadCount|WideBvh\.TheSameTreeAtAnyThreadCount|Shadows\.SameMasksForAnyThreadCount)$$
+TSAN_TESTS := ^(Determinism\.SameImage(For|Across).*|.*\.SameVoxelsForAnyThreadCount|Simplify\.SerialAndParallelGiveIdenticalPyramids|VoxelDeterminism\..*|BlockLoader\..*|BlockPool\..*|Streaming\..*|LazyRefit\..*|BvhBuild\.SameTreeForAnyThreadCount|BvhRefit\.SameBoxesAndDegradationForAnyThreadCount|WideBvh\.TheSameTreeAtAnyThreadCount|Shadows\.SameMasksForAnyThreadCount|AmbientOcclusion\.TheSameMaskAtAnyThreadCount)$$
 sanitize: asan tsan
 
 # The suites' environment under ASan (clang's and GCC's): clang 14's and GCC 12's runtimes take a
