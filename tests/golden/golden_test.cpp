@@ -105,7 +105,7 @@ TEST(Golden, TriSceneAt4Samples) { compareWithGolden("tri_msaa4", renderTri(gold
 TEST(Golden, TriSceneAt16Samples) { compareWithGolden("tri_msaa16", renderTri(goldenTriScene(), 16, false)); }
 TEST(Golden, TriSceneTilesView) { compareWithGolden("tri_tiles", renderTri(goldenTriScene(), 4, true)); }
 
-raster::Image renderField(int msaa, apps::View view) {
+raster::Image renderField(int msaa, apps::View view, int occlusionRays = 0) {
     apps::RenderOptions o;
     o.scene = "field";
     o.width = 160;
@@ -113,11 +113,18 @@ raster::Image renderField(int msaa, apps::View view) {
     o.msaa = msaa;
     o.detail = 0.1f;
     o.view = view;
+    o.ambientOcclusion.raysPerPixel = occlusionRays;
     return apps::renderScene(o).image;
 }
 
 TEST(Golden, FieldSceneLambertAt4Samples) {
     compareWithGolden("field_msaa4", renderField(4, apps::View::Color));
+}
+// Ambient occlusion by rays (rt/ambient_occlusion.h) darkening the field's ambient light between
+// its spheres, tori and ground: the estimator's directions, per-pixel turn and offset are in
+// these bits.
+TEST(Golden, FieldSceneWithAmbientOcclusion) {
+    compareWithGolden("field_ao8", renderField(4, apps::View::Color, 8));
 }
 // The depth view's distances along the view axis (world units), alpha the coverage.
 TEST(Golden, FieldSceneDepthView) {
