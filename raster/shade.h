@@ -150,8 +150,7 @@ public:
         fusedLambert_ = kModel == ShadingModel::Lambert && state.lighting.lightCount == 1 && !environment_ &&
                         state.lighting.lights[0].type == LightType::Directional &&
                         state.lighting.lights[0].visibility == nullptr && state.lighting.ambientVisibility == nullptr &&
-                        layout.texCoord < 0 &&
-                        layout.alpha < 0 && !hasEmissive_;
+                        layout.texCoord < 0 && layout.alpha < 0 && !hasEmissive_;
     }
 
     void shade(const TriangleSetup& t, const float* v, ShadeQueue& q, StageCounters& counters) const {
