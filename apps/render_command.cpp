@@ -106,10 +106,10 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
                     (unsigned long long)c.counters.nodesVisited, c.cullMs, c.rebuilt ? "build" : "refit", c.buildMs,
                     c.degradation);
     }
-    if (r.shadows && r.shadows->occlusionRun) {
+    if (r.shadows && r.shadows->occlusion.raysPerPixel > 0) {
         const rt::AmbientOcclusionStats& ao = r.shadows->occlusion;
         std::printf("  ambient occlusion: %d rays a pixel within %g, %llu pixels, %llu rays; %.1f ms\n",
-                    r.shadows->occlusionRaysPerPixel, ao.distance, (unsigned long long)ao.pixels,
+                    ao.raysPerPixel, ao.distance, (unsigned long long)ao.pixels,
                     (unsigned long long)ao.rays, ao.ms);
     }
     if (r.shadows && r.shadows->mode != rt::ShadowMode::None) {

@@ -232,10 +232,9 @@ std::vector<rt::Ray> cameraRays(const Geometry& g, int size, int side) {
 /// about the normal facing the camera, turned per hit, reaching a tenth of the model's diagonal
 /// (the renderer's default), any hit: short rays that start on the surface, where most of the
 /// work is the nodes around their origin.
-void benchOcclusionRays(const Geometry& g, const rt::WideBvh& wide, const EmbreeScene& embree, const std::vector<rt::Ray>& camera,
-                        const std::vector<rt::RayHit>& hits, float offset, const std::string& name) {
-    rt::Aabb box;
-    for (const glm::vec3& p : g.positions) box.grow(p);
+void benchOcclusionRays(const Geometry& g, const rt::Aabb& box, const rt::WideBvh& wide, const EmbreeScene& embree,
+                        const std::vector<rt::Ray>& camera, const std::vector<rt::RayHit>& hits, float offset,
+                        const std::string& name) {
     const float distance = rt::kDefaultOcclusionDistanceOfBounds * glm::length(box.extent());
     const std::vector<glm::vec3> directions = rt::occlusionDirections(8);
     std::vector<rt::Ray> rays;
@@ -377,7 +376,7 @@ void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry
                 "%.2f, grid packets (a tile's hits) %.2f | wide BVH and packets unlike the BVH: %zu, %zu\n",
                 name.c_str(), shadowCount, bvhRate, wideRate, embreeRate, gridRate, double(shadowCount) / packetMs / 1000.0, wideDiffer,
                 differ);
-    benchOcclusionRays(g, wide, embree, single, reference, offset, name);
+    benchOcclusionRays(g, box, wide, embree, single, reference, offset, name);
 }
 
 void benchModel(RTCDevice device, const std::string& name) {

@@ -508,8 +508,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                         {"mapMs", st.mapMs},
                         {"maskMs", st.maskMs},
                         {"totalMs", sh.totalMs}};
-        if (sh.occlusionRun)
-            j["ambientOcclusion"] = {{"raysPerPixel", sh.occlusionRaysPerPixel},
+        if (sh.occlusion.raysPerPixel > 0)
+            j["ambientOcclusion"] = {{"raysPerPixel", sh.occlusion.raysPerPixel},
                                      {"distance", sh.occlusion.distance},
                                      {"pixels", sh.occlusion.pixels},
                                      {"rays", sh.occlusion.rays},

@@ -117,8 +117,6 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
                                    : rt::kDefaultOcclusionDistanceOfBounds * glm::length(bounds_.extent());
         rt::computeAmbientOcclusion(surfaces, *bvh_, distance, rt::surfaceRayOffset(bounds_), occlusion_, occlusionMask_,
                                     stats.occlusion);
-        stats.occlusionRun = true;
-        stats.occlusionRaysPerPixel = occlusion_.raysPerPixel;
         lighting.ambientVisibility = occlusionMask_.data();
     }
     return lighting;

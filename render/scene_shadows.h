@@ -37,9 +37,7 @@ struct ShadowFrameStats {
     /// per pose (at construction, reported with the first frame, and in each update()).
     double castersMs = 0.0;
     double surfacesMs = 0.0;  // the visibility buffer and surface reconstruction
-    bool occlusionRun = false;  // --ao: the ambient occlusion mask was found this frame
-    int occlusionRaysPerPixel = 0;
-    rt::AmbientOcclusionStats occlusion;  // its rays and time (in totalMs too)
+    rt::AmbientOcclusionStats occlusion;  // --ao: its rays and time (in totalMs too); raysPerPixel 0: not run
     double totalMs = 0.0;     // the whole stage this frame; the BVH build (at construction) is not in it
 };
 

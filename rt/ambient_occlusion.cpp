@@ -12,6 +12,7 @@ void computeAmbientOcclusion(const ScreenSurfaces& surfaces, const DeformingBvh&
                              AmbientOcclusionStats& stats) {
     const double t0 = raster::nowMs();
     stats = {};
+    stats.raysPerPixel = options.raysPerPixel;
     stats.distance = distance;
     mask.assign(size_t(surfaces.width) * surfaces.height, 1.0f);
     const std::vector<glm::vec3> directions = occlusionDirections(options.raysPerPixel);

@@ -44,6 +44,7 @@ struct AmbientOcclusionOptions {
 inline constexpr float kDefaultOcclusionDistanceOfBounds = 0.1f;
 
 struct AmbientOcclusionStats {
+    int raysPerPixel = 0;     // 0: the stage did not run
     float distance = 0.0f;    // the reach used, world units
     uint64_t pixels = 0;      // pixels with a surface
     uint64_t rays = 0;
@@ -58,7 +59,8 @@ float occlusionTurnRadians(int x, int y);
 
 /// The share of `directions` (turned by `turnRadians` about the normal) along which `occluded`
 /// finds nothing within `distance` of the surface, each ray starting `rayOffset` off it along the
-/// normal. `occluded(ray)` answers one ray: the BVH's any hit, or brute force's in the tests.
+/// normal. `occluded(ray)` answers one ray: the BVH's any hit, or brute force's in the tests (bvh_bench
+/// records the rays through it).
 template <class Occluded>
 float openShare(const Surface& surface, const std::vector<glm::vec3>& directions, float turnRadians, float distance,
                 float rayOffset, Occluded&& occluded);

@@ -142,7 +142,6 @@ int pyramidLevels(int size) {
     return levels;
 }
 
-
 // ---- one light's shadow stage ------------------------------------------------------------
 
 class LightShadows {
