@@ -4,7 +4,7 @@
 
 namespace cuberille::rt {
 
-WatertightRay::WatertightRay(const Ray& ray) : origin(ray.origin) {
+WatertightRay::WatertightRay(const Ray& ray) : origin(ray.origin), box(ray) {
     const glm::vec3 d = glm::abs(ray.direction);
     kz = d.x >= d.y && d.x >= d.z ? 0 : (d.y >= d.z ? 1 : 2);
     kx = (kz + 1) % 3;

@@ -78,10 +78,19 @@ struct RayBoxTest {
 /// origin, permute so the largest direction component is z, shear so the ray is the +z axis.
 /// Every triangle edge is then a 2D cross product of two sheared vertices, computed the same way
 /// for both triangles that share it, so a ray through an edge or vertex cannot slip between them.
+///
+/// A hit also needs the ray to meet the triangle's own bounding box, and its t is raised to where
+/// the ray enters that box (confirmInOwnBox): the watertight t is exact about *whether* the ray
+/// crosses the triangle, but its value carries a few ulps of the vertices' distance, which can
+/// round a hit just behind the origin (a ray leaving a flat face from within ulps of it, tMin 0)
+/// to +-0 or above. A traversal reaches a triangle only through boxes that contain its box, and
+/// the slab test is monotone in the bounds, so with the box in the definition every traversal
+/// (brute force, the BVHs, the grid's walk and packets) accepts exactly the same hits.
 struct WatertightRay {
     glm::vec3 origin;
     int kx, ky, kz;
     float shearX, shearY, shearZ;
+    RayBoxTest box;
 
     explicit WatertightRay(const Ray& ray);
 
@@ -107,10 +116,26 @@ struct WatertightRay {
         const float az = shearZ * A[kz], bz = shearZ * B[kz], cz = shearZ * C[kz];
         const float t = (u * az + v * bz + w * cz) / det;
         if (!(t >= tMin && t <= tMax)) return false;
-        hit->t = t;
+        float tInBox = t;
+        if (!confirmInOwnBox(a, b, c, tMin, tMax, tInBox)) [[unlikely]]
+            return false;
+        hit->t = tInBox;
         hit->u = v / det;
         hit->v = w / det;
         return true;
+    }
+
+    /// The second half of a hit's definition, for a t the watertight test found in [tMin, tMax]:
+    /// the ray meets the triangle's bounding box at or after tMin, and t becomes at least that
+    /// box's entry (at most ulps of a change) and still no more than tMax. The wide BVH's lanes
+    /// call it for each lane they hit. Only hits pay for it, not every triangle tested.
+    bool confirmInOwnBox(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, float tMin, float tMax, float& t) const {
+        float entry = 0.0f;
+        if (!box.hits(glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c)), tMin, std::numeric_limits<float>::infinity(),
+                      &entry))
+            return false;
+        t = entry > t ? entry : t;
+        return t <= tMax;
     }
 
     /// The edge weights u, v, w recomputed in double and rounded once.

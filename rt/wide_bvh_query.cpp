@@ -170,6 +170,11 @@ RayHit traverse(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters)
                     const int i = __builtin_ctz(hits);
                     RayHit candidate;
                     candidate.t = t[i], candidate.u = u[i], candidate.v = v[i], candidate.triangle = group.triangle[i];
+                    const glm::vec3 a(group.a[0][i], group.a[1][i], group.a[2][i]);
+                    const glm::vec3 b(group.b[0][i], group.b[1][i], group.b[2][i]);
+                    const glm::vec3 c(group.c[0][i], group.c[1][i], group.c[2][i]);
+                    if (!triangleTest.confirmInOwnBox(a, b, c, ray.tMin, best.t, candidate.t)) [[unlikely]]
+                        continue;
                     if (kAnyHit) return candidate;
                     if (candidate.closerThan(best.t, best.triangle)) best = candidate;
                 }

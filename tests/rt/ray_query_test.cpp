@@ -58,6 +58,17 @@ TEST(RayQuery, OriginsOnSurfacesEqualBruteForce) {
     testing::forEachRayFromSurface(sphere.view(), 9, 3000, [&](const Ray& ray) { expectSameAsBruteForce(bvh, sphere.view(), ray); });
 }
 
+TEST(RayQuery, RaysLeavingFromUlpsOffASurfaceEqualBruteForce) {
+    // The lattice's faces are axis-aligned, so a triangle's box is flat across its plane and a
+    // ray leaving from a few ulps outside it exits the box before t = 0.
+    for (const OwnedMesh& mesh : {testing::cubeLattice(4), testing::uvSphere(24, 48, glm::vec3(37.0f, -11.0f, 5.0f), 3.0f)})
+        for (const BvhBuildMethod method : kMethods) {
+            const Bvh bvh = buildBvh(mesh.view(), {.method = method});
+            testing::forEachRayLeavingNearASurface(mesh.view(), 17, 20000, 3,
+                                                   [&](const Ray& ray) { expectSameAsBruteForce(bvh, mesh.view(), ray); });
+        }
+}
+
 TEST(RayQuery, NoRayEscapesAClosedMeshThroughAnEdgeOrVertex) {
     // From points inside a closed sphere, rays aimed exactly at vertices and edge midpoints must
     // hit: a non-watertight test lets some through the cracks between neighbouring triangles.

@@ -111,6 +111,34 @@ void forEachRayFromSurface(const TriangleMeshView& m, uint32_t seed, int count, 
     }
 }
 
+/// Rays that leave a surface from within a few ulps of it, on either side, with tMin 0: what an
+/// occlusion or shadow ray started without its offset is. The origin is a point of a triangle
+/// with each coordinate moved up to `ulps` representable floats either way, the direction a
+/// random one on the side of the triangle's plane it leaves by (about its normal, and grazing).
+/// For such a ray the watertight test may round its own triangle's t, a few ulps below zero, to
+/// +-0 or a few ulps above: the case where the hit's definition must hold for every traversal.
+template <class F>
+void forEachRayLeavingNearASurface(const TriangleMeshView& m, uint32_t seed, int count, int ulps, F&& f) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), weight(0.0f, 1.0f);
+    std::uniform_int_distribution<int> steps(-ulps, ulps);
+    for (int i = 0; i < count; ++i) {
+        const uint32_t t = uint32_t(rng() % m.triangleCount());
+        float a = weight(rng), b = weight(rng);
+        if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
+        const glm::vec3 e1 = m.vertex(t, 1) - m.vertex(t, 0), e2 = m.vertex(t, 2) - m.vertex(t, 0);
+        glm::vec3 p = m.vertex(t, 0) + a * e1 + b * e2;
+        for (int axis = 0; axis < 3; ++axis)
+            for (int s = steps(rng); s != 0; s += s > 0 ? -1 : 1)
+                p[axis] = std::nextafter(p[axis], s > 0 ? INFINITY : -INFINITY);
+        const glm::vec3 n = glm::normalize(glm::cross(e1, e2)) * (rng() % 2 ? 1.0f : -1.0f);
+        glm::vec3 d(unit(rng), unit(rng), unit(rng));
+        d += n * (i % 4 == 0 ? 0.05f : 1.0f);  // a quarter of them grazing
+        if (glm::dot(d, n) < 0.0f) d -= 2.0f * glm::dot(d, n) * n;
+        f(Ray{p, d, 0.0f});
+    }
+}
+
 /// An axis-aligned box's twelve triangles, appended to m.
 inline void addBox(OwnedMesh& m, glm::vec3 lo, glm::vec3 hi) {
     const uint32_t b = uint32_t(m.positions.size());

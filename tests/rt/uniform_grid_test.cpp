@@ -100,6 +100,25 @@ TEST(UniformGrid, OriginsOnSurfacesEqualBruteForce) {
     testing::forEachRayFromSurface(sphere.view(), 9, 3000, [&](const Ray& ray) { expectSameAsBruteForce(grid, sphere.view(), ray); });
 }
 
+TEST(UniformGrid, RaysLeavingFromUlpsOffASurfaceEqualBruteForce) {
+    std::mt19937 rng(18);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    for (const OwnedMesh& mesh : {testing::cubeLattice(4), testing::uvSphere(24, 48, glm::vec3(37.0f, -11.0f, 5.0f), 3.0f)}) {
+        const UniformGrid grid = buildUniformGrid(mesh.view());
+        int rays = 0;
+        testing::forEachRayLeavingNearASurface(mesh.view(), 17, 20000, 3, [&](const Ray& ray) {
+            expectSameAsBruteForce(grid, mesh.view(), ray);
+            if (rays++ % 16 != 0) return;
+            // A coherent packet from the same origin, as an occlusion pixel's rays are: 16
+            // directions within a narrow cone about this one, traced through the frustum path.
+            std::vector<Ray> packet;
+            for (int k = 0; k < 16; ++k)
+                packet.push_back(Ray{ray.origin, ray.direction + 0.1f * glm::vec3(unit(rng), unit(rng), unit(rng)), 0.0f});
+            expectPacketsMatchBruteForce(grid, mesh.view(), packet);
+        });
+    }
+}
+
 // Packets (Wald et al. §2) give each ray exactly brute force's closest hit and any hit: camera packets of 8x8 and 4x4
 // rays from a common eye (the pixels of a small image, some rays missing the scene), shadow packets
 // from points on the surface toward one light, segments, and incoherent packets (random

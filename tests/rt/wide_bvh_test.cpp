@@ -142,6 +142,14 @@ TEST(WideBvh, OriginsOnSurfacesEqualBruteForce) {
     testing::forEachRayFromSurface(sphere.view(), 9, 3000, [&](const Ray& ray) { expectSameAsBruteForce(bvh, sphere.view(), ray); });
 }
 
+TEST(WideBvh, RaysLeavingFromUlpsOffASurfaceEqualBruteForce) {
+    for (const OwnedMesh& mesh : {testing::cubeLattice(4), testing::uvSphere(24, 48, glm::vec3(37.0f, -11.0f, 5.0f), 3.0f)}) {
+        const WideBvh bvh = collapseToWideBvh(buildBvh(mesh.view()));
+        testing::forEachRayLeavingNearASurface(mesh.view(), 17, 20000, 3,
+                                               [&](const Ray& ray) { expectSameAsBruteForce(bvh, mesh.view(), ray); });
+    }
+}
+
 TEST(WideBvh, RaysAtTheEdgesAndVerticesOfAClosedMeshEqualBruteForce) {
     // Aimed at shared vertices and edge midpoints with coordinates that are not integers: edge
     // weights round to exactly zero in float where they are not zero, and the lanes must then
