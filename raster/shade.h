@@ -196,6 +196,7 @@ public:
 
 private:
     static constexpr int N = ShadeQueue::kCapacity;
+    static_assert(N <= SampleFootprints::kMaxPoints, "a queue's texture footprints are planned in one SampleFootprints");
 
     /// Per-pixel values of the queue, structure-of-arrays.
     struct PixelAttributes {
@@ -219,6 +220,9 @@ private:
             int width = 0, height = 0;  // 0: none fetched yet (a texture is at least 1x1)
             UvTransform transform;
             float u[N], v[N], lod[N];
+            // Where those coordinates sample the last 8-bit texture layout planned: the
+            // material's textures of one size, wraps and filter gather from the same places.
+            SampleFootprints footprints;
         } fetched;
     };
 
@@ -312,8 +316,9 @@ private:
             }
             for (int i = 0; i < count; ++i) c.lod[i] = Texture::levelOfFootprint(c.lod[i]);  // log2: a call per pixel
             c.width = t.width(), c.height = t.height(), c.transform = b.transform;
+            c.footprints.clear();
         }
-        t.sampleBatch(count, c.u, c.v, c.lod, {out.r, out.g, out.b, out.a});
+        t.sampleBatch(count, c.u, c.v, c.lod, {out.r, out.g, out.b, out.a}, c.footprints);
     }
 
     void applyBaseColorTexture(int count, PixelAttributes& a, StageCounters& counters) const {

@@ -220,6 +220,19 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(
     return glm::mix(top, bottom, f.ay);
 }
 
+void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out,
+                          SampleFootprints& shared) const {
+    if (format_ == TexelFormat::LinearFloat || count > SampleFootprints::kMaxPoints) return sampleBatch(count, u, v, lod, out);
+    const TexelPyramid pyramid{packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,
+                               filter_, levels_.width, levels_.height, levels_.offset, levels_.tileRowStride};
+    const SampleFootprints::Layout layout{width(), height(), wrapU_, wrapV_, filter_};
+    if (!(shared.layout == layout && shared.count == count)) {
+        planSampleFootprints(pyramid, count, u, v, lod, shared);
+        shared.layout = layout;
+    }
+    sampleFootprints(pyramid, shared, out);
+}
+
 void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out) const {
     if (format_ != TexelFormat::LinearFloat) {
         const TexelPyramid pyramid{packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,

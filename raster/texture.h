@@ -60,6 +60,35 @@ struct TextureFilter {
     MinFilter minify = MinFilter::LinearMipmapLinear;
 };
 
+/// Where a batch of points samples an 8-bit texture: per point, the levels, weights and the four
+/// texel places of each level's footprint (raster/texture_lanes.h plans them). They depend only
+/// on the texture's layout — its size (which fixes every level's size and place), wraps and
+/// filter — and on the points, so the textures of a material that share one layout and one set of
+/// texture coordinates (DamagedHelmet binds five 2048x2048 maps to one UV set) are planned once
+/// and each only gathers and filters its own texels. The caller owns it and clears it whenever
+/// the points change.
+struct SampleFootprints {
+    static constexpr int kMaxPoints = 64;
+    struct Layout {
+        int width = 0, height = 0;  // 0: nothing planned
+        WrapMode wrapU = WrapMode::Repeat, wrapV = WrapMode::Repeat;
+        TextureFilter filter;
+        bool operator==(const Layout& o) const {
+            return width == o.width && height == o.height && wrapU == o.wrapU && wrapV == o.wrapV &&
+                   filter.magnifyNearest == o.filter.magnifyNearest && filter.minify == o.filter.minify;
+        }
+    } layout;
+    int count = 0;
+    // Per point: the first and second level's footprints (as Texture::BilinearFootprint), the
+    // weight between them, and the lanes' masks as 0 / -1.
+    alignas(64) int32_t index[2][4][kMaxPoints];
+    alignas(64) float ax[2][kMaxPoints], ay[2][kMaxPoints];
+    alignas(64) float weight[kMaxPoints];
+    alignas(64) int32_t nearest[kMaxPoints], mixLevels[kMaxPoints];
+
+    void clear() { layout.width = 0; }
+};
+
 class Texture {
 public:
     /// `rgba` is width x height linear RGBA, row-major, top row first.
@@ -107,6 +136,10 @@ public:
     /// every point's texel addresses found before the texels are read, so the cache misses of
     /// many points overlap instead of each waiting behind the last.
     void sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out) const;
+    /// The same, for at most SampleFootprints::kMaxPoints points, with the footprints kept in
+    /// `shared`: planned there unless it already holds these points' plan for this texture's
+    /// layout (an 8-bit texture of the same size, wraps and filter). Float textures ignore it.
+    void sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out, SampleFootprints& shared) const;
     glm::vec4 sampleNearest(int level, glm::vec2 uv) const;
     glm::vec4 sampleBilinear(int level, glm::vec2 uv) const;
     /// lod <= 0 samples level 0; fractional lods blend the two nearest levels.

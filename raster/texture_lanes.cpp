@@ -245,7 +245,90 @@ HWY_INLINE Texel bilinear(const TexelPyramid& t, const Footprint& f) {
     return {channel(&Texel::r), channel(&Texel::g), channel(&Texel::b), channel(&Texel::a)};
 }
 
+/// Planning for SampleFootprints: one vector of points' plan and footprints, stored at point i.
+HWY_INLINE void storeFootprint(const Footprint& f, SampleFootprints& out, int tap, int i) {
+    const DF df;
+    const DI di;
+    for (int k = 0; k < 4; ++k) hn::Store(f.index[k], di, out.index[tap][k] + i);
+    hn::Store(f.ax, df, out.ax[tap] + i), hn::Store(f.ay, df, out.ay[tap] + i);
+}
+
+HWY_INLINE void planVector(const TexelPyramid& t, VF u, VF v, VF lod, SampleFootprints& out, int i) {
+    const DF df;
+    const DI di;
+    const LanePlan p = plan(t, lod);
+    hn::Store(hn::VecFromMask(di, hn::RebindMask(di, p.nearest)), di, out.nearest + i);
+    hn::Store(hn::VecFromMask(di, hn::RebindMask(di, p.mixLevels)), di, out.mixLevels + i);
+    hn::Store(p.weight, df, out.weight + i);
+    storeFootprint(footprint(t, p.first, p.nearest, u, v), out, 0, i);
+    if (!hn::AllFalse(df, p.mixLevels)) storeFootprint(footprint(t, p.second, p.nearest, u, v), out, 1, i);
+}
+
+/// tap() on a stored footprint.
+HWY_INLINE Texel storedTap(const TexelPyramid& t, const SampleFootprints& f, int tap, int i, MF nearest) {
+    const DF df;
+    const DI di;
+    if (hn::AllTrue(df, nearest)) return texelsAt(t, hn::Load(di, f.index[tap][0] + i));
+    const Footprint footprint{{hn::Load(di, f.index[tap][0] + i), hn::Load(di, f.index[tap][1] + i), hn::Load(di, f.index[tap][2] + i),
+                               hn::Load(di, f.index[tap][3] + i)},
+                              hn::Load(df, f.ax[tap] + i),
+                              hn::Load(df, f.ay[tap] + i)};
+    return bilinear(t, footprint);
+}
+
+/// sample() on stored footprints: the same blends of the same texels.
+HWY_INLINE Texel sampleStored(const TexelPyramid& t, const SampleFootprints& f, int i) {
+    const DF df;
+    const DI di;
+    const MF nearest = hn::RebindMask(df, hn::Ne(hn::Load(di, f.nearest + i), hn::Zero(di)));
+    const MF mixLevels = hn::RebindMask(df, hn::Ne(hn::Load(di, f.mixLevels + i), hn::Zero(di)));
+    const Texel first = storedTap(t, f, 0, i, nearest);
+    if (hn::AllFalse(df, mixLevels)) return first;
+    const Texel second = storedTap(t, f, 1, i, nearest);
+    const VF weight = hn::Load(df, f.weight + i);
+    return {hn::IfThenElse(mixLevels, mix(first.r, second.r, weight), first.r),
+            hn::IfThenElse(mixLevels, mix(first.g, second.g, weight), first.g),
+            hn::IfThenElse(mixLevels, mix(first.b, second.b, weight), first.b),
+            hn::IfThenElse(mixLevels, mix(first.a, second.a, weight), first.a)};
+}
+
 }  // namespace
+
+void planSampleFootprintsOnTarget(const TexelPyramid& t, int count, const float* u, const float* v, const float* lod,
+                                  SampleFootprints& out) {
+    const DF df;
+    const int lanes = int(hn::Lanes(df));
+    out.count = count;
+    int i = 0;
+    for (; i + lanes <= count; i += lanes) planVector(t, hn::LoadU(df, u + i), hn::LoadU(df, v + i), hn::LoadU(df, lod + i), out, i);
+    if (i == count) return;
+    // The last points, padded to a whole vector with the point (0, 0) at level 0 (kMaxPoints is
+    // a multiple of every target's lanes, so the padding fits).
+    constexpr int kMaxLanes = HWY_MAX_BYTES / sizeof(float);
+    alignas(64) float uTail[kMaxLanes] = {}, vTail[kMaxLanes] = {}, lodTail[kMaxLanes] = {};
+    const int rest = count - i;
+    std::copy_n(u + i, rest, uTail), std::copy_n(v + i, rest, vTail), std::copy_n(lod + i, rest, lodTail);
+    planVector(t, hn::Load(df, uTail), hn::Load(df, vTail), hn::Load(df, lodTail), out, i);
+}
+
+void sampleFootprintsOnTarget(const TexelPyramid& t, const SampleFootprints& f, Texture::Channels out) {
+    const DF df;
+    const int lanes = int(hn::Lanes(df));
+    int i = 0;
+    for (; i + lanes <= f.count; i += lanes) {
+        const Texel s = sampleStored(t, f, i);
+        hn::StoreU(s.r, df, out.r + i), hn::StoreU(s.g, df, out.g + i);
+        hn::StoreU(s.b, df, out.b + i), hn::StoreU(s.a, df, out.a + i);
+    }
+    if (i == f.count) return;
+    constexpr int kMaxLanes = HWY_MAX_BYTES / sizeof(float);
+    alignas(64) float tail[4][kMaxLanes];
+    const int rest = f.count - i;
+    const Texel s = sampleStored(t, f, i);
+    hn::Store(s.r, df, tail[0]), hn::Store(s.g, df, tail[1]), hn::Store(s.b, df, tail[2]), hn::Store(s.a, df, tail[3]);
+    std::copy_n(tail[0], rest, out.r + i), std::copy_n(tail[1], rest, out.g + i);
+    std::copy_n(tail[2], rest, out.b + i), std::copy_n(tail[3], rest, out.a + i);
+}
 
 void sampleLanesOnTarget(const TexelPyramid& t, int count, const float* u, const float* v, const float* lod,
                          Texture::Channels out) {
@@ -278,6 +361,17 @@ HWY_AFTER_NAMESPACE();
 namespace cuberille::raster {
 
 HWY_EXPORT(sampleLanesOnTarget);
+HWY_EXPORT(planSampleFootprintsOnTarget);
+HWY_EXPORT(sampleFootprintsOnTarget);
+
+void planSampleFootprints(const TexelPyramid& layout, int count, const float* u, const float* v, const float* lod,
+                          SampleFootprints& out) {
+    HWY_DYNAMIC_DISPATCH(planSampleFootprintsOnTarget)(layout, count, u, v, lod, out);
+}
+
+void sampleFootprints(const TexelPyramid& texture, const SampleFootprints& footprints, Texture::Channels out) {
+    HWY_DYNAMIC_DISPATCH(sampleFootprintsOnTarget)(texture, footprints, out);
+}
 
 void sampleLanes(const TexelPyramid& texture, int count, const float* u, const float* v, const float* lod,
                  Texture::Channels out) {

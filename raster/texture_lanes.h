@@ -47,4 +47,12 @@ struct TexelPyramid {
 void sampleLanes(const TexelPyramid& texture, int count, const float* u, const float* v, const float* lod,
                  Texture::Channels out);
 
+/// sampleLanes in two halves, for textures that share a layout (SampleFootprints): plan the
+/// footprints of `count` (at most SampleFootprints::kMaxPoints) points on `layout`'s levels, wraps
+/// and filter; then gather and filter any such texture's texels at them. The same bits as
+/// sampleLanes: the same operations, their intermediate values kept in memory in between.
+void planSampleFootprints(const TexelPyramid& layout, int count, const float* u, const float* v, const float* lod,
+                          SampleFootprints& out);
+void sampleFootprints(const TexelPyramid& texture, const SampleFootprints& footprints, Texture::Channels out);
+
 }  // namespace cuberille::raster

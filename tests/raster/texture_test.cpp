@@ -207,6 +207,53 @@ TEST(Texture, BatchSamplingIsSampleBitForBitUnderEveryFilter) {
     }
 }
 
+// A material's textures of one layout share their footprints (SampleFootprints): each texture
+// sampled through a shared plan gets exactly its own sample() values, bit for bit, whether the
+// plan was made for it, reused from another texture of that layout (other texels, other 8-bit
+// format), or made again because the layout changed (another size, other wraps, another filter).
+TEST(Texture, SharedFootprintsGiveEachTextureOfTheLayoutItsOwnSamplesBitForBit) {
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<float> coordinate(-2.5f, 3.5f), level(-2.0f, 9.0f);
+    constexpr int kPoints = raster::SampleFootprints::kMaxPoints;
+    const auto randomBytes = [&](glm::ivec2 size) {
+        std::vector<uint8_t> bytes(size_t(size.x) * size.y * 4);
+        for (uint8_t& b : bytes) b = uint8_t(rng() & 0xFF);
+        return bytes;
+    };
+    const glm::ivec2 size(37, 20);
+    std::vector<Texture> textures;
+    for (const raster::MinFilter minify : {raster::MinFilter::LinearMipmapLinear, raster::MinFilter::NearestMipmapLinear})
+        for (const WrapMode wrap : {WrapMode::Repeat, WrapMode::MirroredRepeat}) {
+            // Two textures of each layout, one of each 8-bit format, so the second reuses the plan.
+            for (const raster::TexelFormat format : {raster::TexelFormat::Srgb8, raster::TexelFormat::Unorm8}) {
+                textures.emplace_back(size.x, size.y, randomBytes(size), format, wrap, WrapMode::ClampToEdge);
+                textures.back().setFilter({false, minify});
+            }
+        }
+    textures.emplace_back(16, 16, randomBytes({16, 16}), raster::TexelFormat::Unorm8);  // another size
+    for (const int count : {kPoints, 37}) {  // whole vectors, and a tail
+        float u[kPoints], v[kPoints], lod[kPoints];
+        for (int i = 0; i < count; ++i) u[i] = coordinate(rng), v[i] = coordinate(rng), lod[i] = level(rng);
+        raster::SampleFootprints shared;
+        int reused = 0;
+        for (const Texture& t : textures) {
+            const bool samePlan = shared.layout.width == t.width() && shared.layout.wrapU == t.wrapU() &&
+                                  shared.layout.filter.minify == t.filter().minify;
+            reused += samePlan;
+            float channels[4][kPoints];
+            t.sampleBatch(count, u, v, lod, {channels[0], channels[1], channels[2], channels[3]}, shared);
+            EXPECT_EQ(shared.layout.width, t.width());
+            for (int i = 0; i < count; ++i) {
+                const glm::vec4 one = t.sample({u[i], v[i]}, lod[i]);
+                for (int c = 0; c < 4; ++c)
+                    ASSERT_EQ(std::bit_cast<uint32_t>(channels[c][i]), std::bit_cast<uint32_t>(one[c]))
+                        << "point " << i << " of " << count << ", texture " << (&t - textures.data());
+            }
+        }
+        EXPECT_EQ(reused, 4) << "the second texture of each of the four layouts reuses the first's plan";
+    }
+}
+
 TEST(TexturedDraw, OneTexelPerPixelReproducesTheTexture) {
     constexpr int kSize = 32;
     const Texture t = ramp(kSize, kSize, WrapMode::ClampToEdge, WrapMode::ClampToEdge);
