@@ -107,6 +107,14 @@ rt::BvhUpdateMethod parseBvhUpdate(const std::string& name) {
     throw scene::InputError("--bvh-update: '" + name + "' is not refit, lazy or rebuild");
 }
 
+rt::CasterAccel parseAccel(const std::string& name) {
+    if (name == "bvh") return rt::CasterAccel::Bvh;
+    if (name == "grid") return rt::CasterAccel::Grid;
+    throw scene::InputError("--accel: '" + name + "' is not bvh or grid");
+}
+
+const char* accelName(rt::CasterAccel accel) { return accel == rt::CasterAccel::Grid ? "grid" : "bvh"; }
+
 const char* textureFilterName(TextureFilterOverride f) {
     switch (f) {
         case TextureFilterOverride::File: return "file";

@@ -15,6 +15,7 @@
 
 #include "raster/framebuffer.h"
 #include "rt/ambient_occlusion.h"
+#include "rt/caster_rays.h"
 #include "rt/deforming_bvh.h"
 #include "rt/shadows.h"
 #include "scene/camera.h"
@@ -62,6 +63,9 @@ struct FrameSettings {
     /// so the model and its shadow sit on the page as a product shot's do.
     bool shadowCatcher = false;
     rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit;  // how BVHs follow a new pose
+    /// --accel: what answers the shadow stage's rays (shadows, ambient occlusion): the BVH, or a
+    /// uniform grid rebuilt for every pose (rt/caster_rays.h). The same images either way.
+    rt::CasterAccel accel = rt::CasterAccel::Bvh;
     int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)
     TextureFilterOverride textureFilter = TextureFilterOverride::File;
     raster::DepthConvention depth = raster::DepthConvention::Standard;  // --depth standard|reversed
@@ -111,5 +115,7 @@ TextureFilterOverride parseTextureFilter(const std::string& name);
 const char* textureFilterName(TextureFilterOverride filter);
 raster::DepthConvention parseDepthConvention(const std::string& name);
 rt::BvhUpdateMethod parseBvhUpdate(const std::string& name);
+rt::CasterAccel parseAccel(const std::string& name);  // bvh or grid; throws scene::InputError
+const char* accelName(rt::CasterAccel accel);
 
 }  // namespace cuberille::render

@@ -228,13 +228,14 @@ SceneShadows* LoadedScene::State::shadowsFor(const FrameSettings& f) {
     if (f.shadows.mode == rt::ShadowMode::None && f.ambientOcclusion.raysPerPixel == 0) return nullptr;
     const rt::ShadowOptions& o = f.shadows;
     const rt::AmbientOcclusionOptions& ao = f.ambientOcclusion;
-    const bool same = shadows && shadowsMethod == f.bvhUpdate && occlusionOptions.raysPerPixel == ao.raysPerPixel &&
+    const bool same = shadows && shadowsMethod == f.bvhUpdate && shadowsAccel == f.accel && occlusionOptions.raysPerPixel == ao.raysPerPixel &&
                       occlusionOptions.maxDistance == ao.maxDistance && shadowsOptions.mode == o.mode && shadowsOptions.soft == o.soft &&
                       shadowsOptions.lightRadius == o.lightRadius && shadowsOptions.mapSizeTexels == o.mapSizeTexels &&
                       shadowsOptions.softSamplesPerSide == o.softSamplesPerSide && shadowsOptions.focus == o.focus &&
                       shadowsOptions.sequenceFrames == o.sequenceFrames;
     if (!same) {
-        shadows.emplace(posed, o, f.bvhUpdate, ao);
+        shadows.emplace(posed, o, f.bvhUpdate, ao, f.accel);
+        shadowsAccel = f.accel;
         shadowsOptions = o;
         occlusionOptions = ao;
         shadowsMethod = f.bvhUpdate;

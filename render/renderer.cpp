@@ -497,6 +497,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                         {"mapsDrawn", st.mapsDrawn},
                         {"mapsKept", st.mapsKept},
                         {"thinTriangles", st.thinTriangles},
+                        {"accel", accelName(sh.accel)},
                         {"bvhBuildMs", sh.bvhBuildMs},
                         {"adjacencyMs", sh.adjacencyMs},
                         {"bvhUpdated", sh.bvhUpdated},

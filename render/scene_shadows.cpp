@@ -10,8 +10,8 @@
 namespace cuberille::render {
 
 SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& options, rt::BvhUpdateMethod bvhUpdate,
-                           const rt::AmbientOcclusionOptions& occlusion)
-    : options_(options), occlusion_(occlusion) {
+                           const rt::AmbientOcclusionOptions& occlusion, rt::CasterAccel accel)
+    : options_(options), occlusion_(occlusion), accel_(accel) {
     if (options.mode != rt::ShadowMode::None)
         for (int l = 0; l < s.lighting.lightCount; ++l) shadowed_ = shadowed_ || rt::castsShadows(s.lighting.lights[l]);
     if (!shadowed_ && occlusion.raysPerPixel == 0) return;
@@ -25,7 +25,10 @@ SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& optio
                       options_.mode == rt::ShadowMode::Auto;
     if ((shadowed_ && rays) || occlusion.raysPerPixel > 0) {
         t0 = raster::nowMs();
-        bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, bvhUpdate);
+        if (accel_ == rt::CasterAccel::Grid)
+            grid_ = rt::buildUniformGrid({positions_, indices_});
+        else
+            bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, bvhUpdate);
         pending_.bvhBuildMs = raster::nowMs() - t0;
     }
     if (shadowed_ && options_.mode == rt::ShadowMode::Hybrid) {
@@ -74,6 +77,10 @@ void SceneShadows::update(const scene::Scene& s) {
         pending_.bvhRebuilt = report.rebuilt;
         pending_.degradation = report.degradation;
     }
+    if (grid_) {
+        *grid_ = rt::buildUniformGrid({positions_, indices_});
+        pending_.bvhRebuilt = true;
+    }
     adjacencyFound_ = false;  // the last pose's
     if (shadowed_ && options_.mode == rt::ShadowMode::Hybrid) findAdjacency();
     pending_.bvhUpdateMs = raster::nowMs() - t1;
@@ -84,6 +91,7 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     stats.mode = options_.mode;
     stats.soft = options_.soft;
     stats.focus = options_.focus;
+    stats.accel = accel_;
     stats.casterTriangles = indices_.size() / 3;
     raster::Lighting lighting = s.lighting;
     if (!active_) return lighting;
@@ -95,7 +103,7 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     const rt::ScreenSurfaces& surfaces = visibility_.draw(standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
     stats.surfacesMs = raster::nowMs() - t0;
     const rt::ShadowCasters shadowCasters{.mesh = casters,
-                                          .bvh = bvh_ ? &*bvh_ : nullptr,
+                                          .rays = {.bvh = bvh_ ? &*bvh_ : nullptr, .grid = grid_ ? &*grid_ : nullptr, .mesh = casters},
                                           .bounds = bounds_,
                                           .adjacency = adjacencyFound_ ? &adjacency_ : nullptr,
                                           .version = castersVersion_,
@@ -115,7 +123,7 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
         const float distance = occlusion_.maxDistance > 0.0f
                                    ? occlusion_.maxDistance
                                    : rt::kDefaultOcclusionDistanceOfBounds * glm::length(bounds_.extent());
-        rt::computeAmbientOcclusion(surfaces, *bvh_, distance, rt::surfaceRayOffset(bounds_), occlusion_, occlusionMask_,
+        rt::computeAmbientOcclusion(surfaces, shadowCasters.rays, distance, rt::surfaceRayOffset(bounds_), occlusion_, occlusionMask_,
                                     stats.occlusion);
         lighting.ambientVisibility = occlusionMask_.data();
     }

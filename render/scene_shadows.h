@@ -38,6 +38,9 @@ struct ShadowFrameStats {
     double castersMs = 0.0;
     double surfacesMs = 0.0;  // the visibility buffer and surface reconstruction
     rt::AmbientOcclusionStats occlusion;  // --ao: its rays and time (in totalMs too); raysPerPixel 0: not run
+    /// What answered the rays; the bvh* fields above then describe the grid (built at
+    /// construction, and built again, never refitted, for every pose: bvhRebuilt).
+    rt::CasterAccel accel = rt::CasterAccel::Bvh;
     double totalMs = 0.0;     // the whole stage this frame; the BVH build (at construction) is not in it
 };
 
@@ -46,10 +49,11 @@ public:
     /// `bvhUpdate`: how update() makes the casters' hierarchy follow each new pose
     /// (rt/deforming_bvh.h); with Lazy the shadow rays refresh the lower boxes they reach.
     /// `occlusion`: ambient occlusion by rays from the same surfaces through the same BVH, with
-    /// or without shadows.
+    /// or without shadows. `accel`: Grid answers the rays with a uniform grid built for each
+    /// pose instead of the BVH (rt/caster_rays.h): the same masks, another cost.
     SceneShadows(const scene::Scene& scene, const rt::ShadowOptions& options,
                  rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit,
-                 const rt::AmbientOcclusionOptions& occlusion = {});
+                 const rt::AmbientOcclusionOptions& occlusion = {}, rt::CasterAccel accel = rt::CasterAccel::Bvh);
 
     /// Whether the stage runs at all: casters, and a mode other than none with a shadow-casting
     /// light, or ambient occlusion.
@@ -82,7 +86,9 @@ private:
     std::vector<rt::CasterRange> ranges_;
     rt::Aabb bounds_;
     uint64_t castersVersion_ = 0;  // a fresh rt::nextCastersVersion() per pose: maps are kept while it stays
-    std::optional<rt::DeformingBvh> bvh_;  // hybrid, raytraced and auto
+    rt::CasterAccel accel_;
+    std::optional<rt::DeformingBvh> bvh_;  // hybrid, raytraced, auto and --ao, under --accel bvh
+    std::optional<rt::UniformGrid> grid_;  // the same under --accel grid
     /// Hybrid: thin casters are looked for at silhouettes. Built per pose for hybrid; for auto on
     /// the first light given hybrid (adjacencyFound_ says whether it is this pose's).
     rt::MeshAdjacency adjacency_;

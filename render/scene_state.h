@@ -50,6 +50,7 @@ struct LoadedScene::State {
     rt::ShadowOptions shadowsOptions;
     rt::AmbientOcclusionOptions occlusionOptions;
     rt::BvhUpdateMethod shadowsMethod = rt::BvhUpdateMethod::Refit;
+    rt::CasterAccel shadowsAccel = rt::CasterAccel::Bvh;
     bool shadowsPoseStale = false;  // the pose changed since they were built or updated
     std::optional<SceneFrustumCull> culling;
     rt::BvhUpdateMethod cullingMethod = rt::BvhUpdateMethod::Refit;

@@ -7,7 +7,7 @@
 
 namespace cuberille::rt {
 
-void computeAmbientOcclusion(const ScreenSurfaces& surfaces, const DeformingBvh& bvh, float distance, float rayOffset,
+void computeAmbientOcclusion(const ScreenSurfaces& surfaces, const CasterRays& casters, float distance, float rayOffset,
                              const AmbientOcclusionOptions& options, std::vector<float>& mask,
                              AmbientOcclusionStats& stats) {
     const double t0 = raster::nowMs();
@@ -22,7 +22,7 @@ void computeAmbientOcclusion(const ScreenSurfaces& surfaces, const DeformingBvh&
         surfaces.forEachSurfaceInRow(int(y), [&](int x, size_t i, const Surface& surface) {
             ++rowPixels[y];
             mask[i] = openShare(surface, directions, occlusionTurnRadians(x, int(y)), distance, rayOffset,
-                                [&](const Ray& ray) { return bvh.anyHit(ray); });
+                                [&](const Ray& ray) { return casters.anyHit(ray); });
         });
     });
     for (const uint64_t p : rowPixels) stats.pixels += p;

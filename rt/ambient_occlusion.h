@@ -24,7 +24,7 @@
 
 #include <glm/glm.hpp>
 
-#include "rt/deforming_bvh.h"
+#include "rt/caster_rays.h"
 #include "rt/ray.h"
 #include "rt/screen_surfaces.h"
 
@@ -65,9 +65,9 @@ template <class Occluded>
 float openShare(const Surface& surface, const std::vector<glm::vec3>& directions, float turnRadians, float distance,
                 float rayOffset, Occluded&& occluded);
 
-/// The mask: per pixel of `surfaces`, openShare() over the BVH with rays of `options`; 1 where no
+/// The mask: per pixel of `surfaces`, openShare() over the casters with rays of `options`; 1 where no
 /// surface is seen. `rayOffset` is the shadow stage's (surfaceRayOffset).
-void computeAmbientOcclusion(const ScreenSurfaces& surfaces, const DeformingBvh& bvh, float distance, float rayOffset,
+void computeAmbientOcclusion(const ScreenSurfaces& surfaces, const CasterRays& casters, float distance, float rayOffset,
                              const AmbientOcclusionOptions& options, std::vector<float>& mask,
                              AmbientOcclusionStats& stats);
 

@@ -7,6 +7,8 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
+#include <utility>
 
 #include "raster/clock.h"
 #include "raster/parallel.h"
@@ -377,22 +379,25 @@ private:
         }
         glm::vec3 u, v;
         tangentFrame(in.toLight, u, v);
+        if (casters_.rays.grid) return traceSoftAsPacket(origin, in, u, v, rays);
         int lit = 0;
         for (const glm::vec2& s : disk_) {
-            glm::vec3 direction;
-            float distance;
-            if (light_.type == raster::LightType::Directional) {
-                direction = glm::normalize(in.toLight + options_.lightRadius * (s.x * u + s.y * v));
-                distance = std::numeric_limits<float>::infinity();
-            } else {
-                const glm::vec3 target = light_.position + options_.lightRadius * (s.x * u + s.y * v) - origin;
-                distance = glm::length(target);
-                direction = target / distance;
-            }
+            const auto [direction, distance] = diskTarget(origin, in, u, v, s);
             lit += !occluded(origin, direction, distance);
         }
         *rays += disk_.size();
         return float(lit) / float(disk_.size());
+    }
+
+    /// The direction to one sample `s` of the light's disk (frame u, v about the direction to the
+    /// light) and how far it is: infinitely far for a directional light.
+    std::pair<glm::vec3, float> diskTarget(const glm::vec3& origin, const Incidence& in, const glm::vec3& u, const glm::vec3& v,
+                                           const glm::vec2& s) const {
+        if (light_.type == raster::LightType::Directional)
+            return {glm::normalize(in.toLight + options_.lightRadius * (s.x * u + s.y * v)), std::numeric_limits<float>::infinity()};
+        const glm::vec3 target = light_.position + options_.lightRadius * (s.x * u + s.y * v) - origin;
+        const float distance = glm::length(target);
+        return {target / distance, distance};
     }
 
     /// Whether a caster lies on the segment from `origin` toward the light. It is traced from the
@@ -400,10 +405,40 @@ private:
     /// met before the dense surface about the receiver, every triangle of which a ray leaving the
     /// receiver must first prove it misses. (A lit segment visits the same boxes either way.)
     bool occluded(const glm::vec3& origin, const glm::vec3& direction, float distance) const {
+        Ray ray;
+        return shadowRay(origin, direction, distance, &ray) && casters_.rays.anyHit(ray);
+    }
+
+    /// The ray occluded() asks about, or false where there is none to ask (the segment leaves the
+    /// casters' bounds at once).
+    bool shadowRay(const glm::vec3& origin, const glm::vec3& direction, float distance, Ray* ray) const {
         const float length = std::isinf(distance) ? exitDistance(origin, direction) : distance * (1.0f - 1e-4f);
-        if (!(length > 0.0f)) return false;  // the ray leaves the casters' bounds at once
-        const Ray ray{origin + direction * length, -direction, 0.0f, length};
-        return casters_.bvh->anyHit(ray);
+        if (!(length > 0.0f)) return false;
+        *ray = Ray{origin + direction * length, -direction, 0.0f, length};
+        return true;
+    }
+
+    /// trace()'s soft shadows through a grid: one receiver's rays toward the light's disk, which
+    /// leave nearly together, as one of the grid's packets (Wald et al.'s soft-shadow packets).
+    /// Each ray's answer is its single query's, so the value is trace()'s.
+    float traceSoftAsPacket(const glm::vec3& origin, const Incidence& in, const glm::vec3& u, const glm::vec3& v,
+                            uint64_t* rays) const {
+        Ray packet[kMaxGridPacketRays];
+        uint8_t occludedRays[kMaxGridPacketRays];
+        int lit = 0;
+        for (size_t first = 0; first < disk_.size(); first += kMaxGridPacketRays) {
+            int n = 0;
+            for (size_t k = first; k < std::min(disk_.size(), first + kMaxGridPacketRays); ++k) {
+                const auto [direction, distance] = diskTarget(origin, in, u, v, disk_[k]);
+                if (shadowRay(origin, direction, distance, &packet[n])) ++n;
+                else ++lit;
+            }
+            anyHits(*casters_.rays.grid, casters_.rays.mesh, std::span<const Ray>(packet, size_t(n)),
+                    std::span<uint8_t>(occludedRays, size_t(n)));
+            for (int k = 0; k < n; ++k) lit += !occludedRays[k];
+        }
+        *rays += disk_.size();
+        return float(lit) / float(disk_.size());
     }
 
     /// How far a ray from `origin` runs before it leaves the casters' bounds for good (widened by

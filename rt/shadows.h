@@ -29,6 +29,7 @@
 #include "raster/draw.h"
 #include "raster/pipeline.h"
 #include "rt/aabb.h"
+#include "rt/caster_rays.h"
 #include "rt/deforming_bvh.h"
 #include "rt/mesh_adjacency.h"
 #include "rt/screen_surfaces.h"
@@ -99,10 +100,10 @@ struct ShadowMasks {
 /// RayTraced only; null for Map).
 struct ShadowCasters {
     TriangleMeshView mesh;
-    /// Rays ask the hierarchy through its own queries, so a lazily updated one (a deforming
-    /// mesh, rt/deforming_bvh.h) refreshes the lower boxes they reach; a static scene's is
-    /// one that is never updated.
-    const DeformingBvh* bvh = nullptr;
+    /// What answers the rays (rt/caster_rays.h): the BVH through its own queries, so a lazily
+    /// updated one (a deforming mesh, rt/deforming_bvh.h) refreshes the lower boxes they reach,
+    /// or a grid built for this pose.
+    CasterRays rays;
     Aabb bounds;
     /// The mesh's edge adjacency (Hybrid): thin-caster marking keeps to the triangles at a
     /// silhouette from the light. Null: every thin triangle is marked.

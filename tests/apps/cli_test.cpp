@@ -646,8 +646,23 @@ TEST_F(Cli, AnAnimationsShadowsFromARefittedHierarchyAreThoseOfAFreshOne) {
             EXPECT_EQ(stats["frames"][1]["shadows"]["bvhRebuilt"].get<bool>(), std::string(method) == "rebuild") << method;
             EXPECT_EQ(stats["frames"][1]["frustumCull"]["rebuilt"].get<bool>(), std::string(method) == "rebuild") << method;
         }
+        // Wald's grid rebuilt for every pose answers the same rays: the same images again, with
+        // ambient occlusion's rays through it too.
+        const std::string tag = name + "_grid";
+        ASSERT_EQ(run(common + " --animate 3 --fps 2 --accel grid --stats " + (dir_ / (tag + ".json")).string() + " --out " +
+                      (dir_ / (tag + ".png")).string()).exitCode, 0);
+        EXPECT_EQ(animated, fileBytes(dir_ / (tag + "_002.png"))) << mode << " grid";
+        const nlohmann::json stats = nlohmann::json::parse(std::ifstream(dir_ / (tag + ".json")));
+        EXPECT_EQ(stats["frames"][1]["shadows"]["accel"].get<std::string>(), "grid");
+        EXPECT_TRUE(stats["frames"][1]["shadows"]["bvhRebuilt"].get<bool>()) << "a grid is built again for every pose";
+        for (const char* accel : {"bvh", "grid"})
+            ASSERT_EQ(run(common + " --ao 4 --animate 3 --fps 2 --accel " + accel + " --out " +
+                          (dir_ / (name + "_ao_" + accel + ".png")).string()).exitCode, 0);
+        EXPECT_EQ(fileBytes(dir_ / (name + "_ao_grid_002.png")), fileBytes(dir_ / (name + "_ao_bvh_002.png"))) << mode;
+        EXPECT_NE(fileBytes(dir_ / (name + "_ao_bvh_002.png")), animated) << "occlusion changed the image";
     }
     EXPECT_EQ(run("render " + gltf.string() + " --animate 2 --bvh-update sometimes --out " + (dir_ / "x.png").string()).exitCode, 2);
+    EXPECT_EQ(run("render " + gltf.string() + " --shadows raytraced --accel octree --out " + (dir_ / "x.png").string()).exitCode, 2);
 }
 
 TEST_F(Cli, ExplainWritesEveryStageAndRefusesBadInputWithExitTwo) {

@@ -37,7 +37,7 @@ struct Occlusion {
     AmbientOcclusionStats stats;
 };
 
-Occlusion occlusionOf(const OwnedMesh& scene, const DeformingBvh& bvh, const AmbientOcclusionOptions& options, float distance) {
+Occlusion occlusionOf(const OwnedMesh& scene, const CasterRays& casters, const AmbientOcclusionOptions& options, float distance) {
     const TriangleMeshView mesh = scene.view();
     const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), 160.0f / 120.0f, 0.1f, 50.0f) *
                                     glm::lookAtRH(glm::vec3(2.5f, 3.0f, 4.5f), glm::vec3(-0.3f, 0.3f, 0.0f), glm::vec3(0, 1, 0));
@@ -45,7 +45,7 @@ Occlusion occlusionOf(const OwnedMesh& scene, const DeformingBvh& bvh, const Amb
     raster::Pipeline gpu;
     Occlusion o;
     o.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, 160, 120, gpu);
-    computeAmbientOcclusion(o.surfaces, bvh, distance, surfaceRayOffset(meshBounds(mesh)), options, o.mask, o.stats);
+    computeAmbientOcclusion(o.surfaces, casters, distance, surfaceRayOffset(meshBounds(mesh)), options, o.mask, o.stats);
     return o;
 }
 
@@ -55,7 +55,7 @@ TEST(AmbientOcclusion, MatchesBruteForceRaysBitForBit) {
     const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);
     const AmbientOcclusionOptions options{.raysPerPixel = 12};
     const float distance = 0.6f, offset = surfaceRayOffset(meshBounds(mesh));
-    const Occlusion o = occlusionOf(scene, bvh, options, distance);
+    const Occlusion o = occlusionOf(scene, {.bvh = &bvh}, options, distance);
     const std::vector<glm::vec3> directions = occlusionDirections(options.raysPerPixel);
     int compared = 0, partlyOpen = 0, open = 0;
     for (int y = 0; y < o.surfaces.height; ++y)
@@ -119,7 +119,7 @@ TEST(AmbientOcclusion, OpenConvexSurfacesDoNotOccludeThemselves) {
     testing::addBox(scene, {-1.0f, -0.2f, -1.0f}, {1.0f, 0.0f, 1.0f});
     testing::append(scene, testing::uvSphere(24, 48, glm::vec3(0.0f, 2.0f, 0.0f), 0.3f));  // far off the slab
     const DeformingBvh bvh(scene.view(), BvhUpdateMethod::Refit);
-    const Occlusion o = occlusionOf(scene, bvh, {.raysPerPixel = 16}, 1.0f);
+    const Occlusion o = occlusionOf(scene, {.bvh = &bvh}, {.raysPerPixel = 16}, 1.0f);
     ASSERT_GT(o.stats.pixels, 1000u);
     for (size_t i = 0; i < o.mask.size(); ++i) ASSERT_EQ(o.mask[i], 1.0f) << "pixel " << i;
 }
@@ -130,11 +130,24 @@ TEST(AmbientOcclusion, TheSameMaskAtAnyThreadCount) {
     std::vector<float> reference;
     for (const cuberille::testing::ThreadCount count : cuberille::testing::kThreadCounts) {
         const cuberille::testing::ThreadCountScope scope(count);
-        const Occlusion o = occlusionOf(scene, bvh, {.raysPerPixel = 8}, 0.8f);
+        const Occlusion o = occlusionOf(scene, {.bvh = &bvh}, {.raysPerPixel = 8}, 0.8f);
         if (count.exact) { EXPECT_EQ(scope.ran(), count.threads) << "threads that ran"; }
         if (count.threads == 1) reference = o.mask;
         else EXPECT_EQ(o.mask, reference) << count.threads << " threads";
     }
+}
+
+// The two seeds' structures (rt/caster_rays.h) answer every ray alike, so the mask is the same
+// bits through a grid built for the pose as through the BVH.
+TEST(AmbientOcclusion, TheGridGivesTheBvhsMaskBitForBit) {
+    const OwnedMesh scene = occludedScene();
+    const DeformingBvh bvh(scene.view(), BvhUpdateMethod::Refit);
+    const UniformGrid grid = buildUniformGrid(scene.view());
+    const Occlusion throughBvh = occlusionOf(scene, {.bvh = &bvh}, {.raysPerPixel = 16}, 0.8f);
+    const Occlusion throughGrid = occlusionOf(scene, {.grid = &grid, .mesh = scene.view()}, {.raysPerPixel = 16}, 0.8f);
+    ASSERT_GT(throughBvh.stats.rays, 0u);
+    EXPECT_LT(*std::min_element(throughBvh.mask.begin(), throughBvh.mask.end()), 1.0f) << "some pixel is occluded";
+    EXPECT_EQ(throughGrid.mask, throughBvh.mask);
 }
 
 TEST(AmbientOcclusion, DirectionsAreUnitAndInTheUpperHemisphere) {

@@ -42,9 +42,11 @@ struct Rendered {
 /// The stage as the renderer runs it (hybrid with the casters' edge adjacency), or with every
 /// thin triangle marked (`silhouettesOnly` false).
 Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, const ShadowOptions& options, int width = 320,
-                   int height = 240, bool silhouettesOnly = true) {
+                   int height = 240, bool silhouettesOnly = true, CasterAccel accel = CasterAccel::Bvh) {
     const TriangleMeshView mesh = scene.view();
     const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);  // a static scene's: never updated
+    const UniformGrid grid = accel == CasterAccel::Grid ? buildUniformGrid(mesh) : UniformGrid{};
+    const CasterRays rays = accel == CasterAccel::Grid ? CasterRays{.grid = &grid, .mesh = mesh} : CasterRays{.bvh = &bvh};
     const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
     const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), float(width) / float(height), 0.1f, 50.0f) *
                                     glm::lookAtRH(glm::vec3(3.0f, 4.0f, 6.0f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
@@ -53,7 +55,7 @@ Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, con
     raster::Pipeline gpu;
     r.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, width, height, gpu);
     r.masks = computeShadows(r.surfaces, lighting,
-                             {.mesh = mesh, .bvh = &bvh, .bounds = meshBounds(mesh),
+                             {.mesh = mesh, .rays = rays, .bounds = meshBounds(mesh),
                               .adjacency = silhouettesOnly ? &adjacency : nullptr, .adjacencyOnDemand = {}},
                              options, gpu);
     return r;
@@ -262,6 +264,26 @@ TEST(Shadows, SoftHybridEqualsSoftRayTracedOnEveryPixel) {
     EXPECT_GT(partialShadowCount(reference), 200u) << "the penumbra exists";
 }
 
+// The two seeds' structures (rt/caster_rays.h) answer every shadow ray alike: the masks through
+// a grid built for the pose are the BVH's bit for bit, hard and soft, ray-traced and hybrid.
+TEST(Shadows, TheGridGivesTheBvhsMasksBitForBit) {
+    const OwnedMesh scene = testScene();
+    for (const bool soft : {false, true})
+        for (const ShadowMode mode : {ShadowMode::RayTraced, ShadowMode::Hybrid}) {
+            ShadowOptions options;
+            options.mode = mode;
+            options.soft = soft;
+            options.lightRadius = 0.05f;
+            options.softSamplesPerSide = 3;
+            options.mapSizeTexels = 512;
+            const Rendered bvh = shadowsOf(scene, sun(), options, 160, 120);
+            const Rendered grid = shadowsOf(scene, sun(), options, 160, 120, true, CasterAccel::Grid);
+            ASSERT_GT(bvh.masks.stats.raysTraced, 0u);
+            EXPECT_EQ(grid.masks.stats.raysTraced, bvh.masks.stats.raysTraced);
+            EXPECT_EQ(grid.masks.visibility[0], bvh.masks.visibility[0]) << (soft ? "soft " : "hard ") << int(mode);
+        }
+}
+
 TEST(Shadows, APointLikeSoftLightMarksWhatHardShadowsMark) {
     // A light too small for its rays to stray a texel from the shadow ray: every ray stays among
     // the receiver's own 3x3 texels, which the hard test has already found in agreement, so
@@ -309,7 +331,7 @@ TEST(Shadows, MasksDrawnOverAnEarlierFramesEqualFreshOnes) {
     const TriangleMeshView mesh = scene.view();
     const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);
     const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
-    const ShadowCasters casters{.mesh = mesh, .bvh = &bvh, .bounds = meshBounds(mesh), .adjacency = &adjacency, .adjacencyOnDemand = {}};
+    const ShadowCasters casters{.mesh = mesh, .rays = {.bvh = &bvh}, .bounds = meshBounds(mesh), .adjacency = &adjacency, .adjacencyOnDemand = {}};
     const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
     raster::Pipeline gpu;
     auto surfacesFrom = [&](glm::vec3 eye) {
