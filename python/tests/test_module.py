@@ -35,6 +35,8 @@ CASES = [
       "--ground", "--shadows", "raytraced"]),
     ("knot.obj", dict(width=160, height=120, ground=True, ao=8, ao_distance=0.5),
      ["--width", "160", "--height", "120", "--ground", "--ao", "8", "--ao-distance", "0.5"]),
+    ("knot.obj", dict(width=160, height=120, ground=True, shadows="raytraced", soft=True, accel="grid"),
+     ["--width", "160", "--height", "120", "--ground", "--shadows", "raytraced", "--soft", "--accel", "grid"]),
 ]
 
 
@@ -76,6 +78,21 @@ def test_ambient_occlusion_only_takes_ambient_light_away(examples):
     assert darker.mean() > 0.02, darker.mean()
     occlusion = scene.stats["ambientOcclusion"]
     assert occlusion["rays"] == 16 * occlusion["pixels"] > 0
+
+
+def test_the_grid_answers_the_shadow_stages_rays_as_the_bvh_does(examples):
+    """accel="grid" (a uniform grid built for the pose) and the default BVH answer every shadow and
+    occlusion ray alike, so the pixels are the same; the stats name the structure, and an unknown
+    one is refused with the command line's message."""
+    scene = cuberille.Scene(str(examples / "knot.obj"))
+    settings = dict(width=160, height=120, ground=True, shadows="raytraced", soft=True, ao=4)
+    through_bvh = scene.render(**settings)
+    assert scene.stats["shadows"]["accel"] == "bvh"
+    through_grid = scene.render(accel="grid", **settings)
+    assert scene.stats["shadows"]["accel"] == "grid"
+    assert np.array_equal(through_grid, through_bvh)
+    with pytest.raises(cuberille.InputError, match="--accel: 'octree' is not bvh or grid"):
+        scene.render(accel="octree", **settings)
 
 
 def test_linear_returns_the_renderers_floats(examples):
