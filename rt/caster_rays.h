@@ -6,7 +6,8 @@
 //   refitting, Larsson's lazy refit, or rebuilding (`--bvh-update`; rt/deforming_bvh.h, after
 //   Lauterbach et al.), queried through the eight-wide tree.
 // - Grid (`--accel grid`): a uniform grid rebuilt from scratch for every pose, so any motion costs
-//   the same linear build (Wald et al. 2006, rt/uniform_grid.h), walked by the 3D-DDA.
+//   the same linear build (Wald et al. 2006, rt/uniform_grid.h): single rays walk it by the
+//   3D-DDA, and the shadow stage sends rays that travel together as its packets (rt/shadows.cpp).
 //
 // Both answer exactly as brute force over every caster does (the same watertight test and hit
 // definition, rt/ray.h), so the masks, and the images, are the same bits whichever answers.

@@ -207,6 +207,47 @@ public:
         return float(decision);
     }
 
+    /// Whether hard ray-traced shadows go through the grid a tile at a time (traceTileAsPacket).
+    bool tracesTilesAsPackets() const {
+        return casters_.rays.grid && options_.mode == ShadowMode::RayTraced && !options_.soft;
+    }
+
+    /// Hard ray-traced shadows through a grid for the kPacketTilePixels-square tile at (x0, y0):
+    /// its receivers' rays toward the light as one packet (for a directional light, parallel
+    /// rays: Wald et al.'s shadow packets). Each ray's answer is its single query's, so the mask,
+    /// marks and counts (receivers, marked, rays) are those visibility() gives pixel by pixel.
+    void traceTileAsPacket(const ScreenSurfaces& surfaces, int x0, int y0, const glm::vec3& toSun, std::vector<float>& mask,
+                           std::vector<uint8_t>& marked, std::array<uint64_t, 3>& counts) const {
+        Ray packet[kPacketTilePixels * kPacketTilePixels];
+        size_t pixel[kPacketTilePixels * kPacketTilePixels];
+        uint8_t occludedRays[kPacketTilePixels * kPacketTilePixels];
+        size_t n = 0;
+        for (int y = y0; y < std::min(y0 + kPacketTilePixels, surfaces.height); ++y) {
+            const ScreenSurfaces::CameraRow row = surfaces.cameraRow(y);
+            for (int x = x0; x < std::min(x0 + kPacketTilePixels, surfaces.width); ++x) {
+                const size_t i = row.firstPixel + size_t(x);
+                Surface surface;
+                if (!surfaces.covered(i) || !surfaces.surfaceAt(row, x, surface)) continue;
+                const Incidence in = incidence(light_, toSun, surface.position, surface.normal);
+                if (!in.reaches) {
+                    mask[i] = 0.0f;
+                    continue;
+                }
+                ++counts[0], ++counts[1], ++counts[2];
+                marked[i] = 1;
+                if (shadowRay(surface.position + surface.normal * rayOffset_, in.toLight, in.distance, &packet[n]))
+                    pixel[n++] = i;
+                else
+                    mask[i] = 1.0f;
+            }
+        }
+        anyHits(*casters_.rays.grid, casters_.rays.mesh, std::span<const Ray>(packet, n), std::span<uint8_t>(occludedRays, n));
+        for (size_t k = 0; k < n; ++k) mask[pixel[k]] = occludedRays[k] ? 0.0f : 1.0f;
+    }
+    /// 8x8 pixels: a packet of kMaxGridPacketRays, the paper's best size (§4.1).
+    static constexpr int kPacketTilePixels = 8;
+    static_assert(kPacketTilePixels * kPacketTilePixels <= kMaxGridPacketRays);
+
 private:
     /// A receiver in map space: its continuous texel position and the plane through it, as depth
     /// change per texel step along x and y.
@@ -811,6 +852,23 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
         // Counters per row, summed in row order: integers, so the totals are exact anyway.
         std::vector<std::array<uint64_t, 3>> rowCounts(size_t(surfaces.height));
         const glm::vec3 toSun = -glm::normalize(light.direction);  // used for directional lights only
+        if (shadows.tracesTilesAsPackets()) {
+            // Counters per tile, summed in tile order (integers: exact in any order anyway).
+            constexpr int kTile = LightShadows::kPacketTilePixels;
+            const int tilesX = (surfaces.width + kTile - 1) / kTile, tilesY = (surfaces.height + kTile - 1) / kTile;
+            std::vector<std::array<uint64_t, 3>> tileCounts(size_t(tilesX) * size_t(tilesY));
+            raster::parallelFor(tileCounts.size(), [&](size_t t) {
+                shadows.traceTileAsPacket(surfaces, int(t % size_t(tilesX)) * kTile, int(t / size_t(tilesX)) * kTile, toSun, mask,
+                                          out.marked, tileCounts[t]);
+            });
+            for (const auto& c : tileCounts) {
+                out.stats.receiverPixels += c[0];
+                out.stats.markedPixels += c[1];
+                out.stats.raysTraced += c[2];
+            }
+            out.stats.maskMs += raster::nowMs() - t0;
+            continue;
+        }
         raster::parallelFor(size_t(surfaces.height), [&](size_t y) {
             std::array<uint64_t, 3>& c = rowCounts[y];
             surfaces.forEachSurfaceInRow(int(y), [&](int, size_t i, const Surface& surface) {
