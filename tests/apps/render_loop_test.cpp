@@ -3,6 +3,7 @@
 // voxel model larger than its budget, a turntable, an animation): no growing caches, no leaked
 // per-frame buffers, no scratch that keeps the largest frame's size.
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -47,13 +48,24 @@ TEST(RenderLoop, TenThousandRendersHoldFlatMemory) {
     // Warm up: allocator pools, thread pools and the first-use tables settle here.
     const int warmup = kSanitized ? 50 : 500, renders = kSanitized ? 950 : 9500;
     for (int i = 0; i < warmup; ++i) apps::renderScene(o);
-    const uint64_t before = residentBytes();
     const raster::Image first = apps::renderScene(o).image;
-    for (int i = 0; i < renders; ++i) ASSERT_EQ(apps::renderScene(o).image.rgba, first.rgba) << "render " << i << " differs";
-    const uint64_t after = residentBytes();
+    // The resident set swings by a few MiB from one moment to the next as the allocator hands
+    // its top back to the kernel and takes it again (measured on the 2-core VM under load: 17.0
+    // to 22.5 MB between samples of one run), so two single readings can differ by more than a
+    // small leak. A leak raises every reading after it: compare the highest reading of the first
+    // quarter of the renders with the highest of the last quarter, each sampled every 50 renders.
+    uint64_t firstQuarterPeak = 0, lastQuarterPeak = 0;
+    for (int i = 0; i < renders; ++i) {
+        ASSERT_EQ(apps::renderScene(o).image.rgba, first.rgba) << "render " << i << " differs";
+        if (i % 50 != 0) continue;
+        if (i < renders / 4) firstQuarterPeak = std::max(firstQuarterPeak, residentBytes());
+        if (i >= renders - renders / 4) lastQuarterPeak = std::max(lastQuarterPeak, residentBytes());
+    }
     if (kSanitized) GTEST_SKIP() << "resident set not checked under a sanitizer (quarantine); every render identical";
-    // One leaked 24x16x4-sample frame per render would be over 50 MiB by now.
-    EXPECT_LT(after, before + 4 * kMib) << "resident set grew from " << before << " to " << after << " bytes";
+    // Half the renders lie between the two quarters: one leaked 24x16x4-sample frame per render
+    // would be over 100 MiB, a leak of 1 KiB per render 4.6 MiB.
+    EXPECT_LT(lastQuarterPeak, firstQuarterPeak + 4 * kMib)
+        << "resident set peaked at " << firstQuarterPeak << " bytes early and " << lastQuarterPeak << " late";
 }
 
 // A per-process folder under the test temporary directory, removed afterwards.
