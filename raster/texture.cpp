@@ -220,11 +220,15 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(
     return glm::mix(top, bottom, f.ay);
 }
 
+TexelPyramid Texture::lanePyramid() const {
+    return {packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,
+            filter_, levels_.width, levels_.height, levels_.offset, levels_.tileRowStride};
+}
+
 void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out,
                           SampleFootprints& shared) const {
     if (format_ == TexelFormat::LinearFloat || count > SampleFootprints::kMaxPoints) return sampleBatch(count, u, v, lod, out);
-    const TexelPyramid pyramid{packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,
-                               filter_, levels_.width, levels_.height, levels_.offset, levels_.tileRowStride};
+    const TexelPyramid pyramid = lanePyramid();
     const SampleFootprints::Layout layout{width(), height(), wrapU_, wrapV_, filter_};
     if (!(shared.layout == layout && shared.count == count)) {
         planSampleFootprints(pyramid, count, u, v, lod, shared);
@@ -234,11 +238,7 @@ void Texture::sampleBatch(int count, const float* u, const float* v, const float
 }
 
 void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out) const {
-    if (format_ != TexelFormat::LinearFloat) {
-        const TexelPyramid pyramid{packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,
-                                   filter_, levels_.width, levels_.height, levels_.offset, levels_.tileRowStride};
-        return sampleLanes(pyramid, count, u, v, lod, out);
-    }
+    if (format_ != TexelFormat::LinearFloat) return sampleLanes(lanePyramid(), count, u, v, lod, out);
     // The plans of a run of points first, then their texels.
     constexpr int kRun = 64;
     SamplePlan plans[kRun];

@@ -36,6 +36,8 @@
 
 namespace cuberille::raster {
 
+struct TexelPyramid;  // raster/texture_lanes.h
+
 /// The most mip levels a texture has: a side of 2^31 texels.
 inline constexpr int kMaxTextureLevels = 32;
 
@@ -58,6 +60,7 @@ enum class MinFilter : uint8_t {
 struct TextureFilter {
     bool magnifyNearest = false;  // magFilter NEAREST; LINEAR otherwise
     MinFilter minify = MinFilter::LinearMipmapLinear;
+    bool operator==(const TextureFilter&) const = default;
 };
 
 /// Where a batch of points samples an 8-bit texture: per point, the levels, weights and the four
@@ -73,10 +76,7 @@ struct SampleFootprints {
         int width = 0, height = 0;  // 0: nothing planned
         WrapMode wrapU = WrapMode::Repeat, wrapV = WrapMode::Repeat;
         TextureFilter filter;
-        bool operator==(const Layout& o) const {
-            return width == o.width && height == o.height && wrapU == o.wrapU && wrapV == o.wrapV &&
-                   filter.magnifyNearest == o.filter.magnifyNearest && filter.minify == o.filter.minify;
-        }
+        bool operator==(const Layout&) const = default;
     } layout;
     int count = 0;
     // Per point: the first and second level's footprints (as Texture::BilinearFootprint), the
@@ -169,6 +169,8 @@ private:
         friend bool operator==(const CacheLineAllocator&, const CacheLineAllocator&) { return true; }
     };
     void allocateLevels(int width, int height);
+    /// What the lane sampler reads of an 8-bit texture (raster/texture_lanes.h).
+    TexelPyramid lanePyramid() const;
     void buildMipChain();
     /// The four texels and weights sampleBilinear(level, uv) blends.
     struct BilinearFootprint {

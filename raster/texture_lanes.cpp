@@ -88,26 +88,6 @@ HWY_INLINE LanePlan plan(const TexelPyramid& t, VF lod) {
     return p;
 }
 
-/// One tap per lane on the given levels: one texel where every lane's tap is nearest (glTF's
-/// NEAREST_MIPMAP_LINEAR, common in exported models, reads 2 texels a point and not 8).
-HWY_INLINE Texel tap(const TexelPyramid& t, VI level, MF nearest, VF u, VF v) {
-    const Footprint f = footprint(t, level, nearest, u, v);
-    return hn::AllTrue(DF(), nearest) ? texelsAt(t, f.index[0]) : bilinear(t, f);
-}
-
-/// One vector of points: Texture::plan() then Texture::gather().
-HWY_INLINE Texel sample(const TexelPyramid& t, VF u, VF v, VF lod) {
-    const DF df;
-    const LanePlan p = plan(t, lod);
-    const Texel first = tap(t, p.first, p.nearest, u, v);
-    if (hn::AllFalse(df, p.mixLevels)) return first;
-    const Texel second = tap(t, p.second, p.nearest, u, v);
-    return {hn::IfThenElse(p.mixLevels, mix(first.r, second.r, p.weight), first.r),
-            hn::IfThenElse(p.mixLevels, mix(first.g, second.g, p.weight), first.g),
-            hn::IfThenElse(p.mixLevels, mix(first.b, second.b, p.weight), first.b),
-            hn::IfThenElse(p.mixLevels, mix(first.a, second.a, p.weight), first.a)};
-}
-
 /// glm::mix's arithmetic: a (1 - weight) + b weight.
 HWY_INLINE VF mix(VF a, VF b, VF weight) {
     const VF one = hn::Set(DF(), 1.0f);
@@ -264,7 +244,8 @@ HWY_INLINE void planVector(const TexelPyramid& t, VF u, VF v, VF lod, SampleFoot
     if (!hn::AllFalse(df, p.mixLevels)) storeFootprint(footprint(t, p.second, p.nearest, u, v), out, 1, i);
 }
 
-/// tap() on a stored footprint.
+/// One stored tap per lane: one texel where every lane's tap is nearest (glTF's
+/// NEAREST_MIPMAP_LINEAR, common in exported models, reads 2 texels a point and not 8).
 HWY_INLINE Texel storedTap(const TexelPyramid& t, const SampleFootprints& f, int tap, int i, MF nearest) {
     const DF df;
     const DI di;
@@ -276,7 +257,7 @@ HWY_INLINE Texel storedTap(const TexelPyramid& t, const SampleFootprints& f, int
     return bilinear(t, footprint);
 }
 
-/// sample() on stored footprints: the same blends of the same texels.
+/// One vector of points on their stored plan: Texture::gather() after Texture::plan().
 HWY_INLINE Texel sampleStored(const TexelPyramid& t, const SampleFootprints& f, int i) {
     const DF df;
     const DI di;
@@ -330,29 +311,6 @@ void sampleFootprintsOnTarget(const TexelPyramid& t, const SampleFootprints& f, 
     std::copy_n(tail[2], rest, out.b + i), std::copy_n(tail[3], rest, out.a + i);
 }
 
-void sampleLanesOnTarget(const TexelPyramid& t, int count, const float* u, const float* v, const float* lod,
-                         Texture::Channels out) {
-    const DF df;
-    const int lanes = int(hn::Lanes(df));
-    int i = 0;
-    for (; i + lanes <= count; i += lanes) {
-        const Texel s = sample(t, hn::LoadU(df, u + i), hn::LoadU(df, v + i), hn::LoadU(df, lod + i));
-        hn::StoreU(s.r, df, out.r + i), hn::StoreU(s.g, df, out.g + i);
-        hn::StoreU(s.b, df, out.b + i), hn::StoreU(s.a, df, out.a + i);
-    }
-    if (i == count) return;
-    // The last points, padded to a whole vector with the point (0, 0) at level 0.
-    constexpr int kMaxLanes = HWY_MAX_BYTES / sizeof(float);
-    alignas(64) float uTail[kMaxLanes] = {}, vTail[kMaxLanes] = {}, lodTail[kMaxLanes] = {};
-    alignas(64) float tail[4][kMaxLanes];
-    const int rest = count - i;
-    std::copy_n(u + i, rest, uTail), std::copy_n(v + i, rest, vTail), std::copy_n(lod + i, rest, lodTail);
-    const Texel s = sample(t, hn::Load(df, uTail), hn::Load(df, vTail), hn::Load(df, lodTail));
-    hn::Store(s.r, df, tail[0]), hn::Store(s.g, df, tail[1]), hn::Store(s.b, df, tail[2]), hn::Store(s.a, df, tail[3]);
-    std::copy_n(tail[0], rest, out.r + i), std::copy_n(tail[1], rest, out.g + i);
-    std::copy_n(tail[2], rest, out.b + i), std::copy_n(tail[3], rest, out.a + i);
-}
-
 }  // namespace HWY_NAMESPACE
 }  // namespace cuberille::raster
 HWY_AFTER_NAMESPACE();
@@ -360,7 +318,6 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace cuberille::raster {
 
-HWY_EXPORT(sampleLanesOnTarget);
 HWY_EXPORT(planSampleFootprintsOnTarget);
 HWY_EXPORT(sampleFootprintsOnTarget);
 
@@ -373,9 +330,15 @@ void sampleFootprints(const TexelPyramid& texture, const SampleFootprints& footp
     HWY_DYNAMIC_DISPATCH(sampleFootprintsOnTarget)(texture, footprints, out);
 }
 
+// A run of points at a time: planned, then sampled, as the shade stage's shared fetches are.
 void sampleLanes(const TexelPyramid& texture, int count, const float* u, const float* v, const float* lod,
                  Texture::Channels out) {
-    HWY_DYNAMIC_DISPATCH(sampleLanesOnTarget)(texture, count, u, v, lod, out);
+    SampleFootprints footprints;
+    for (int first = 0; first < count; first += SampleFootprints::kMaxPoints) {
+        const int n = std::min(SampleFootprints::kMaxPoints, count - first);
+        planSampleFootprints(texture, n, u + first, v + first, lod + first, footprints);
+        sampleFootprints(texture, footprints, {out.r + first, out.g + first, out.b + first, out.a + first});
+    }
 }
 
 }  // namespace cuberille::raster

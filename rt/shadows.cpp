@@ -849,44 +849,39 @@ void computeShadows(const ScreenSurfaces& surfaces, const raster::Lighting& ligh
         t0 = raster::nowMs();
         std::vector<float>& mask = out.visibility[size_t(l)];
         mask.assign(pixels, 1.0f);
-        // Counters per row, summed in row order: integers, so the totals are exact anyway.
-        std::vector<std::array<uint64_t, 3>> rowCounts(size_t(surfaces.height));
+        // Counters per task (a row, or a tile of packets), summed in task order: integers, so the
+        // totals are exact anyway.
+        std::vector<std::array<uint64_t, 3>> taskCounts;
         const glm::vec3 toSun = -glm::normalize(light.direction);  // used for directional lights only
         if (shadows.tracesTilesAsPackets()) {
-            // Counters per tile, summed in tile order (integers: exact in any order anyway).
             constexpr int kTile = LightShadows::kPacketTilePixels;
             const int tilesX = (surfaces.width + kTile - 1) / kTile, tilesY = (surfaces.height + kTile - 1) / kTile;
-            std::vector<std::array<uint64_t, 3>> tileCounts(size_t(tilesX) * size_t(tilesY));
-            raster::parallelFor(tileCounts.size(), [&](size_t t) {
+            taskCounts.resize(size_t(tilesX) * size_t(tilesY));
+            raster::parallelFor(taskCounts.size(), [&](size_t t) {
                 shadows.traceTileAsPacket(surfaces, int(t % size_t(tilesX)) * kTile, int(t / size_t(tilesX)) * kTile, toSun, mask,
-                                          out.marked, tileCounts[t]);
+                                          out.marked, taskCounts[t]);
             });
-            for (const auto& c : tileCounts) {
-                out.stats.receiverPixels += c[0];
-                out.stats.markedPixels += c[1];
-                out.stats.raysTraced += c[2];
-            }
-            out.stats.maskMs += raster::nowMs() - t0;
-            continue;
+        } else {
+            taskCounts.resize(size_t(surfaces.height));
+            raster::parallelFor(size_t(surfaces.height), [&](size_t y) {
+                std::array<uint64_t, 3>& c = taskCounts[y];
+                surfaces.forEachSurfaceInRow(int(y), [&](int, size_t i, const Surface& surface) {
+                    const Incidence in = incidence(light, toSun, surface.position, surface.normal);
+                    if (!in.reaches) {
+                        mask[i] = 0.0f;  // the shading gives this light nothing here anyway
+                        return;
+                    }
+                    ++c[0];
+                    bool marked = false;
+                    mask[i] = shadows.visibility(surface.position, surface.normal, in, &marked, &c[2]);
+                    if (marked) {
+                        ++c[1];
+                        out.marked[i] = 1;
+                    }
+                });
+            });
         }
-        raster::parallelFor(size_t(surfaces.height), [&](size_t y) {
-            std::array<uint64_t, 3>& c = rowCounts[y];
-            surfaces.forEachSurfaceInRow(int(y), [&](int, size_t i, const Surface& surface) {
-                const Incidence in = incidence(light, toSun, surface.position, surface.normal);
-                if (!in.reaches) {
-                    mask[i] = 0.0f;  // the shading gives this light nothing here anyway
-                    return;
-                }
-                ++c[0];
-                bool marked = false;
-                mask[i] = shadows.visibility(surface.position, surface.normal, in, &marked, &c[2]);
-                if (marked) {
-                    ++c[1];
-                    out.marked[i] = 1;
-                }
-            });
-        });
-        for (const auto& c : rowCounts) {
+        for (const auto& c : taskCounts) {
             out.stats.receiverPixels += c[0];
             out.stats.markedPixels += c[1];
             out.stats.raysTraced += c[2];
