@@ -180,6 +180,7 @@ void assembleAndSetUp(const DrawCall& call, const TriangleInput& in, size_t firs
 
 void Pipeline::beginFrame(const FramebufferDesc& desc) {
     frameStartMs_ = nowMs();
+    deferred_ = false;
     framebuffer_.reset(desc);
     stats_ = {};
     drawInProgress_ = false;  // an earlier frame may have ended by an exception, mid-draw
@@ -192,9 +193,27 @@ void Pipeline::beginFrame(const FramebufferDesc& desc) {
     tilesDrawnSinceTightened_.assign(size_t(framebuffer_.tileCount()), 0);
 }
 
+void Pipeline::beginDeferredFrame(const FramebufferDesc& desc) {
+    beginFrame(desc);
+    deferred_ = true;
+}
+
+VisibilityShadeStats Pipeline::shadeVisible(const VisibilityBuffer& seen) {
+    if (!deferred_) throw std::logic_error("shadeVisible: not a deferred frame (beginDeferredFrame)");
+    const VisibilityShadeStats s = shadeVisibility(draws_, seen, framebuffer_, stats_.counters);
+    stats_.times.vertexMs += s.vertexMs;
+    stats_.times.frontEndMs += s.setupMs;
+    stats_.times.backEndMs += s.shadeMs;
+    return s;
+}
+
 void Pipeline::draw(const DrawCall& call) {
     if (call.state.colorWriteMask != 0 && !framebuffer_.hasColor())
         throw std::invalid_argument("a draw with colour writes into a depth-only framebuffer");
+    if (deferred_) {
+        draws_.push_back(call);
+        return;
+    }
     const uint32_t drawIndex = uint32_t(draws_.size());
     draws_.push_back(call);
     const size_t triangles = call.triangleCount();

@@ -21,6 +21,7 @@
 // in order; counters are integer sums. The image is the same for every thread count.
 // Thread-safety: one frame at a time per Pipeline; the calls themselves are not re-entrant.
 
+#include <span>
 #include <vector>
 
 #include "raster/bin.h"
@@ -29,6 +30,7 @@
 #include "raster/stats.h"
 #include "raster/tile_raster.h"
 #include "raster/vertex.h"
+#include "raster/visibility_shade.h"
 
 namespace cuberille::raster {
 
@@ -46,6 +48,15 @@ public:
     /// out what lies behind them before it becomes triangles.
     void flushAndTightenHierarchicalDepth();
     void endFrame();
+
+    /// A deferred frame: draw() records the draws without rasterizing them, and visibility is
+    /// found elsewhere (the camera rays of the ray-tracing renderer) and handed to shadeVisible(),
+    /// which runs the vertex, set-up and shade stages for what it names
+    /// (raster/visibility_shade.h). Then endFrame().
+    void beginDeferredFrame(const FramebufferDesc& desc);
+    /// The draws recorded since beginDeferredFrame, in order: what a visibility buffer indexes.
+    std::span<const DrawCall> recordedDraws() const { return draws_; }
+    VisibilityShadeStats shadeVisible(const VisibilityBuffer& seen);
 
     const Framebuffer& framebuffer() const { return framebuffer_; }
     const PipelineStats& stats() const { return stats_; }
@@ -69,6 +80,7 @@ private:
     size_t spareVertexBytes_ = 0;  // their capacity, at most kSpareVertexStorageBytes
     size_t drawsShaded_ = 0;
     size_t drawsRecycled_ = 0;  // draws below this one have given their vertex storage back
+    bool deferred_ = false;  // beginDeferredFrame: draws are recorded only
     bool drawInProgress_ = false;  // draw() is queueing; its draw may have batches still to come
     std::vector<BatchRef> queued_;
     std::vector<TriangleBatch> batches_;  // reused across flushes and frames

@@ -124,13 +124,15 @@ SetupResult setupTriangle(const WindowVertex& w0, const WindowVertex& w1, const 
     t.pixelMinY = std::max(t.pixelMinY, 0);
     t.pixelMaxX = std::min(t.pixelMaxX, context.scissorWidth - 1);
     t.pixelMaxY = std::min(t.pixelMaxY, context.scissorHeight - 1);
-    if (t.pixelMinX > t.pixelMaxX || t.pixelMinY > t.pixelMaxY) return SetupResult::NoSamples;
+    if (context.rejectWithoutSamples && (t.pixelMinX > t.pixelMaxX || t.pixelMinY > t.pixelMaxY))
+        return SetupResult::NoSamples;
 
     setEdge(t, 0, v[1], v[2]);
     setEdge(t, 1, v[2], v[0]);
     setEdge(t, 2, v[0], v[1]);
     const int64_t boundsPixels = int64_t{t.pixelMaxX - t.pixelMinX + 1} * (t.pixelMaxY - t.pixelMinY + 1);
-    if (boundsPixels <= kSetupCoverageTestPixels && !coversAnySample(t, sp)) return SetupResult::NoSamples;
+    if (context.rejectWithoutSamples && boundsPixels <= kSetupCoverageTestPixels && !coversAnySample(t, sp))
+        return SetupResult::NoSamples;
     t.invDoubleArea = 1.0 / static_cast<double>(doubleArea);
     setDepthPlane(t, v[0], v[1], v[2], t.invDoubleArea);
     t.depthKeySign = context.depthKeySign;

@@ -69,6 +69,10 @@ struct SetupContext {
     CullMode cull = CullMode::None;
     int varyingCount = 0;
     float depthKeySign = 1.0f;  // the framebuffer's DepthConvention
+    /// False: a triangle is set up even where it covers no sample position (never
+    /// SetupResult::NoSamples). For the deferred shade (raster/visibility_shade.h), whose samples
+    /// an exact ray found inside a triangle that snapping moved off them.
+    bool rejectWithoutSamples = true;
 
     static SetupContext forDraw(PositionSpace space, int widthPixels, int heightPixels,
                                 const SamplePattern& samples, CullMode cull, int varyingCount);
