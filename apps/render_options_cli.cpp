@@ -94,10 +94,16 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
                        "(bottom-up, rebuilt past Lauterbach's 0.4), lazy (Larsson's: the upper half refitted, the "
                        "rest on first touch by a ray) or rebuild (a new tree every frame)")
         ->capture_default_str();
+    render->add_option("--renderer", names.renderer,
+                       "What finds the surface each sample sees: raster (the rasterizer's depth test) or raytrace "
+                       "(3D scenes: a camera ray per sample through --accel's structure, built for the frame; the "
+                       "same shading, shadows and occlusion)")
+        ->capture_default_str();
     render->add_option("--accel", names.accel,
-                       "What answers the shadow stage's rays (--shadows hybrid/raytraced/auto, --ao): bvh (built "
-                       "once, following each --animate pose as --bvh-update says) or grid (a uniform grid rebuilt "
-                       "from scratch for every pose, Wald et al. 2006). The same images either way")
+                       "What answers the rays (--renderer raytrace's camera rays, and the shadow stage's for --shadows "
+                       "hybrid/raytraced/auto and --ao): bvh (the shadow stage's built once, following each --animate "
+                       "pose as --bvh-update says) or grid (a uniform grid rebuilt from scratch for every pose, Wald et "
+                       "al. 2006). The same images either way")
         ->capture_default_str();
     render->add_option("--pixel-error", o.pixelError,
                        "Voxel models: refine blocks until a voxel's edge projects to at most this many pixels "
@@ -159,6 +165,7 @@ void applyRenderNames(const RenderNames& names, RenderOptions& o) {
     o.depth = parseDepthConvention(names.depth);
     o.bvhUpdate = parseBvhUpdate(names.bvhUpdate);
     o.accel = render::parseAccel(names.accel);
+    o.renderer = render::parseRenderer(names.renderer);
     if (names.upAxis != "y" && names.upAxis != "z")
         throw scene::InputError("--up-axis " + names.upAxis + ": expected y or z");
     o.zUp = names.upAxis == "z";

@@ -204,6 +204,9 @@ VisibilityShadeStats Pipeline::shadeVisible(const VisibilityBuffer& seen) {
     stats_.times.vertexMs += s.vertexMs;
     stats_.times.frontEndMs += s.setupMs;
     stats_.times.backEndMs += s.shadeMs;
+    // Later draws run forward, over what was shaded; the recorded ones are finished.
+    deferred_ = false;
+    drawsShaded_ = drawsRecycled_ = draws_.size();
     return s;
 }
 

@@ -52,7 +52,8 @@ public:
     /// A deferred frame: draw() records the draws without rasterizing them, and visibility is
     /// found elsewhere (the camera rays of the ray-tracing renderer) and handed to shadeVisible(),
     /// which runs the vertex, set-up and shade stages for what it names
-    /// (raster/visibility_shade.h). Then endFrame().
+    /// (raster/visibility_shade.h). Draws after it run forward over the shaded frame, tested
+    /// against the depths it wrote (a deferred renderer's transparent pass). Then endFrame().
     void beginDeferredFrame(const FramebufferDesc& desc);
     /// The draws recorded since beginDeferredFrame, in order: what a visibility buffer indexes.
     std::span<const DrawCall> recordedDraws() const { return draws_; }

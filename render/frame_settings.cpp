@@ -115,6 +115,14 @@ rt::CasterAccel parseAccel(const std::string& name) {
 
 const char* accelName(rt::CasterAccel accel) { return accel == rt::CasterAccel::Grid ? "grid" : "bvh"; }
 
+Renderer parseRenderer(const std::string& name) {
+    if (name == "raster") return Renderer::Raster;
+    if (name == "raytrace") return Renderer::Raytrace;
+    throw scene::InputError("--renderer: '" + name + "' is not raster or raytrace");
+}
+
+const char* rendererName(Renderer renderer) { return renderer == Renderer::Raytrace ? "raytrace" : "raster"; }
+
 const char* textureFilterName(TextureFilterOverride f) {
     switch (f) {
         case TextureFilterOverride::File: return "file";

@@ -28,6 +28,12 @@ enum class TextureFilterOverride { File, Nearest, Bilinear, Trilinear };
 /// What the image shows: the shaded frame, or one of the pipeline's internals made visible.
 enum class View { Color, Depth, Normals, Tiles, Overdraw, Lod, Visibility, ShadowPixels };
 
+/// What finds the surface each sample sees: the rasterizer's depth test, or a ray per sample
+/// (rt/primary_rays.h) whose answer the deferred shade stage shades with the same models
+/// (raster/visibility_shade.h). Everything after visibility — shading, shadows, occlusion — is
+/// the same stage either way.
+enum class Renderer { Raster, Raytrace };
+
 /// How a scene is read, fixed for as long as it stays loaded (render/loaded_scene.h).
 struct SceneOptions {
     float detail = 1.0f;  // tessellation scale of built-in scenes, (0, 16]
@@ -66,6 +72,9 @@ struct FrameSettings {
     /// --accel: what answers the shadow stage's rays (shadows, ambient occlusion): the BVH, or a
     /// uniform grid rebuilt for every pose (rt/caster_rays.h). The same images either way.
     rt::CasterAccel accel = rt::CasterAccel::Bvh;
+    /// --renderer: raster (the default) or raytrace (3D scenes: camera rays through --accel's
+    /// structure, built for the frame, decide visibility).
+    Renderer renderer = Renderer::Raster;
     int supersample = 1;      // N: render N x N times the pixels and box-filter down (N² samples on a grid)
     TextureFilterOverride textureFilter = TextureFilterOverride::File;
     raster::DepthConvention depth = raster::DepthConvention::Standard;  // --depth standard|reversed
@@ -117,5 +126,7 @@ raster::DepthConvention parseDepthConvention(const std::string& name);
 rt::BvhUpdateMethod parseBvhUpdate(const std::string& name);
 rt::CasterAccel parseAccel(const std::string& name);  // bvh or grid; throws scene::InputError
 const char* accelName(rt::CasterAccel accel);
+Renderer parseRenderer(const std::string& name);  // raster or raytrace; throws scene::InputError
+const char* rendererName(Renderer renderer);
 
 }  // namespace cuberille::render

@@ -104,6 +104,12 @@ void validate(const State& s, const FrameSettings& o) {
         throw InputError("--view normals: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
         throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
+    if (o.renderer == Renderer::Raytrace && !threeD)
+        throw InputError("--renderer raytrace: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
+    if (o.renderer == Renderer::Raytrace && o.view != View::Color && o.view != View::Depth && o.view != View::Normals &&
+        o.view != View::ShadowPixels)
+        throw InputError(std::string("--view ") + viewName(o.view) + ": shows the rasterizer's stages; with --renderer "
+                         "raytrace only color, depth, normals and shadow-pixels");
     if (o.frustumCull && !threeD) throw InputError("--frustum-cull: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.ground && (!threeD || s.procedural)) throw InputError("--ground: only for model files (glTF, PLY, OBJ), not " + s.name);
     // A .tri scene's triangles are flat colours; a voxel model's frame takes the voxel scene's own
@@ -186,6 +192,45 @@ void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::C
     result.stats = pipeline.stats();
     if (result.voxel) result.voxel->coveredPixels = raster::coveredPixels(pipeline.framebuffer());
     finishView(pipeline, o.view, camera, result.image, result.stats.times.resolveMs);
+}
+
+// --renderer raytrace: the frame's draws recorded, camera rays through the opaque ones decide what
+// each sample sees, and the deferred shade stage shades it with the draws' own shading. The rest
+// are then drawn over it by the rasterizer, in their order, against the depths the shade stage
+// wrote: see-through draws (blended, transmissive), as a deferred GPU renderer draws its
+// transparent pass forward, and alpha-tested ones, whose alpha the rays do not evaluate yet
+// (docs/ray_tracing.md).
+void drawRayTracedFrame(const FrameSettings& o, const scene::Scene& drawn, const scene::Camera& camera,
+                        const raster::Lighting* shadowed, RenderResult& result) {
+    raster::Pipeline pipeline;
+    raster::FramebufferDesc desc = framebufferDesc(o);
+    desc.clearColor = o.background ? clearColorFor(*o.background) : drawn.background;
+    pipeline.beginDeferredFrame(desc);
+    const float aspect = float(o.width) / float(o.height);
+    drawn.draw(pipeline, aspect, shadowed);
+    const std::vector<raster::DrawCall> draws(pipeline.recordedDraws().begin(), pipeline.recordedDraws().end());
+    std::vector<uint8_t> traced(draws.size());
+    RayTracedFrameStats st;
+    for (size_t d = 0; d < draws.size(); ++d) {
+        traced[d] = draws[d].state.depthWrite && draws[d].state.alphaMode != raster::AlphaMode::Mask;
+        (traced[d] ? st.drawsTraced : st.drawsRasterized) += 1;
+    }
+    rt::PrimaryRayCamera rays;
+    rays.worldFromClip = glm::inverse(glm::dmat4(camera.clipFromWorld(aspect)));
+    rays.reversedDepth = camera.reversedDepth;
+    rays.orthographic = camera.orthographic;
+    rays.eye = camera.position;
+    rays.viewDirection = glm::normalize(camera.target - camera.position);
+    raster::VisibilityBuffer seen;
+    seen.reset(desc.widthPixels, desc.heightPixels, desc.samples);
+    st.rays = rt::tracePrimaryVisibility(draws, traced, rays, o.accel, seen);
+    st.shade = pipeline.shadeVisible(seen);
+    for (size_t d = 0; d < draws.size(); ++d)
+        if (!traced[d]) pipeline.draw(draws[d]);
+    pipeline.endFrame();
+    result.stats = pipeline.stats();
+    result.rayTraced = st;
+    finishView(pipeline, o.view, &camera, result.image, result.stats.times.resolveMs);
 }
 
 // --zoom F: a lens zoom. The eye stays and the field of view narrows until what it saw is F
@@ -326,9 +371,13 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
     if (culling) result.culling = culling->cull(s, float(o.width) / float(o.height));
     const std::optional<scene::Scene> normals = o.view == View::Normals ? std::optional(normalsScene(s)) : std::nullopt;
     const scene::Scene& drawn = normals ? *normals : s;
-    drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) {
-        drawn.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
-    }, result);
+    if (o.renderer == Renderer::Raytrace) {
+        drawRayTracedFrame(o, drawn, s.camera, shadowed ? &*shadowed : nullptr, result);
+    } else {
+        drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) {
+            drawn.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
+        }, result);
+    }
     if (o.view == View::ShadowPixels) showShadowPixels(shadows->markedPixels(), result.image);
 }
 
@@ -446,6 +495,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
     j["threadsRequested"] = o.threads > 0 ? o.threads : raster::hardwareThreads();
     j["instructionSet"] = raster::activeInstructionSet();  // of the back end; the image is the same on each
     j["view"] = viewName(o.view);
+    j["renderer"] = rendererName(o.renderer);
     j["projection"] = o.orthographic ? "orthographic" : "perspective";
     const FrameMemory memory = frameMemory(o);
     j["memory"] = {{"framebufferBytes", memory.framebufferBytes}, {"imageBytes", memory.imageBytes}};
@@ -469,6 +519,21 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                       {"facesPerCoveredPixel", v.facesPerCoveredPixel()},
                       {"selectMs", v.selectMs},
                       {"expandMs", v.expandMs}};
+    }
+    if (r.rayTraced) {
+        const RayTracedFrameStats& rt = *r.rayTraced;
+        j["primaryRays"] = {{"accel", accelName(rt.rays.accel)},
+                            {"drawsTraced", rt.drawsTraced},
+                            {"drawsRasterized", rt.drawsRasterized},
+                            {"triangles", rt.rays.triangles},
+                            {"rays", rt.rays.rays},
+                            {"hits", rt.rays.hits},
+                            {"trianglesSeen", rt.shade.trianglesSeen},
+                            {"samplesWithoutSetUp", rt.shade.samplesWithoutSetUp},
+                            {"gatherMs", rt.rays.gatherMs},
+                            {"buildMs", rt.rays.buildMs},
+                            {"traceMs", rt.rays.traceMs},
+                            {"shadeMs", rt.shade.vertexMs + rt.shade.setupMs + rt.shade.shadeMs}};
     }
     if (r.culling) {
         const FrustumCullStats& c = *r.culling;

@@ -6,7 +6,8 @@
 //      zoom, orbit), the texture-filter and depth-convention knobs;
 //   2. shadows, when asked for: masks per light from a map, rays, or both (render/scene_shadows.h);
 //   3. the frustum cull, when asked for (render/scene_culling.h);
-//   4. the draws through raster::Pipeline (a voxel model's after block selection, lod/);
+//   4. the draws through raster::Pipeline (a voxel model's after block selection, lod/), or with
+//      --renderer raytrace, recorded and shaded from what camera rays see (rt/primary_rays.h);
 //   5. the resolve of what the view shows.
 // Supersampling renders step 1-5 at N x N the size and box-filters down.
 //
@@ -24,9 +25,17 @@
 #include "render/loaded_scene.h"
 #include "render/scene_culling.h"
 #include "render/scene_shadows.h"
+#include "rt/primary_rays.h"
 #include "scene/load_stats.h"
 
 namespace cuberille::render {
+
+/// --renderer raytrace: the camera rays and the deferred shade of what they found.
+struct RayTracedFrameStats {
+    rt::PrimaryRayStats rays;
+    raster::VisibilityShadeStats shade;
+    size_t drawsTraced = 0, drawsRasterized = 0;  // see-through and alpha-tested draws: rasterized after
+};
 
 struct RenderResult {
     /// Linear RGBA, colour premultiplied by alpha; for the depth view of a 3D scene, the distance
@@ -41,6 +50,7 @@ struct RenderResult {
     uint32_t voxelResolution = 0;               // voxel models: the finest level's
     std::optional<ShadowFrameStats> shadows;    // when a shadow mode was asked for
     std::optional<FrustumCullStats> culling;    // with frustumCull
+    std::optional<RayTracedFrameStats> rayTraced;  // with Renderer::Raytrace
 };
 
 /// One frame. Throws scene::InputError for settings the scene cannot honour (an option it has no

@@ -95,6 +95,24 @@ def test_the_grid_answers_the_shadow_stages_rays_as_the_bvh_does(examples):
         scene.render(accel="octree", **settings)
 
 
+def test_the_ray_tracer_sees_what_the_rasterizer_sees(examples):
+    """renderer="raytrace" finds each sample's surface by a camera ray and shades it with the same
+    models: on a mesh on its floor, with ray-traced shadows, the image is the rasterizer's but for
+    a few pixels where snapping to 1/256 pixel decides (PrimaryRays' tests bound where); the stats
+    report the rays, and a 2D .tri scene is refused."""
+    scene = cuberille.Scene(str(examples / "knot.obj"))
+    settings = dict(width=160, height=120, ground=True, shadows="raytraced")
+    rasterized = scene.render(**settings)
+    assert scene.stats["renderer"] == "raster" and "primaryRays" not in scene.stats
+    traced = scene.render(renderer="raytrace", **settings)
+    rays = scene.stats["primaryRays"]
+    assert scene.stats["renderer"] == "raytrace" and rays["rays"] == 160 * 120 and rays["hits"] > 0
+    differing = np.any(traced != rasterized, axis=2).sum()
+    assert differing < 160 * 120 / 500
+    with pytest.raises(cuberille.InputError, match="--renderer: 'path' is not raster or raytrace"):
+        scene.render(renderer="path", **settings)
+
+
 def test_linear_returns_the_renderers_floats(examples):
     scene = cuberille.Scene(examples / "torus.ply")
     linear = scene.render(64, 48, linear=True)

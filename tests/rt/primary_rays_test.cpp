@@ -1,0 +1,178 @@
+// Camera rays (rt/primary_rays.h): each sample sees what brute force over every triangle sees,
+// through either structure and at any thread count; where they part from the rasterizer's depth
+// test, it is only where snapping to 1/256 pixel can decide.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rt/primary_rays.h"
+#include "rt/ray_query.h"
+#include "tests/raster/random_draws.h"
+#include "tests/thread_counts.h"
+
+namespace cuberille::testing {
+namespace {
+
+rt::PrimaryRayCamera cameraOf(const RandomPerspectiveDraws& s) {
+    rt::PrimaryRayCamera c;
+    c.worldFromClip = glm::inverse(glm::dmat4(s.clipFromWorld));
+    c.eye = s.eye;
+    c.viewDirection = glm::normalize(s.target - s.eye);
+    return c;
+}
+
+glm::dvec2 samplePosition(int x, int y, int s, int samples) {
+    const raster::SamplePattern& sp = raster::standardSamplePattern(samples);
+    return {x + 0.5 + sp.dx[s] / 16.0, y + 0.5 + sp.dy[s] / 16.0};
+}
+
+// Every draw unculled and every triangle in one mesh, tested one by one: the reference. Both
+// structures, 1 and 4 samples, every thread count: the same (draw, triangle) at every sample.
+TEST(PrimaryRays, EverySampleSeesWhatBruteForceSees) {
+    constexpr int kWidth = 48, kHeight = 32;
+    for (const uint32_t seed : {1u, 2u}) {
+        const RandomPerspectiveDraws scene(seed);
+        std::vector<raster::DrawCall> draws = scene.draws();
+        for (raster::DrawCall& d : draws) d.state.cull = raster::CullMode::None;
+        std::vector<glm::vec3> positions;
+        std::vector<uint32_t> indices, drawOf, triangleOf;
+        for (size_t d = 0; d < draws.size(); ++d) {
+            const uint32_t base = uint32_t(positions.size());
+            positions.insert(positions.end(), draws[d].positions.begin(), draws[d].positions.end());
+            for (size_t t = 0; t < draws[d].triangleCount(); ++t) {
+                for (int k = 0; k < 3; ++k)
+                    indices.push_back(base + (draws[d].indices.empty() ? uint32_t(3 * t + k) : draws[d].indices[3 * t + k]));
+                drawOf.push_back(uint32_t(d)), triangleOf.push_back(uint32_t(t));
+            }
+        }
+        const rt::TriangleMeshView all{positions, indices};
+        const rt::PrimaryRayCamera camera = cameraOf(scene);
+        const std::vector<uint8_t> traced(draws.size(), 1);
+        for (const int samples : {1, 4}) {
+            raster::VisibilityBuffer expected;
+            expected.reset(kWidth, kHeight, samples);
+            int hits = 0;
+            for (int y = 0; y < kHeight; ++y)
+                for (int x = 0; x < kWidth; ++x)
+                    for (int s = 0; s < samples; ++s) {
+                        const glm::dvec2 p = samplePosition(x, y, s, samples);
+                        const rt::RayHit h = rt::closestHitBruteForce(all, rt::primaryRay(camera, p.x, p.y, kWidth, kHeight));
+                        if (!h.hit()) continue;
+                        ++hits;
+                        const size_t i = (size_t(y) * kWidth + x) * samples + s;
+                        expected.draw[i] = drawOf[h.triangle], expected.triangle[i] = triangleOf[h.triangle];
+                    }
+            ASSERT_GT(hits, kWidth * kHeight * samples / 2);
+            for (const rt::CasterAccel accel : {rt::CasterAccel::Bvh, rt::CasterAccel::Grid})
+                for (const ThreadCount count : kThreadCounts) {
+                    ThreadCountScope threads(count);
+                    raster::VisibilityBuffer found;
+                    found.reset(kWidth, kHeight, samples);
+                    const rt::PrimaryRayStats stats = rt::tracePrimaryVisibility(draws, traced, camera, accel, found);
+                    const std::string where = "seed " + std::to_string(seed) + ", " + std::to_string(samples) + " samples, " +
+                                              (accel == rt::CasterAccel::Grid ? "grid, " : "bvh, ") +
+                                              std::to_string(count.threads) + " threads";
+                    EXPECT_EQ(stats.triangles, drawOf.size()) << where;
+                    EXPECT_EQ(stats.hits, uint64_t(hits)) << where;
+                    EXPECT_EQ(found.draw, expected.draw) << where;
+                    EXPECT_EQ(found.triangle, expected.triangle) << where;
+                }
+        }
+    }
+}
+
+/// A triangle of a draw as the rasterizer would place it before snapping, in double: window
+/// positions (pixels) and depths; `inFront` false where a vertex lies behind the eye's plane
+/// (clipping then makes the window triangle something else).
+struct WindowTriangle {
+    glm::dvec3 v[3];  // x, y in pixels, z in [0, 1]
+    bool inFront = true;
+};
+
+WindowTriangle windowTriangle(const RandomPerspectiveDraws& scene, const raster::DrawCall& draw, uint32_t triangle, int width,
+                              int height) {
+    WindowTriangle w;
+    for (int k = 0; k < 3; ++k) {
+        const size_t i = draw.indices.empty() ? 3 * size_t(triangle) + k : draw.indices[3 * size_t(triangle) + k];
+        const glm::dvec4 c = glm::dmat4(scene.clipFromWorld) * glm::dvec4(glm::dvec3(draw.positions[i]), 1.0);
+        if (!(c.w > 1e-6)) w.inFront = false;
+        w.v[k] = {(c.x / c.w + 1.0) * width / 2.0, (1.0 - c.y / c.w) * height / 2.0, c.z / c.w};
+    }
+    return w;
+}
+
+double distanceToEdges(const WindowTriangle& w, const glm::dvec2& p) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+        const glm::dvec2 a(w.v[k]), b(w.v[(k + 1) % 3]);
+        const glm::dvec2 e = b - a;
+        const double length = glm::length(e);
+        if (length == 0.0) return 0.0;
+        nearest = std::min(nearest, std::abs(e.x * (p.y - a.y) - e.y * (p.x - a.x)) / length);
+    }
+    return nearest;
+}
+
+/// The triangle's window depth at p and the length of its depth gradient (per pixel).
+glm::dvec2 depthAndGradient(const WindowTriangle& w, const glm::dvec2& p) {
+    const glm::dvec3 n = glm::cross(w.v[1] - w.v[0], w.v[2] - w.v[0]);
+    if (n.z == 0.0) return {0.0, std::numeric_limits<double>::infinity()};
+    const glm::dvec2 gradient(-n.x / n.z, -n.y / n.z);
+    return {w.v[0].z + gradient.x * (p.x - w.v[0].x) + gradient.y * (p.y - w.v[0].y), glm::length(gradient)};
+}
+
+// The bound on where snapping can decide: each vertex moves by at most 1/512 pixel in x and in y,
+// so an edge by at most sqrt(2)/512 = 0.0028 pixel, and a depth plane's value at a sample by its
+// gradient times that much; 1/256 pixel covers both with the float rounding of the vertex stage
+// (some 1e-5 pixel over a frame this size) to spare.
+constexpr double kSnapPixels = 1.0 / 256.0;
+
+// Random scenes with culling, clipping and intersecting triangles, at 1 and 4 samples: every
+// sample where the rays and the depth test name different triangles (or one names none) lies
+// within kSnapPixels of an edge of either triangle, or where their depths are within what
+// snapping can move them; and few do. Culling the wrong side, a ray through the wrong position or
+// the wrong depth range would part from the rasterizer far from any edge.
+TEST(PrimaryRays, PartFromTheDepthTestOnlyWhereSnappingDecides) {
+    constexpr int kWidth = 150, kHeight = 100;
+    for (const uint32_t seed : {1u, 2u, 3u}) {
+        const RandomPerspectiveDraws scene(seed);
+        const std::vector<raster::DrawCall> draws = scene.draws();
+        const std::vector<uint8_t> traced(draws.size(), 1);
+        for (const int samples : {1, 4}) {
+            const std::string where = "seed " + std::to_string(seed) + ", " + std::to_string(samples) + " samples";
+            const raster::VisibilityBuffer raster = visibilityOfForwardFrame(draws, kWidth, kHeight, samples);
+            raster::VisibilityBuffer rays;
+            rays.reset(kWidth, kHeight, samples);
+            rt::tracePrimaryVisibility(draws, traced, cameraOf(scene), rt::CasterAccel::Bvh, rays);
+            int differing = 0, unexplained = 0;
+            for (int y = 0; y < kHeight; ++y)
+                for (int x = 0; x < kWidth; ++x)
+                    for (int s = 0; s < samples; ++s) {
+                        const size_t i = (size_t(y) * kWidth + x) * samples + s;
+                        if (raster.draw[i] == rays.draw[i] && raster.triangle[i] == rays.triangle[i]) continue;
+                        ++differing;
+                        const glm::dvec2 p = samplePosition(x, y, s, samples);
+                        std::vector<WindowTriangle> named;
+                        for (const raster::VisibilityBuffer* b : {&raster, static_cast<const raster::VisibilityBuffer*>(&rays)})
+                            if (b->draw[i] != raster::VisibilityBuffer::kNone)
+                                named.push_back(windowTriangle(scene, draws[b->draw[i]], b->triangle[i], kWidth, kHeight));
+                        bool explained = false;
+                        for (const WindowTriangle& w : named)
+                            explained = explained || !w.inFront || distanceToEdges(w, p) <= kSnapPixels;
+                        if (!explained && named.size() == 2) {
+                            const glm::dvec2 a = depthAndGradient(named[0], p), b = depthAndGradient(named[1], p);
+                            explained = std::abs(a.x - b.x) <= (a.y + b.y) * kSnapPixels + 1e-6;
+                        }
+                        if (!explained && unexplained++ < 3)
+                            ADD_FAILURE() << where << ": sample " << s << " of (" << x << ", " << y
+                                          << ") parts from the depth test away from any edge or depth tie";
+                    }
+            EXPECT_EQ(unexplained, 0) << where;
+            EXPECT_LT(differing, kWidth * kHeight * samples / 200) << where << ": more than 0.5% of the samples differ";
+        }
+    }
+}
+
+}  // namespace
+}  // namespace cuberille::testing
