@@ -90,20 +90,20 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
     render->add_flag("--frustum-cull", o.frustumCull,
                      "3D scenes: cull triangles against the view frustum through a BVH (refitted per --animate frame)");
     render->add_option("--bvh-update", names.bvhUpdate,
-                       "With --animate: how the frustum cull's and the shadow stage's BVHs follow each pose: refit "
+                       "With --animate: how the frustum cull's, the shadow stage's and the camera rays' BVHs follow each pose: refit "
                        "(bottom-up, rebuilt past Lauterbach's 0.4), lazy (Larsson's: the upper half refitted, the "
                        "rest on first touch by a ray) or rebuild (a new tree every frame)")
         ->capture_default_str();
     render->add_option("--renderer", names.renderer,
                        "What finds the surface each sample sees: raster (the rasterizer's depth test) or raytrace "
-                       "(3D scenes: a camera ray per sample through --accel's structure, built for the frame; the "
-                       "same shading, shadows and occlusion)")
+                       "(3D scenes: a camera ray per sample through --accel's structure; the same shading, shadows "
+                       "and occlusion)")
         ->capture_default_str();
     render->add_option("--accel", names.accel,
                        "What answers the rays (--renderer raytrace's camera rays, and the shadow stage's for --shadows "
-                       "hybrid/raytraced/auto and --ao): bvh (the shadow stage's built once, following each --animate "
-                       "pose as --bvh-update says) or grid (a uniform grid rebuilt from scratch for every pose, Wald et "
-                       "al. 2006). The same images either way")
+                       "hybrid/raytraced/auto and --ao): bvh (built once, kept for every view and following each "
+                       "--animate pose as --bvh-update says) or grid (a uniform grid rebuilt from scratch for every "
+                       "frame, Wald et al. 2006). The same images either way")
         ->capture_default_str();
     render->add_option("--pixel-error", o.pixelError,
                        "Voxel models: refine blocks until a voxel's edge projects to at most this many pixels "

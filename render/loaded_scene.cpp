@@ -156,7 +156,7 @@ double LoadedScene::State::poseFor(const FrameSettings& f) {
     fileLights = std::move(c.lights);
     bounds = scene::boundsOf(posed.meshes);
     groundHeld = false;  // the new pose's meshes are the model's alone
-    shadowsPoseStale = cullingPoseStale = hasPose;  // the hierarchies follow the new pose
+    shadowsPoseStale = cullingPoseStale = primaryRaysPoseStale = hasPose;  // the hierarchies follow the new pose
     hasPose = true;
     poseTimeSeconds = f.timeSeconds;
     poseAnimation = f.animation;

@@ -200,7 +200,7 @@ void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::C
 // wrote: see-through draws (blended, transmissive), as a deferred GPU renderer draws its
 // transparent pass forward, and alpha-tested ones, whose alpha the rays do not evaluate yet
 // (docs/ray_tracing.md).
-void drawRayTracedFrame(const FrameSettings& o, const scene::Scene& drawn, const scene::Camera& camera,
+void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene& drawn, const scene::Camera& camera,
                         const raster::Lighting* shadowed, RenderResult& result) {
     raster::Pipeline pipeline;
     raster::FramebufferDesc desc = framebufferDesc(o);
@@ -223,7 +223,23 @@ void drawRayTracedFrame(const FrameSettings& o, const scene::Scene& drawn, const
     rays.viewDirection = glm::normalize(camera.target - camera.position);
     raster::VisibilityBuffer seen;
     seen.reset(desc.widthPixels, desc.heightPixels, desc.samples);
-    st.rays = rt::tracePrimaryVisibility(draws, traced, rays, o.accel, seen);
+    if (o.accel == rt::CasterAccel::Grid) {
+        st.rays = rt::tracePrimaryVisibility(draws, traced, rays, o.accel, seen);
+    } else {
+        // The tree is kept for the next frame unless the frustum cull rewrites index lists in place.
+        std::optional<rt::PrimaryRayHierarchy>& kept = state.primaryRays;
+        if (kept && (o.frustumCull || state.primaryRaysMethod != o.bvhUpdate || !kept->sameDraws(draws, traced))) kept.reset();
+        if (!kept) {
+            kept.emplace(draws, traced, o.bvhUpdate);
+            state.primaryRaysMethod = o.bvhUpdate;
+        } else if (state.primaryRaysPoseStale || !kept->sameVertexArrays(draws)) {
+            st.update = kept->update(draws);
+            st.updated = true;
+        }
+        state.primaryRaysPoseStale = false;
+        st.rays = kept->trace(rays, seen);
+        if (o.frustumCull) kept.reset();
+    }
     st.shade = pipeline.shadeVisible(seen);
     for (size_t d = 0; d < draws.size(); ++d)
         if (!traced[d]) pipeline.draw(draws[d]);
@@ -372,7 +388,7 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
     const std::optional<scene::Scene> normals = o.view == View::Normals ? std::optional(normalsScene(s)) : std::nullopt;
     const scene::Scene& drawn = normals ? *normals : s;
     if (o.renderer == Renderer::Raytrace) {
-        drawRayTracedFrame(o, drawn, s.camera, shadowed ? &*shadowed : nullptr, result);
+        drawRayTracedFrame(st, o, drawn, s.camera, shadowed ? &*shadowed : nullptr, result);
     } else {
         drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) {
             drawn.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
@@ -532,6 +548,8 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                             {"samplesWithoutSetUp", rt.shade.samplesWithoutSetUp},
                             {"gatherMs", rt.rays.gatherMs},
                             {"buildMs", rt.rays.buildMs},
+                            {"bvhUpdated", rt.updated},
+                            {"bvhRebuilt", rt.update.rebuilt},
                             {"traceMs", rt.rays.traceMs},
                             {"shadeMs", rt.shade.vertexMs + rt.shade.setupMs + rt.shade.shadeMs}};
     }

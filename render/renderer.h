@@ -34,6 +34,10 @@ namespace cuberille::render {
 struct RayTracedFrameStats {
     rt::PrimaryRayStats rays;
     raster::VisibilityShadeStats shade;
+    /// --accel bvh keeps its tree across frames: whether this frame brought it to a new pose, and how
+    /// (rays.buildMs holds the build or update's time; 0 when the tree was reused as it was).
+    bool updated = false;
+    rt::BvhUpdateReport update;
     size_t drawsTraced = 0, drawsRasterized = 0;  // see-through and alpha-tested draws: rasterized after
 };
 

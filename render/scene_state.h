@@ -12,6 +12,7 @@
 #include "render/loaded_scene.h"
 #include "render/scene_culling.h"
 #include "render/scene_shadows.h"
+#include "rt/primary_rays.h"
 #include "scene/environment_map.h"
 #include "scene/gltf_loader.h"
 #include "scene/scene.h"
@@ -55,6 +56,11 @@ struct LoadedScene::State {
     std::optional<SceneFrustumCull> culling;
     rt::BvhUpdateMethod cullingMethod = rt::BvhUpdateMethod::Refit;
     bool cullingPoseStale = false;
+    /// --renderer raytrace --accel bvh: the camera rays' tree over the traced draws, kept while
+    /// they are the same draws (rt::PrimaryRayHierarchy::sameDraws) and brought to each new pose.
+    std::optional<rt::PrimaryRayHierarchy> primaryRays;
+    rt::BvhUpdateMethod primaryRaysMethod = rt::BvhUpdateMethod::Refit;
+    bool primaryRaysPoseStale = false;
 
     /// A 3D scene at the frame's pose (glTF: its animation and time; posed again only when they
     /// differ from the pose held). Returns the milliseconds spent posing.

@@ -71,6 +71,11 @@ RayHit DeformingBvh::closestHit(const Ray& ray) const {
     return usesWide() ? rt::closestHit(wide_, ray) : rt::closestHit(*bvh_, mesh_, ray);
 }
 
+RayHit DeformingBvh::closestHit(const Ray& ray, const SkippedTriangles& skipped) const {
+    if (lazy_) return lazy_->closestHit(ray, &skipped);
+    return usesWide() ? rt::closestHit(wide_, ray, skipped) : rt::closestHit(*bvh_, mesh_, ray, skipped);
+}
+
 bool DeformingBvh::anyHit(const Ray& ray) const {
     if (lazy_) return lazy_->anyHit(ray);
     return usesWide() ? rt::anyHit(wide_, ray) : rt::anyHit(*bvh_, mesh_, ray);

@@ -12,19 +12,25 @@
 namespace cuberille::rt {
 namespace {
 
-/// The traced draws as one world-space mesh, and where each of its triangles came from.
-struct TracedMesh {
-    std::vector<glm::vec3> positions;
-    std::vector<uint32_t> indices;
-    std::vector<uint32_t> draw, triangle;  // per mesh triangle: its draw and its index there
-
-    TriangleMeshView view() const { return {positions, indices}; }
+/// Gathers the traced draws' triangles in world space. With `dropCulledFor`, a culled draw's
+/// triangles that face away from that camera are left out (the grid's mesh, built per frame);
+/// without, every triangle is kept with its culled side (the kept BVH's mesh).
+void gatherTracedMesh(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced,
+                      const PrimaryRayCamera* dropCulledFor, TracedMesh& mesh);
+/// Marks the triangles a culled draw shows its culled side to this view.
+void skipCulled(const TracedMesh& mesh, const PrimaryRayCamera& camera, std::vector<uint8_t>& skipped);
+/// Closest hits for a block's rays: the BVH's one at a time, or the grid's as packets.
+struct PrimaryRayQuery {
+    const DeformingBvh* bvh = nullptr;
+    const SkippedTriangles* skipped = nullptr;
+    const UniformGrid* grid = nullptr;
+    TriangleMeshView mesh;
 };
-
-TracedMesh gatherTracedMesh(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced,
-                            const PrimaryRayCamera& camera);
-void traceBlock(const TracedMesh& mesh, const WideBvh* bvh, const UniformGrid* grid, const PrimaryRayCamera& camera,
-                int blockX, int blockY, raster::VisibilityBuffer& out, uint64_t& hits);
+void traceBlock(const TracedMesh& mesh, const PrimaryRayQuery& query, const PrimaryRayCamera& camera, int blockX, int blockY,
+                raster::VisibilityBuffer& out, uint64_t& hits);
+/// Every block of the frame, in parallel; adds the rays and hits to `stats`.
+void traceFrame(const TracedMesh& mesh, const PrimaryRayQuery& query, const PrimaryRayCamera& camera,
+                raster::VisibilityBuffer& out, PrimaryRayStats& stats);
 
 /// The edge of the square blocks of pixels traced together: one grid packet of 8x8 rays at one
 /// sample (Wald et al.'s best packet size below 250k triangles, §4.1).
@@ -51,26 +57,93 @@ PrimaryRayStats tracePrimaryVisibility(std::span<const raster::DrawCall> draws, 
     PrimaryRayStats stats;
     stats.accel = accel;
     double t0 = raster::nowMs();
-    const TracedMesh mesh = gatherTracedMesh(draws, traced, camera);
+    TracedMesh mesh;
+    gatherTracedMesh(draws, traced, accel == CasterAccel::Grid ? &camera : nullptr, mesh);
     stats.triangles = mesh.draw.size();
     double t1 = raster::nowMs();
     stats.gatherMs = t1 - t0;
-    WideBvh wide;
+    std::optional<DeformingBvh> bvh;
     UniformGrid grid;
-    if (accel == CasterAccel::Bvh) wide = collapseToWideBvh(buildBvh(mesh.view()));
-    else grid = buildUniformGrid(mesh.view());
-    double t2 = raster::nowMs();
-    stats.buildMs = t2 - t1;
-    const int blocksX = (out.width + kBlockPixels - 1) / kBlockPixels, blocksY = (out.height + kBlockPixels - 1) / kBlockPixels;
-    std::vector<uint64_t> hits(size_t(blocksX) * size_t(blocksY), 0);
-    if (!mesh.draw.empty())
-        raster::parallelFor(hits.size(), [&](size_t b) {
-            traceBlock(mesh, accel == CasterAccel::Bvh ? &wide : nullptr, accel == CasterAccel::Grid ? &grid : nullptr, camera,
-                       int(b % blocksX), int(b / blocksX), out, hits[b]);
-        });
-    for (uint64_t h : hits) stats.hits += h;
-    stats.rays = uint64_t(out.width) * uint64_t(out.height) * uint64_t(out.samples);
-    stats.traceMs = raster::nowMs() - t2;
+    std::vector<uint8_t> culled;
+    SkippedTriangles skipped;
+    PrimaryRayQuery query{.skipped = &skipped, .mesh = mesh.view()};
+    if (accel == CasterAccel::Bvh) {
+        skipCulled(mesh, camera, culled);
+        skipped.skipped = culled;
+        bvh.emplace(mesh.view(), BvhUpdateMethod::Rebuild);
+        query.bvh = &*bvh;
+    } else {
+        grid = buildUniformGrid(mesh.view());
+        query.grid = &grid;
+    }
+    stats.buildMs = raster::nowMs() - t1;
+    traceFrame(mesh, query, camera, out, stats);
+    return stats;
+}
+
+PrimaryRayHierarchy::DrawKey PrimaryRayHierarchy::keyOf(uint32_t draw, const raster::DrawCall& c) {
+    return {draw, c.positions.size(), c.indices.size(), c.worldFromObject, c.state.cull};
+}
+
+PrimaryRayHierarchy::PrimaryRayHierarchy(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced,
+                                         BvhUpdateMethod method) {
+    for (size_t d = 0; d < draws.size(); ++d)
+        if (traced[d]) {
+            keys_.push_back(keyOf(uint32_t(d), draws[d]));
+            sourceIndices_.insert(sourceIndices_.end(), draws[d].indices.begin(), draws[d].indices.end());
+            vertexArrays_.push_back(draws[d].positions.data());
+        }
+    const double t0 = raster::nowMs();
+    gatherTracedMesh(draws, traced, nullptr, mesh_);
+    bvh_.emplace(mesh_.view(), method);
+    pendingBuildMs_ = raster::nowMs() - t0;
+}
+
+bool PrimaryRayHierarchy::sameDraws(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced) const {
+    size_t k = 0, index = 0;
+    for (size_t d = 0; d < draws.size(); ++d) {
+        if (!traced[d]) continue;
+        if (k == keys_.size() || !(keys_[k] == keyOf(uint32_t(d), draws[d]))) return false;
+        const std::span<const uint32_t> indices = draws[d].indices;
+        if (!std::equal(indices.begin(), indices.end(), sourceIndices_.begin() + ptrdiff_t(index))) return false;
+        index += indices.size();
+        ++k;
+    }
+    return k == keys_.size();
+}
+
+bool PrimaryRayHierarchy::sameVertexArrays(std::span<const raster::DrawCall> draws) const {
+    for (size_t k = 0; k < keys_.size(); ++k)
+        if (draws[keys_[k].draw].positions.data() != vertexArrays_[k]) return false;
+    return true;
+}
+
+BvhUpdateReport PrimaryRayHierarchy::update(std::span<const raster::DrawCall> draws) {
+    const double t0 = raster::nowMs();
+    // The same triangles in the same order: only the positions are gathered again, in place, so
+    // the tree's view of the mesh stays valid.
+    size_t at = 0;
+    for (size_t k = 0; k < keys_.size(); ++k) {
+        const raster::DrawCall& c = draws[keys_[k].draw];
+        for (const glm::vec3& p : c.positions) mesh_.positions[at++] = glm::vec3(c.worldFromObject * glm::vec4(p, 1.0f));
+        vertexArrays_[k] = c.positions.data();
+    }
+    BvhUpdateReport report = bvh_->update(mesh_.view());
+    pendingBuildMs_ += raster::nowMs() - t0;
+    return report;
+}
+
+PrimaryRayStats PrimaryRayHierarchy::trace(const PrimaryRayCamera& camera, raster::VisibilityBuffer& out) {
+    PrimaryRayStats stats;
+    stats.accel = CasterAccel::Bvh;
+    stats.triangles = mesh_.draw.size();
+    stats.buildMs = pendingBuildMs_;
+    pendingBuildMs_ = 0;
+    const double t0 = raster::nowMs();
+    skipCulled(mesh_, camera, skipped_);
+    stats.gatherMs = raster::nowMs() - t0;
+    const SkippedTriangles skipped{skipped_};
+    traceFrame(mesh_, {.bvh = &*bvh_, .skipped = &skipped, .mesh = mesh_.view()}, camera, out, stats);
     return stats;
 }
 
@@ -84,15 +157,31 @@ bool facesTheCamera(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, 
     return toward > 0.0f;
 }
 
-TracedMesh gatherTracedMesh(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced,
-                            const PrimaryRayCamera& camera) {
-    TracedMesh mesh;
+bool culledFor(raster::CullMode cull, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, const PrimaryRayCamera& camera) {
+    return cull != raster::CullMode::None && facesTheCamera(a, b, c, camera) == (cull == raster::CullMode::Front);
+}
+
+void skipCulled(const TracedMesh& mesh, const PrimaryRayCamera& camera, std::vector<uint8_t>& skipped) {
+    constexpr size_t kTrianglesPerTask = 16384;
+    const size_t triangles = mesh.cull.size();
+    skipped.resize(triangles);
+    raster::parallelFor((triangles + kTrianglesPerTask - 1) / kTrianglesPerTask, [&](size_t task) {
+        for (size_t t = task * kTrianglesPerTask; t < std::min(triangles, (task + 1) * kTrianglesPerTask); ++t) {
+            const uint32_t* i = &mesh.indices[3 * t];
+            skipped[t] = culledFor(mesh.cull[t], mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]], camera);
+        }
+    });
+}
+
+void gatherTracedMesh(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced,
+                      const PrimaryRayCamera* dropCulledFor, TracedMesh& mesh) {
     for (size_t d = 0; d < draws.size(); ++d) {
         if (!traced[d]) continue;
         const raster::DrawCall& call = draws[d];
         const uint32_t base = uint32_t(mesh.positions.size());
         for (const glm::vec3& p : call.positions) mesh.positions.push_back(glm::vec3(call.worldFromObject * glm::vec4(p, 1.0f)));
         const size_t vertexCount = call.positions.size();
+        const raster::CullMode cull = call.state.cull;
         for (size_t t = 0; t < call.triangleCount(); ++t) {
             size_t corner[3];
             bool valid = true;
@@ -101,24 +190,35 @@ TracedMesh gatherTracedMesh(std::span<const raster::DrawCall> draws, std::span<c
                 valid = valid && corner[k] < vertexCount;
             }
             if (!valid) continue;  // as the front end drops it
-            const glm::vec3& a = mesh.positions[base + corner[0]];
-            const glm::vec3& b = mesh.positions[base + corner[1]];
-            const glm::vec3& c = mesh.positions[base + corner[2]];
-            if (call.state.cull != raster::CullMode::None &&
-                facesTheCamera(a, b, c, camera) != (call.state.cull == raster::CullMode::Back))
+            if (dropCulledFor && culledFor(cull, mesh.positions[base + corner[0]], mesh.positions[base + corner[1]],
+                                           mesh.positions[base + corner[2]], *dropCulledFor))
                 continue;
             for (int k = 0; k < 3; ++k) mesh.indices.push_back(base + uint32_t(corner[k]));
             mesh.draw.push_back(uint32_t(d));
             mesh.triangle.push_back(uint32_t(t));
+            mesh.cull.push_back(dropCulledFor ? raster::CullMode::None : cull);
         }
     }
-    return mesh;
+}
+
+void traceFrame(const TracedMesh& mesh, const PrimaryRayQuery& query, const PrimaryRayCamera& camera,
+                raster::VisibilityBuffer& out, PrimaryRayStats& stats) {
+    const double t0 = raster::nowMs();
+    const int blocksX = (out.width + kBlockPixels - 1) / kBlockPixels, blocksY = (out.height + kBlockPixels - 1) / kBlockPixels;
+    std::vector<uint64_t> hits(size_t(blocksX) * size_t(blocksY), 0);
+    if (!mesh.draw.empty())
+        raster::parallelFor(hits.size(), [&](size_t b) {
+            traceBlock(mesh, query, camera, int(b % blocksX), int(b / blocksX), out, hits[b]);
+        });
+    for (uint64_t h : hits) stats.hits += h;
+    stats.rays = uint64_t(out.width) * uint64_t(out.height) * uint64_t(out.samples);
+    stats.traceMs = raster::nowMs() - t0;
 }
 
 // One block's rays, pixel by pixel in row order and each pixel's samples in pattern order: the
 // grid takes them as packets of up to 64, the BVH one by one.
-void traceBlock(const TracedMesh& mesh, const WideBvh* bvh, const UniformGrid* grid, const PrimaryRayCamera& camera,
-                int blockX, int blockY, raster::VisibilityBuffer& out, uint64_t& hits) {
+void traceBlock(const TracedMesh& mesh, const PrimaryRayQuery& query, const PrimaryRayCamera& camera, int blockX, int blockY,
+                raster::VisibilityBuffer& out, uint64_t& hits) {
     const int S = out.samples;
     const raster::SamplePattern& sp = raster::standardSamplePattern(S);
     const int x0 = blockX * kBlockPixels, y0 = blockY * kBlockPixels;
@@ -135,10 +235,10 @@ void traceBlock(const TracedMesh& mesh, const WideBvh* bvh, const UniformGrid* g
                                     out.width, out.height);
                 where[n++] = (size_t(y) * size_t(out.width) + size_t(x)) * size_t(S) + size_t(s);
             }
-    if (grid)
-        closestHits(*grid, mesh.view(), std::span<const Ray>(rays, size_t(n)), std::span<RayHit>(found, size_t(n)));
+    if (query.grid)
+        closestHits(*query.grid, query.mesh, std::span<const Ray>(rays, size_t(n)), std::span<RayHit>(found, size_t(n)));
     else
-        for (int i = 0; i < n; ++i) found[i] = closestHit(*bvh, rays[i]);
+        for (int i = 0; i < n; ++i) found[i] = query.bvh->closestHit(rays[i], *query.skipped);
     for (int i = 0; i < n; ++i) {
         if (!found[i].hit()) continue;
         ++hits;

@@ -8,9 +8,13 @@
 // Each ray runs from the near plane to the far plane (t in [0, 1]), the clip volume's depth
 // range, and its hit is the exact one of the watertight test over every triangle (rt/ray.h):
 // the same answer through the BVH or the grid, at any thread count and packet size. A draw's
-// culling is a property of the camera, not of the ray: every ray of a pinhole (or orthographic)
-// camera sees a plane from the same side, so a culled draw's triangles that face away from the
-// eye are left out of the mesh, and brute force over what remains is the reference.
+// culling is the rasterizer's: a hit on a culled side does not count. Every ray of a pinhole (or
+// orthographic) camera sees a plane from the same side, so culling is decided once per triangle
+// and view, by one test (the side of its plane the eye lies on): the grid, rebuilt for every frame
+// anyway, is built over the triangles that remain; the BVH holds every triangle and its traversal
+// skips the view's culled ones (SkippedTriangles), so one tree serves every view and follows an
+// animation's poses (PrimaryRayHierarchy). Both then answer as brute force over what remains, with
+// the same tie rule (ids keep their order), so their images are the same bits.
 //
 // Where the image may differ from the rasterizer's at one sample, and why: the rasterizer snaps
 // each vertex to 1/256 pixel before it tests coverage, the rays meet the unsnapped triangles in
@@ -21,6 +25,7 @@
 // (PrimaryRays.PartFromTheDepthTestOnlyWhereSnappingDecides).
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -29,6 +34,7 @@
 #include "raster/draw.h"
 #include "raster/visibility_shade.h"
 #include "rt/caster_rays.h"
+#include "rt/deforming_bvh.h"
 #include "rt/ray.h"
 
 namespace cuberille::rt {
@@ -60,5 +66,56 @@ Ray primaryRay(const PrimaryRayCamera& camera, double x, double y, int width, in
 /// BVH (eight-wide queries) or a uniform grid (8x8 packets) over them for this frame.
 PrimaryRayStats tracePrimaryVisibility(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced,
                                        const PrimaryRayCamera& camera, CasterAccel accel, raster::VisibilityBuffer& out);
+
+/// The traced draws as one world-space mesh, each triangle with its draw's culling.
+struct TracedMesh {
+    std::vector<glm::vec3> positions;
+    std::vector<uint32_t> indices;
+    std::vector<uint32_t> draw, triangle;  // per mesh triangle: its draw and its index there
+    std::vector<raster::CullMode> cull;    // per mesh triangle
+
+    TriangleMeshView view() const { return {positions, indices}; }
+};
+
+/// A BVH over the traced draws kept from frame to frame, the way the shadow stage keeps its own:
+/// built once, reused by every view of the same geometry (a turntable, a batch of views), and
+/// made to follow each new pose of an animation by refitting, lazily updating or rebuilding
+/// (`--bvh-update`, rt/deforming_bvh.h), so the seeds' answers to animation can be compared on
+/// the camera rays too.
+class PrimaryRayHierarchy {
+public:
+    PrimaryRayHierarchy(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced, BvhUpdateMethod method);
+
+    /// Whether `draws` are the ones it was built over: as many vertices, the same triangles (index
+    /// lists compared by content), transforms and culling. Their vertices may have moved (a new
+    /// pose, or the same one in new arrays): update() brings the tree to them.
+    bool sameDraws(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced) const;
+    /// Whether the draws' vertex arrays are the ones last gathered (where they lie): with the pose
+    /// unchanged, the tree is current.
+    bool sameVertexArrays(std::span<const raster::DrawCall> draws) const;
+    /// The draws' vertices moved (the same draws, a new pose): gathered again, the tree follows.
+    BvhUpdateReport update(std::span<const raster::DrawCall> draws);
+    /// One frame's camera rays through the kept tree; buildMs is the build or update since the
+    /// last trace (0 when the tree was reused as it was).
+    PrimaryRayStats trace(const PrimaryRayCamera& camera, raster::VisibilityBuffer& out);
+
+private:
+    struct DrawKey {
+        uint32_t draw;
+        size_t vertexCount;
+        size_t indexCount;
+        glm::mat4 worldFromObject;
+        raster::CullMode cull;
+        bool operator==(const DrawKey&) const = default;
+    };
+    static DrawKey keyOf(uint32_t draw, const raster::DrawCall& call);
+    std::vector<DrawKey> keys_;
+    std::vector<uint32_t> sourceIndices_;           // the traced draws' index lists, concatenated
+    std::vector<const glm::vec3*> vertexArrays_;    // per traced draw, as last gathered
+    TracedMesh mesh_;
+    std::optional<DeformingBvh> bvh_;
+    std::vector<uint8_t> skipped_;  // per triangle, this view's culled ones
+    double pendingBuildMs_ = 0;
+};
 
 }  // namespace cuberille::rt

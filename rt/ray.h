@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 
 #include <glm/glm.hpp>
 
@@ -140,6 +141,15 @@ struct WatertightRay {
 
     /// The edge weights u, v, w recomputed in double and rounded once.
     static void edgeWeightsInDouble(float ax, float ay, float bx, float by, float cx, float cy, float& u, float& v, float& w);
+};
+
+/// Triangles a closest-hit search leaves out, by id (nonzero: skipped): for camera rays, what the
+/// rasterizer's face culling removes for one view (rt/primary_rays.h). Every traversal (brute
+/// force, the binary and wide BVHs, lazily updated or not) skips the same ones, so they stay exact
+/// against one another and against brute force over the triangles that remain.
+struct SkippedTriangles {
+    std::span<const uint8_t> skipped;
+    bool contains(uint32_t triangle) const { return skipped[triangle] != 0; }
 };
 
 /// One triangle offered to a closest-hit or any-hit search, as every traversal does it (the BVH's,

@@ -89,6 +89,8 @@ void refreshWideBvh(WideBvh& wide, const Bvh& binary);
 /// triangle, t and barycentrics as closestHitBruteForce; the same occlusion as anyHitBruteForce).
 RayHit closestHit(const WideBvh& bvh, const Ray& ray);
 RayHit closestHit(const WideBvh& bvh, const Ray& ray, TraversalCounters& counters);
+/// The closest hit among the triangles not skipped (rt/ray.h, SkippedTriangles).
+RayHit closestHit(const WideBvh& bvh, const Ray& ray, const SkippedTriangles& skipped);
 bool anyHit(const WideBvh& bvh, const Ray& ray);
 
 }  // namespace cuberille::rt

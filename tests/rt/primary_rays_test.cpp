@@ -27,26 +27,49 @@ glm::dvec2 samplePosition(int x, int y, int s, int samples) {
     return {x + 0.5 + sp.dx[s] / 16.0, y + 0.5 + sp.dy[s] / 16.0};
 }
 
-// Every draw unculled and every triangle in one mesh, tested one by one: the reference. Both
-// structures, 1 and 4 samples, every thread count: the same (draw, triangle) at every sample.
+/// The draws' triangles as one mesh, and which of them a culled draw turns away from the eye (the
+/// definition: counter-clockwise seen from the eye is the front, raster/draw.h).
+struct ReferenceMesh {
+    std::vector<glm::vec3> positions;
+    std::vector<uint32_t> indices, drawOf, triangleOf;
+    std::vector<uint8_t> culled;
+
+    ReferenceMesh(const std::vector<raster::DrawCall>& draws, const glm::vec3& eye) {
+        for (size_t d = 0; d < draws.size(); ++d) {
+            const uint32_t base = uint32_t(positions.size());
+            positions.insert(positions.end(), draws[d].positions.begin(), draws[d].positions.end());
+            for (size_t t = 0; t < draws[d].triangleCount(); ++t) {
+                uint32_t corner[3];
+                for (int k = 0; k < 3; ++k)
+                    corner[k] = base + (draws[d].indices.empty() ? uint32_t(3 * t + k) : draws[d].indices[3 * t + k]);
+                indices.insert(indices.end(), corner, corner + 3);
+                drawOf.push_back(uint32_t(d)), triangleOf.push_back(uint32_t(t));
+                const glm::vec3 &a = positions[corner[0]], &b = positions[corner[1]], &c = positions[corner[2]];
+                const bool front = glm::dot(glm::cross(b - a, c - a), eye - a) > 0.0f;
+                const raster::CullMode cull = draws[d].state.cull;
+                culled.push_back(cull != raster::CullMode::None && front == (cull == raster::CullMode::Front));
+            }
+        }
+    }
+    rt::TriangleMeshView view() const { return {positions, indices}; }
+};
+
+// Every triangle in one mesh, tested one by one, less those the draws' culling turns away: the
+// reference (a draw culls back faces, one front faces, one neither). Both structures, 1 and 4
+// samples, every thread count: the same (draw, triangle) at every sample.
 TEST(PrimaryRays, EverySampleSeesWhatBruteForceSees) {
     constexpr int kWidth = 48, kHeight = 32;
     for (const uint32_t seed : {1u, 2u}) {
         const RandomPerspectiveDraws scene(seed);
         std::vector<raster::DrawCall> draws = scene.draws();
-        for (raster::DrawCall& d : draws) d.state.cull = raster::CullMode::None;
-        std::vector<glm::vec3> positions;
-        std::vector<uint32_t> indices, drawOf, triangleOf;
-        for (size_t d = 0; d < draws.size(); ++d) {
-            const uint32_t base = uint32_t(positions.size());
-            positions.insert(positions.end(), draws[d].positions.begin(), draws[d].positions.end());
-            for (size_t t = 0; t < draws[d].triangleCount(); ++t) {
-                for (int k = 0; k < 3; ++k)
-                    indices.push_back(base + (draws[d].indices.empty() ? uint32_t(3 * t + k) : draws[d].indices[3 * t + k]));
-                drawOf.push_back(uint32_t(d)), triangleOf.push_back(uint32_t(t));
-            }
-        }
-        const rt::TriangleMeshView all{positions, indices};
+        draws[2].state.cull = raster::CullMode::Front;
+        const ReferenceMesh reference(draws, scene.eye);
+        const rt::TriangleMeshView all = reference.view();
+        const std::vector<uint32_t>& drawOf = reference.drawOf;
+        const std::vector<uint32_t>& triangleOf = reference.triangleOf;
+        const rt::SkippedTriangles culled{reference.culled};
+        const size_t kept = size_t(std::count(reference.culled.begin(), reference.culled.end(), 0));
+        ASSERT_LT(kept, drawOf.size() * 5 / 6);
         const rt::PrimaryRayCamera camera = cameraOf(scene);
         const std::vector<uint8_t> traced(draws.size(), 1);
         for (const int samples : {1, 4}) {
@@ -57,7 +80,7 @@ TEST(PrimaryRays, EverySampleSeesWhatBruteForceSees) {
                 for (int x = 0; x < kWidth; ++x)
                     for (int s = 0; s < samples; ++s) {
                         const glm::dvec2 p = samplePosition(x, y, s, samples);
-                        const rt::RayHit h = rt::closestHitBruteForce(all, rt::primaryRay(camera, p.x, p.y, kWidth, kHeight));
+                        const rt::RayHit h = rt::closestHitBruteForce(all, rt::primaryRay(camera, p.x, p.y, kWidth, kHeight), &culled);
                         if (!h.hit()) continue;
                         ++hits;
                         const size_t i = (size_t(y) * kWidth + x) * samples + s;
@@ -73,12 +96,57 @@ TEST(PrimaryRays, EverySampleSeesWhatBruteForceSees) {
                     const std::string where = "seed " + std::to_string(seed) + ", " + std::to_string(samples) + " samples, " +
                                               (accel == rt::CasterAccel::Grid ? "grid, " : "bvh, ") +
                                               std::to_string(count.threads) + " threads";
-                    EXPECT_EQ(stats.triangles, drawOf.size()) << where;
+                    EXPECT_EQ(stats.triangles, accel == rt::CasterAccel::Grid ? kept : drawOf.size()) << where;
                     EXPECT_EQ(stats.hits, uint64_t(hits)) << where;
                     EXPECT_EQ(found.draw, expected.draw) << where;
                     EXPECT_EQ(found.triangle, expected.triangle) << where;
                 }
         }
+    }
+}
+
+// One tree kept across views and poses — refitted, lazily updated or rebuilt — answers each view
+// of each pose as the grid built for that frame does (and so as brute force does), with the
+// draws' culling decided afresh for each view; a change of culling or of the traced draws is not
+// taken for the same draws.
+TEST(PrimaryRays, AKeptHierarchyAnswersEveryViewAndPoseAsAFreshGrid) {
+    constexpr int kWidth = 64, kHeight = 40, kSamples = 2;
+    for (const rt::BvhUpdateMethod method : {rt::BvhUpdateMethod::Refit, rt::BvhUpdateMethod::Lazy, rt::BvhUpdateMethod::Rebuild}) {
+        RandomPerspectiveDraws scene(5);
+        const std::vector<raster::DrawCall> draws = scene.draws();
+        const std::vector<uint8_t> traced(draws.size(), 1);
+        rt::PrimaryRayHierarchy kept(draws, traced, method);
+        ASSERT_TRUE(kept.sameDraws(draws, traced));
+        std::mt19937 rng(9);
+        std::uniform_real_distribution<float> jitter(-0.05f, 0.05f);
+        for (int pose = 0; pose < 3; ++pose) {
+            if (pose > 0) {  // every vertex moved in place: the same draws, a new pose
+                for (std::vector<glm::vec3>& p : scene.positions)
+                    for (glm::vec3& v : p) v += glm::vec3(jitter(rng), jitter(rng), jitter(rng)) + glm::vec3(0.02f * pose, 0.0f, 0.0f);
+                kept.update(draws);
+            }
+            for (const glm::vec3 eye : {glm::vec3(0.3f, 0.2f, 0.6f), glm::vec3(-1.5f, 0.5f, -1.0f), glm::vec3(1.0f, -0.4f, -6.0f)}) {
+                RandomPerspectiveDraws view(5);
+                view.eye = eye;
+                view.clipFromWorld = glm::perspective(glm::radians(60.0f), 1.5f, 0.1f, 20.0f) *
+                                     glm::lookAt(eye, glm::vec3(0.0f, 0.0f, -3.0f), glm::vec3(0, 1, 0));
+                const rt::PrimaryRayCamera camera = cameraOf(view);
+                raster::VisibilityBuffer fromKept, fromGrid;
+                fromKept.reset(kWidth, kHeight, kSamples);
+                fromGrid.reset(kWidth, kHeight, kSamples);
+                const rt::PrimaryRayStats stats = kept.trace(camera, fromKept);
+                rt::tracePrimaryVisibility(draws, traced, camera, rt::CasterAccel::Grid, fromGrid);
+                EXPECT_GT(stats.hits, uint64_t(kWidth * kHeight)) << "pose " << pose;
+                EXPECT_EQ(fromKept.draw, fromGrid.draw) << "pose " << pose;
+                EXPECT_EQ(fromKept.triangle, fromGrid.triangle) << "pose " << pose;
+            }
+        }
+        std::vector<raster::DrawCall> changed = draws;
+        changed[1].state.cull = raster::CullMode::Front;
+        EXPECT_FALSE(kept.sameDraws(changed, traced));
+        std::vector<uint8_t> fewer = traced;
+        fewer[2] = 0;
+        EXPECT_FALSE(kept.sameDraws(draws, fewer));
     }
 }
 
