@@ -208,7 +208,7 @@ TEST(AccuracySweep, CoversTheKnobsThatApplyAroundTheBalancedPreset) {
     std::set<std::string> knobs;
     for (const AccuracySetting& s : accuracySweep(all, false)) knobs.insert(s.knob);
     EXPECT_EQ(knobs, (std::set<std::string>{"samples per pixel", "texture filter", "shadow mode", "map shadow-map size",
-                                            "hybrid shadow-map size", "depth precision", "preset", "defaults",
+                                            "hybrid shadow-map size", "depth precision", "renderer", "preset", "defaults",
                                             "ground truth"}));
     SceneTraits voxel;
     voxel.voxel = true;
@@ -227,6 +227,36 @@ TEST(AccuracySweep, CoversTheKnobsThatApplyAroundTheBalancedPreset) {
     EXPECT_TRUE(lod);
     EXPECT_EQ(resolutions, (std::vector<std::string>{"64", "128", "256"}));
     for (const std::string& a : v.back().args) EXPECT_NE(a, "--shadows");  // no shadow knob for voxels
+}
+
+// A 3D scene's sweep compares the rasterizer's visibility with the camera rays' through each
+// structure (the same image, another time); scenes without camera rays get no such rows.
+TEST(AccuracySweep, TheRendererKnobSetsRaysThroughEachStructureFor3dScenesOnly) {
+    SceneTraits threeD;
+    threeD.threeD = true;
+    std::vector<std::string> values;
+    for (const AccuracySetting& s : accuracySweep(threeD, false)) {
+        const auto renderer = std::find(s.args.begin(), s.args.end(), "--renderer");
+        if (s.knob != "renderer") {
+            EXPECT_EQ(renderer, s.args.end()) << s.knob << " " << s.value << ": the balanced preset rasterizes";
+            continue;
+        }
+        values.push_back(s.value);
+        if (s.value == "raster") {
+            EXPECT_EQ(renderer, s.args.end());
+            continue;
+        }
+        ASSERT_NE(renderer, s.args.end());
+        ASSERT_LT(renderer + 3, s.args.end());
+        EXPECT_EQ(renderer[1], "raytrace");
+        EXPECT_EQ(renderer[2], "--accel");
+        EXPECT_EQ("raytrace, " + renderer[3], s.value);
+    }
+    EXPECT_EQ(values, (std::vector<std::string>{"raster", "raytrace, bvh", "raytrace, grid"}));
+    SceneTraits voxel;
+    voxel.voxel = true;
+    for (const AccuracySetting& s : accuracySweep(voxel, false)) EXPECT_NE(s.knob, "renderer");
+    for (const AccuracySetting& s : accuracySweep(SceneTraits{}, false)) EXPECT_NE(s.knob, "renderer");
 }
 
 TEST(AccuracySweep, AmbientOcclusionIsSweptInEverySettingWhenAsked) {
