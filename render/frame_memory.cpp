@@ -42,6 +42,8 @@ FrameMemory frameMemory(const FrameSettings& f) {
     // The resolve's image, the tiles view's second one or the box-filtered one, and the display
     // encoding (at most 8 bytes a pixel: 16-bit RGBA).
     m.imageBytes = resolved + (f.view == View::Tiles || f.supersample > 1 ? pixels * 16 : 0) + pixels * 8;
+    if (f.renderer == Renderer::Raytrace)
+        m.visibilityBytes = uint64_t(d.widthPixels) * uint64_t(d.heightPixels) * uint64_t(d.samples) * 2 * sizeof(uint32_t);
     return m;
 }
 

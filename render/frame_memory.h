@@ -13,7 +13,10 @@ namespace cuberille::render {
 struct FrameMemory {
     uint64_t framebufferBytes = 0;  // raster::Framebuffer::bytesFor the frame (N² times the pixels when supersampling)
     uint64_t imageBytes = 0;        // the resolved float RGBA image(s) and the display encoding
-    uint64_t totalBytes() const { return framebufferBytes + imageBytes; }
+    /// --renderer raytrace: the visibility buffer the camera rays fill (8 bytes a sample: draw and
+    /// triangle, raster/visibility_shade.h).
+    uint64_t visibilityBytes = 0;
+    uint64_t totalBytes() const { return framebufferBytes + imageBytes + visibilityBytes; }
 };
 
 /// What render() will allocate for the frame itself, beside the scene (which is already loaded).

@@ -195,11 +195,10 @@ void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::C
 }
 
 // --renderer raytrace: the frame's draws recorded, camera rays through the opaque ones decide what
-// each sample sees, and the deferred shade stage shades it with the draws' own shading. The rest
-// are then drawn over it by the rasterizer, in their order, against the depths the shade stage
-// wrote: see-through draws (blended, transmissive), as a deferred GPU renderer draws its
-// transparent pass forward, and alpha-tested ones, whose alpha the rays do not evaluate yet
-// (docs/ray_tracing.md).
+// each sample sees (alpha-tested ones through their alpha test), and the deferred shade stage
+// shades it with the draws' own shading. See-through draws (blended, transmissive) are then drawn
+// over it by the rasterizer, in their order, against the depths the shade stage wrote, as a
+// deferred GPU renderer draws its transparent pass forward (docs/ray_tracing.md).
 void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene& drawn, const scene::Camera& camera,
                         const raster::Lighting* shadowed, RenderResult& result) {
     raster::Pipeline pipeline;
@@ -212,7 +211,7 @@ void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene
     std::vector<uint8_t> traced(draws.size());
     RayTracedFrameStats st;
     for (size_t d = 0; d < draws.size(); ++d) {
-        traced[d] = draws[d].state.depthWrite && draws[d].state.alphaMode != raster::AlphaMode::Mask;
+        traced[d] = draws[d].state.depthWrite;
         (traced[d] ? st.drawsTraced : st.drawsRasterized) += 1;
     }
     rt::PrimaryRayCamera rays;
@@ -237,7 +236,7 @@ void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene
             st.updated = true;
         }
         state.primaryRaysPoseStale = false;
-        st.rays = kept->trace(rays, seen);
+        st.rays = kept->trace(draws, rays, seen);
         if (o.frustumCull) kept.reset();
     }
     st.shade = pipeline.shadeVisible(seen);

@@ -38,7 +38,7 @@ struct RayTracedFrameStats {
     /// (rays.buildMs holds the build or update's time; 0 when the tree was reused as it was).
     bool updated = false;
     rt::BvhUpdateReport update;
-    size_t drawsTraced = 0, drawsRasterized = 0;  // see-through and alpha-tested draws: rasterized after
+    size_t drawsTraced = 0, drawsRasterized = 0;  // see-through draws: rasterized after
 };
 
 struct RenderResult {

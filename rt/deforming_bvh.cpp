@@ -71,9 +71,9 @@ RayHit DeformingBvh::closestHit(const Ray& ray) const {
     return usesWide() ? rt::closestHit(wide_, ray) : rt::closestHit(*bvh_, mesh_, ray);
 }
 
-RayHit DeformingBvh::closestHit(const Ray& ray, const SkippedTriangles& skipped) const {
-    if (lazy_) return lazy_->closestHit(ray, &skipped);
-    return usesWide() ? rt::closestHit(wide_, ray, skipped) : rt::closestHit(*bvh_, mesh_, ray, skipped);
+RayHit DeformingBvh::closestHit(const Ray& ray, const HitFilter& filter) const {
+    if (lazy_) return lazy_->closestHit(ray, &filter);
+    return usesWide() ? rt::closestHit(wide_, ray, filter) : rt::closestHit(*bvh_, mesh_, ray, filter);
 }
 
 bool DeformingBvh::anyHit(const Ray& ray) const {

@@ -42,8 +42,8 @@ public:
     BvhUpdateReport update(const TriangleMeshView& mesh);
 
     RayHit closestHit(const Ray& ray) const;
-    /// The closest hit among the triangles not skipped (SkippedTriangles, by the mesh's ids).
-    RayHit closestHit(const Ray& ray, const SkippedTriangles& skipped) const;
+    /// The closest hit among the triangles not skipped (HitFilter, by the mesh's ids).
+    RayHit closestHit(const Ray& ray, const HitFilter& filter) const;
     bool anyHit(const Ray& ray) const;
 
     /// The tree with every box current (a lazy tree is brought up to date first).

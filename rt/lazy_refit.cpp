@@ -86,10 +86,10 @@ Aabb LazyRefit::currentBox(uint32_t node) const {
 
 // Lazy queries read the triangles from the mesh: the tree's leafVertices are as old as its last
 // full refit, and refreshing them eagerly would undo the laziness.
-RayHit LazyRefit::closestHit(const Ray& ray, const SkippedTriangles* skipped) const {
+RayHit LazyRefit::closestHit(const Ray& ray, const HitFilter* filter) const {
     return detail::traverse<false>(
         *bvh_, ray, [this](uint32_t node) { return currentBox(node); },
-        [this](uint32_t slot, int corner) { return mesh_.vertex(bvh_->primitiveIndices[slot], corner); }, nullptr, skipped);
+        [this](uint32_t slot, int corner) { return mesh_.vertex(bvh_->primitiveIndices[slot], corner); }, nullptr, filter);
 }
 
 bool LazyRefit::anyHit(const Ray& ray) const {

@@ -39,7 +39,7 @@ public:
     /// tree): every box is current, none is refreshed by queries.
     void updateAfterFullRefit(const TriangleMeshView& mesh);
 
-    RayHit closestHit(const Ray& ray, const SkippedTriangles* skipped = nullptr) const;
+    RayHit closestHit(const Ray& ray, const HitFilter* filter = nullptr) const;
     bool anyHit(const Ray& ray) const;
 
     /// Brings every stale box up to date, as a full refit would: for use before anything that

@@ -1,11 +1,13 @@
 #include "rt/primary_rays.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "raster/clock.h"
 #include "raster/limits.h"
 #include "raster/parallel.h"
 #include "raster/sample_pattern.h"
+#include "raster/texture.h"
 #include "rt/bvh_build.h"
 #include "rt/wide_bvh.h"
 
@@ -17,12 +19,22 @@ namespace {
 /// without, every triangle is kept with its culled side (the kept BVH's mesh).
 void gatherTracedMesh(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced,
                       const PrimaryRayCamera* dropCulledFor, TracedMesh& mesh);
-/// Marks the triangles a culled draw shows its culled side to this view.
-void skipCulled(const TracedMesh& mesh, const PrimaryRayCamera& camera, std::vector<uint8_t>& skipped);
+/// The view's HitFilter entries: the triangles a culled draw shows its culled side (none in a
+/// mesh gathered without them), and the alpha-tested ones.
+void filterForView(const TracedMesh& mesh, const PrimaryRayCamera& camera, std::vector<uint8_t>& entries);
+/// What the alpha test of a camera ray's hit reads.
+struct AlphaTestContext {
+    const TracedMesh* mesh;
+    std::span<const raster::DrawCall> draws;
+    const PrimaryRayCamera* camera;
+    glm::dmat4 clipFromWorld;
+    int width, height;
+};
+bool passesAlphaTest(const void* context, uint32_t triangle, const Ray& ray, float u, float v);
 /// Closest hits for a block's rays: the BVH's one at a time, or the grid's as packets.
 struct PrimaryRayQuery {
     const DeformingBvh* bvh = nullptr;
-    const SkippedTriangles* skipped = nullptr;
+    const HitFilter* filter = nullptr;
     const UniformGrid* grid = nullptr;
     TriangleMeshView mesh;
 };
@@ -64,12 +76,12 @@ PrimaryRayStats tracePrimaryVisibility(std::span<const raster::DrawCall> draws, 
     stats.gatherMs = t1 - t0;
     std::optional<DeformingBvh> bvh;
     UniformGrid grid;
-    std::vector<uint8_t> culled;
-    SkippedTriangles skipped;
-    PrimaryRayQuery query{.skipped = &skipped, .mesh = mesh.view()};
+    std::vector<uint8_t> entries;
+    filterForView(mesh, camera, entries);
+    const AlphaTestContext alpha{&mesh, draws, &camera, glm::inverse(camera.worldFromClip), out.width, out.height};
+    const HitFilter filter{entries, passesAlphaTest, &alpha};
+    PrimaryRayQuery query{.filter = &filter, .mesh = mesh.view()};
     if (accel == CasterAccel::Bvh) {
-        skipCulled(mesh, camera, culled);
-        skipped.skipped = culled;
         bvh.emplace(mesh.view(), BvhUpdateMethod::Rebuild);
         query.bvh = &*bvh;
     } else {
@@ -133,17 +145,19 @@ BvhUpdateReport PrimaryRayHierarchy::update(std::span<const raster::DrawCall> dr
     return report;
 }
 
-PrimaryRayStats PrimaryRayHierarchy::trace(const PrimaryRayCamera& camera, raster::VisibilityBuffer& out) {
+PrimaryRayStats PrimaryRayHierarchy::trace(std::span<const raster::DrawCall> draws, const PrimaryRayCamera& camera,
+                                           raster::VisibilityBuffer& out) {
     PrimaryRayStats stats;
     stats.accel = CasterAccel::Bvh;
     stats.triangles = mesh_.draw.size();
     stats.buildMs = pendingBuildMs_;
     pendingBuildMs_ = 0;
     const double t0 = raster::nowMs();
-    skipCulled(mesh_, camera, skipped_);
+    filterForView(mesh_, camera, filter_);
     stats.gatherMs = raster::nowMs() - t0;
-    const SkippedTriangles skipped{skipped_};
-    traceFrame(mesh_, {.bvh = &*bvh_, .skipped = &skipped, .mesh = mesh_.view()}, camera, out, stats);
+    const AlphaTestContext alpha{&mesh_, draws, &camera, glm::inverse(camera.worldFromClip), out.width, out.height};
+    const HitFilter filter{filter_, passesAlphaTest, &alpha};
+    traceFrame(mesh_, {.bvh = &*bvh_, .filter = &filter, .mesh = mesh_.view()}, camera, out, stats);
     return stats;
 }
 
@@ -161,16 +175,88 @@ bool culledFor(raster::CullMode cull, const glm::vec3& a, const glm::vec3& b, co
     return cull != raster::CullMode::None && facesTheCamera(a, b, c, camera) == (cull == raster::CullMode::Front);
 }
 
-void skipCulled(const TracedMesh& mesh, const PrimaryRayCamera& camera, std::vector<uint8_t>& skipped) {
+void filterForView(const TracedMesh& mesh, const PrimaryRayCamera& camera, std::vector<uint8_t>& entries) {
     constexpr size_t kTrianglesPerTask = 16384;
     const size_t triangles = mesh.cull.size();
-    skipped.resize(triangles);
+    entries.resize(triangles);
     raster::parallelFor((triangles + kTrianglesPerTask - 1) / kTrianglesPerTask, [&](size_t task) {
         for (size_t t = task * kTrianglesPerTask; t < std::min(triangles, (task + 1) * kTrianglesPerTask); ++t) {
             const uint32_t* i = &mesh.indices[3 * t];
-            skipped[t] = culledFor(mesh.cull[t], mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]], camera);
+            entries[t] = culledFor(mesh.cull[t], mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]], camera)
+                             ? HitFilter::kSkipped
+                             : (mesh.alphaTested[t] ? HitFilter::kAlphaTested : HitFilter::kKept);
         }
     });
+}
+
+// The weights of p in triangle (a, b, c) by areas, in double: those of b and c.
+glm::dvec2 weightsInTriangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+    const glm::dvec3 n = glm::cross(b - a, c - a);
+    const double area = glm::dot(n, n);
+    if (!(area > 0.0)) return {0.0, 0.0};
+    return {glm::dot(glm::cross(p - a, c - a), n) / area, glm::dot(glm::cross(b - a, p - a), n) / area};
+}
+
+// The weights (of the second and third vertex) where the camera's ray through window position
+// (x, y) meets the triangle's plane.
+glm::dvec2 weightsOnPlane(const AlphaTestContext& c, double x, double y, const glm::dvec3 (&v)[3]) {
+    const Ray r = primaryRay(*c.camera, x, y, c.width, c.height);
+    const glm::dvec3 o(r.origin), d(r.direction);
+    const glm::dvec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
+    const double along = glm::dot(n, d);
+    const double t = along != 0.0 ? glm::dot(n, v[0] - o) / along : 0.0;
+    return weightsInTriangle(o + t * d, v[0], v[1], v[2]);
+}
+
+// The rasterizer's alpha test (raster/shade.h, output merge), which a pixel takes once, at its
+// centre, for all its samples: the base colour factor's alpha times the vertex alphas,
+// interpolated, times the base colour texture's alpha at the level of detail of the centre's UV
+// derivatives, against the draw's cutoff. The centre's weights are where the ray through it meets
+// the triangle's plane (clamped onto the triangle where the centre lies outside it, as the shade
+// stage clamps); the derivatives, the UV where the rays through the next pixel right and the next
+// pixel down meet the plane, less the centre's: the rasterizer's own finite differences, on the
+// unsnapped plane.
+bool passesAlphaTest(const void* context, uint32_t triangle, const Ray& ray, float, float) {
+    const AlphaTestContext& c = *static_cast<const AlphaTestContext*>(context);
+    const raster::DrawCall& call = c.draws[c.mesh->draw[triangle]];
+    const raster::DrawState& state = call.state;
+    const size_t source = c.mesh->triangle[triangle];
+    size_t corner[3];
+    for (int k = 0; k < 3; ++k) corner[k] = call.indices.empty() ? 3 * source + k : call.indices[3 * source + k];
+    glm::dvec3 world[3];
+    for (int k = 0; k < 3; ++k) world[k] = glm::dvec3(c.mesh->positions[c.mesh->indices[3 * size_t(triangle) + k]]);
+    // The pixel of the sample, from its ray's start on the near plane.
+    const glm::dvec4 clip = c.clipFromWorld * glm::dvec4(glm::dvec3(ray.origin), 1.0);
+    const double x = std::floor((clip.x / clip.w + 1.0) * c.width / 2.0) + 0.5;
+    const double y = std::floor((1.0 - clip.y / clip.w) * c.height / 2.0) + 0.5;
+    glm::dvec2 centre = weightsOnPlane(c, x, y, world);
+    if (centre.x < 0.0 || centre.y < 0.0 || centre.x + centre.y > 1.0) {
+        const double w0 = std::max(0.0, 1.0 - centre.x - centre.y), w1 = std::max(0.0, centre.x), w2 = std::max(0.0, centre.y);
+        const double sum = w0 + w1 + w2;
+        centre = sum > 0.0 ? glm::dvec2(w1 / sum, w2 / sum) : glm::dvec2(0.0);
+    }
+    const float w[3] = {float(1.0 - centre.x - centre.y), float(centre.x), float(centre.y)};
+    float alpha = state.constantColor.a;
+    const size_t vertexCount = call.positions.size();
+    if (call.vertexAlphas.size() == vertexCount && vertexCount > 0) {
+        alpha = 0.0f;
+        for (int k = 0; k < 3; ++k) alpha += w[k] * (state.constantColor.a * call.vertexAlphas[corner[k]]);
+    }
+    const raster::TextureBinding& base = state.textures.baseColor;
+    if (base && call.texCoords.size() == vertexCount && vertexCount > 0) {
+        const glm::vec2 uv0 = call.texCoords[corner[0]], uv1 = call.texCoords[corner[1]], uv2 = call.texCoords[corner[2]];
+        const auto uvAt = [&](const glm::dvec2& wb) {
+            return glm::vec2(float(1.0 - wb.x - wb.y) * uv0 + float(wb.x) * uv1 + float(wb.y) * uv2);
+        };
+        const glm::vec2 uv = w[0] * uv0 + w[1] * uv1 + w[2] * uv2;
+        const glm::vec2 plane = uvAt(weightsOnPlane(c, x, y, world));  // unclamped, as the derivatives are
+        const glm::vec2 right = uvAt(weightsOnPlane(c, x + 1.0, y, world)), down = uvAt(weightsOnPlane(c, x, y + 1.0, world));
+        const glm::mat2& m = base.transform.linear;
+        const raster::Texture& texture = *base.texture;
+        const float lod = texture.levelOfDetail(m * (right - plane), m * (down - plane));
+        alpha *= texture.sample(base.transform.apply(uv), lod).a;
+    }
+    return alpha >= state.alphaCutoff;
 }
 
 void gatherTracedMesh(std::span<const raster::DrawCall> draws, std::span<const uint8_t> traced,
@@ -197,6 +283,7 @@ void gatherTracedMesh(std::span<const raster::DrawCall> draws, std::span<const u
             mesh.draw.push_back(uint32_t(d));
             mesh.triangle.push_back(uint32_t(t));
             mesh.cull.push_back(dropCulledFor ? raster::CullMode::None : cull);
+            mesh.alphaTested.push_back(call.state.alphaMode == raster::AlphaMode::Mask);
         }
     }
 }
@@ -236,9 +323,10 @@ void traceBlock(const TracedMesh& mesh, const PrimaryRayQuery& query, const Prim
                 where[n++] = (size_t(y) * size_t(out.width) + size_t(x)) * size_t(S) + size_t(s);
             }
     if (query.grid)
-        closestHits(*query.grid, query.mesh, std::span<const Ray>(rays, size_t(n)), std::span<RayHit>(found, size_t(n)));
+        closestHits(*query.grid, query.mesh, std::span<const Ray>(rays, size_t(n)), std::span<RayHit>(found, size_t(n)), nullptr,
+                    query.filter);
     else
-        for (int i = 0; i < n; ++i) found[i] = query.bvh->closestHit(rays[i], *query.skipped);
+        for (int i = 0; i < n; ++i) found[i] = query.bvh->closestHit(rays[i], *query.filter);
     for (int i = 0; i < n; ++i) {
         if (!found[i].hit()) continue;
         ++hits;

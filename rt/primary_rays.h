@@ -12,9 +12,14 @@
 // orthographic) camera sees a plane from the same side, so culling is decided once per triangle
 // and view, by one test (the side of its plane the eye lies on): the grid, rebuilt for every frame
 // anyway, is built over the triangles that remain; the BVH holds every triangle and its traversal
-// skips the view's culled ones (SkippedTriangles), so one tree serves every view and follows an
-// animation's poses (PrimaryRayHierarchy). Both then answer as brute force over what remains, with
-// the same tie rule (ids keep their order), so their images are the same bits.
+// skips the view's culled ones (HitFilter), so one tree serves every view and follows an
+// animation's poses (PrimaryRayHierarchy). An alpha-tested draw's hit counts only where its
+// material's alpha passes the cutoff, tested as the rasterizer tests it: once a pixel, at its
+// centre (so every sample of a pixel on the triangle passes or fails together), the base colour
+// texture sampled at the level of detail the rasterizer takes there, its derivatives from the
+// rays through the next pixels met with the triangle's plane. Both
+// structures then answer as brute force over what remains, with the same tie rule (ids keep
+// their order), so their images are the same bits.
 //
 // Where the image may differ from the rasterizer's at one sample, and why: the rasterizer snaps
 // each vertex to 1/256 pixel before it tests coverage, the rays meet the unsnapped triangles in
@@ -73,6 +78,7 @@ struct TracedMesh {
     std::vector<uint32_t> indices;
     std::vector<uint32_t> draw, triangle;  // per mesh triangle: its draw and its index there
     std::vector<raster::CullMode> cull;    // per mesh triangle
+    std::vector<uint8_t> alphaTested;      // per mesh triangle: its draw is alpha-tested (AlphaMode::Mask)
 
     TriangleMeshView view() const { return {positions, indices}; }
 };
@@ -95,9 +101,10 @@ public:
     bool sameVertexArrays(std::span<const raster::DrawCall> draws) const;
     /// The draws' vertices moved (the same draws, a new pose): gathered again, the tree follows.
     BvhUpdateReport update(std::span<const raster::DrawCall> draws);
-    /// One frame's camera rays through the kept tree; buildMs is the build or update since the
-    /// last trace (0 when the tree was reused as it was).
-    PrimaryRayStats trace(const PrimaryRayCamera& camera, raster::VisibilityBuffer& out);
+    /// One frame's camera rays through the kept tree (the draws it was built over, sameDraws, for
+    /// their materials' alpha); buildMs is the build or update since the last trace (0 when the
+    /// tree was reused as it was).
+    PrimaryRayStats trace(std::span<const raster::DrawCall> draws, const PrimaryRayCamera& camera, raster::VisibilityBuffer& out);
 
 private:
     struct DrawKey {
@@ -114,7 +121,7 @@ private:
     std::vector<const glm::vec3*> vertexArrays_;    // per traced draw, as last gathered
     TracedMesh mesh_;
     std::optional<DeformingBvh> bvh_;
-    std::vector<uint8_t> skipped_;  // per triangle, this view's culled ones
+    std::vector<uint8_t> filter_;  // per triangle, this view's HitFilter entry
     double pendingBuildMs_ = 0;
 };
 

@@ -143,13 +143,24 @@ struct WatertightRay {
     static void edgeWeightsInDouble(float ax, float ay, float bx, float by, float cx, float cy, float& u, float& v, float& w);
 };
 
-/// Triangles a closest-hit search leaves out, by id (nonzero: skipped): for camera rays, what the
-/// rasterizer's face culling removes for one view (rt/primary_rays.h). Every traversal (brute
-/// force, the binary and wide BVHs, lazily updated or not) skips the same ones, so they stay exact
-/// against one another and against brute force over the triangles that remain.
-struct SkippedTriangles {
-    std::span<const uint8_t> skipped;
-    bool contains(uint32_t triangle) const { return skipped[triangle] != 0; }
+/// What a closest-hit search leaves out, for camera rays (rt/primary_rays.h): triangles by id —
+/// what the rasterizer's face culling removes for one view — and, on alpha-tested triangles, the
+/// hits where the material's alpha falls below its cutoff (an any-hit shader's work). Every
+/// traversal (brute force, the binary and wide BVHs, lazily updated or not, the grid's walk and
+/// packets) applies it to the same hits, so they stay exact against one another and against
+/// brute force over what it keeps.
+struct HitFilter {
+    static constexpr uint8_t kKept = 0, kSkipped = 1, kAlphaTested = 2;
+    std::span<const uint8_t> triangle;  // per triangle id: kKept, kSkipped or kAlphaTested
+    /// For kAlphaTested triangles: whether the hit at weights (u, v) of the second and third vertex
+    /// survives the alpha test. Called only for hits nearer than the best so far.
+    bool (*passes)(const void* context, uint32_t triangle, const Ray& ray, float u, float v) = nullptr;
+    const void* context = nullptr;
+
+    bool skips(uint32_t t) const { return triangle[t] == kSkipped; }
+    bool keepsHit(uint32_t t, const Ray& ray, float u, float v) const {
+        return triangle[t] != kAlphaTested || passes(context, t, ray, u, v);
+    }
 };
 
 /// One triangle offered to a closest-hit or any-hit search, as every traversal does it (the BVH's,
@@ -160,6 +171,19 @@ inline bool offerHit(const WatertightRay& test, const glm::vec3& a, const glm::v
                      float tMin, RayHit& best) {
     RayHit candidate;
     if (!test.intersect(a, b, c, tMin, best.t, &candidate)) return false;
+    candidate.triangle = triangle;
+    if (candidate.closerThan(best.t, best.triangle)) best = candidate;
+    return true;
+}
+
+/// offerHit through a HitFilter: a skipped triangle is not tested, and an alpha-tested one's hit
+/// counts only where it passes.
+inline bool offerHit(const WatertightRay& test, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t triangle,
+                     float tMin, RayHit& best, const HitFilter& filter, const Ray& ray) {
+    if (filter.skips(triangle)) return false;
+    RayHit candidate;
+    if (!test.intersect(a, b, c, tMin, best.t, &candidate)) return false;
+    if (!filter.keepsHit(triangle, ray, candidate.u, candidate.v)) return false;
     candidate.triangle = triangle;
     if (candidate.closerThan(best.t, best.triangle)) best = candidate;
     return true;

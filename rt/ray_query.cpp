@@ -23,21 +23,21 @@ RayHit closestHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray, Trave
     return detail::traverse<false>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}, &counters);
 }
 
-RayHit closestHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray, const SkippedTriangles& skipped) {
-    return detail::traverse<false>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}, nullptr, &skipped);
+RayHit closestHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray, const HitFilter& filter) {
+    return detail::traverse<false>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}, nullptr, &filter);
 }
 
 bool anyHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray) {
     return detail::traverse<true>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}).hit();
 }
 
-RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const SkippedTriangles* skipped) {
+RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const HitFilter* filter) {
     const WatertightRay test(ray);
     RayHit best;
     best.t = ray.tMax;
     for (uint32_t t = 0; t < mesh.triangleCount(); ++t) {
-        if (skipped && skipped->contains(t)) continue;
-        offerHit(test, mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), t, ray.tMin, best);
+        if (filter) offerHit(test, mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), t, ray.tMin, best, *filter, ray);
+        else offerHit(test, mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), t, ray.tMin, best);
     }
     if (!best.hit()) best.t = std::numeric_limits<float>::infinity();
     return best;

@@ -16,11 +16,11 @@ namespace cuberille::rt {
 /// refit); the mesh is the one it was built or refitted over.
 RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray);
 bool anyHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray);
-/// The closest hit among the triangles not skipped (rt/ray.h, SkippedTriangles; ids are the mesh's).
-RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray, const SkippedTriangles& skipped);
+/// The closest hit among the triangles not skipped (rt/ray.h, HitFilter; ids are the mesh's).
+RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray, const HitFilter& filter);
 
 /// The slow-but-sure references: every triangle, in id order.
-RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const SkippedTriangles* skipped = nullptr);
+RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const HitFilter* filter = nullptr);
 bool anyHitBruteForce(const TriangleMeshView& mesh, const Ray& ray);
 
 /// Counts of the work one query did, for benchmarks and tests of the traversal's efficiency.
@@ -42,10 +42,10 @@ constexpr float kEntrySlack = 1.0f + 64.0f * std::numeric_limits<float>::epsilon
 /// current box: the node's own for an up-to-date tree, or one refreshed on first touch for the
 /// lazy update (rt/lazy_refit.h). `vertexOf(slot, corner)` yields a leaf triangle's vertex:
 /// from the tree's leafVertices, or from the mesh for the lazy update (the same values).
-/// `skipped`: triangles the search leaves out (SkippedTriangles).
+/// `filter`: what the search leaves out (HitFilter).
 template <bool kAnyHit, class BoxOf, class VertexOf>
 RayHit traverse(const Bvh& bvh, const Ray& ray, BoxOf&& boxOf, VertexOf&& vertexOf,
-                TraversalCounters* counters = nullptr, const SkippedTriangles* skipped = nullptr) {
+                TraversalCounters* counters = nullptr, const HitFilter* filter = nullptr) {
     RayHit best;
     best.t = ray.tMax;
     if (bvh.empty()) return best;
@@ -66,9 +66,10 @@ RayHit traverse(const Bvh& bvh, const Ray& ray, BoxOf&& boxOf, VertexOf&& vertex
             for (uint32_t i = node.first; i < node.first + node.primitiveCount; ++i) {
                 const uint32_t triangle = bvh.primitiveIndices[i];
                 if (counters) ++counters->trianglesTested;
-                if (skipped && skipped->contains(triangle)) continue;
-                if (offerHit(triangleTest, vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), triangle, ray.tMin, best) && kAnyHit)
-                    return best;
+                const bool hit = filter ? offerHit(triangleTest, vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), triangle, ray.tMin,
+                                                   best, *filter, ray)
+                                        : offerHit(triangleTest, vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), triangle, ray.tMin, best);
+                if (hit && kAnyHit) return best;
             }
         } else {
             const Aabb left = boxOf(node.first), right = boxOf(node.first + 1);

@@ -116,7 +116,8 @@ bool leaveEmptyMacrocell(const UniformGrid& grid, const GridFrame& frame, const 
 // The walk (header comment): test each cell's triangles, then stop once the best hit lies
 // before the next cell's entry, else step into the cell whose face the ray crosses first.
 template <bool kAnyHit>
-RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters) {
+RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters,
+            const HitFilter* filter = nullptr) {
     RayHit best;
     best.t = ray.tMax;
     float entry = 0.0f;
@@ -151,10 +152,10 @@ RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ra
             const uint32_t triangle = grid.triangleRefs[i];
             if (mailbox.seen(triangle)) continue;
             if (counters) ++counters->trianglesTested;
-            if (offerHit(triangleTest, mesh.vertex(triangle, 0), mesh.vertex(triangle, 1), mesh.vertex(triangle, 2), triangle,
-                         ray.tMin, best) &&
-                kAnyHit)
-                return best;
+            const glm::vec3 a = mesh.vertex(triangle, 0), b = mesh.vertex(triangle, 1), c = mesh.vertex(triangle, 2);
+            const bool hit = filter ? offerHit(triangleTest, a, b, c, triangle, ray.tMin, best, *filter, ray)
+                                    : offerHit(triangleTest, a, b, c, triangle, ray.tMin, best);
+            if (hit && kAnyHit) return best;
         }
         glm::ivec3 exitFaces;
         for (int a = 0; a < 3; ++a) exitFaces[a] = cell[a] + (step[a] > 0 ? 1 : 0);
@@ -260,11 +261,11 @@ bool anyMacrocellOccupied(const UniformGrid& grid, const GridFrame& frame, int k
 // at its first hit, as the walk returns at it.
 template <bool kAnyHit>
 void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
-                 GridCounters* counters) {
+                 GridCounters* counters, const HitFilter* filter = nullptr) {
     if (rays.size() > size_t(kMaxGridPacketRays)) {  // more than a packet: packets of the most
         for (size_t first = 0; first < rays.size(); first += kMaxGridPacketRays) {
             const size_t count = std::min(rays.size() - first, size_t(kMaxGridPacketRays));
-            tracePacket<kAnyHit>(grid, mesh, rays.subspan(first, count), hits.subspan(first, count), counters);
+            tracePacket<kAnyHit>(grid, mesh, rays.subspan(first, count), hits.subspan(first, count), counters, filter);
         }
         return;
     }
@@ -284,7 +285,7 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
     bool coherent = true;
     for (const Ray& r : rays) coherent = coherent && (step > 0 ? r.direction[k] > 0.0f : r.direction[k] < 0.0f);
     if (!coherent) {  // the 3D-DDA, ray by ray: the same answers
-        for (int i = 0; i < n; ++i) hits[i] = walk<kAnyHit>(grid, mesh, rays[i], counters);
+        for (int i = 0; i < n; ++i) hits[i] = walk<kAnyHit>(grid, mesh, rays[i], counters, filter);
         return;
     }
     const GridFrame frame(grid);
@@ -375,7 +376,9 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                         for (; candidates; candidates &= candidates - 1) {
                             const int i = std::countr_zero(candidates);
                             if (counters) ++counters->trianglesTested;
-                            if (!offerHit(*packet.test[i], p0, p1, p2, triangle, rays[i].tMin, hits[i])) continue;
+                            const bool hit = filter ? offerHit(*packet.test[i], p0, p1, p2, triangle, rays[i].tMin, hits[i], *filter, rays[i])
+                                                    : offerHit(*packet.test[i], p0, p1, p2, triangle, rays[i].tMin, hits[i]);
+                            if (!hit) continue;
                             packet.bestT[i] = hits[i].t;
                             if (kAnyHit) retire(i);
                         }
@@ -461,8 +464,9 @@ UniformGrid buildUniformGrid(const TriangleMeshView& mesh, float lambda) {
     return grid;
 }
 
-RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters) {
-    return walk<false>(grid, mesh, ray, counters);
+RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters,
+                  const HitFilter* filter) {
+    return walk<false>(grid, mesh, ray, counters, filter);
 }
 
 bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters) {
@@ -470,8 +474,8 @@ bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ra
 }
 
 void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
-                 GridCounters* counters) {
-    tracePacket<false>(grid, mesh, rays, hits, counters);
+                 GridCounters* counters, const HitFilter* filter) {
+    tracePacket<false>(grid, mesh, rays, hits, counters, filter);
 }
 
 void anyHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<uint8_t> occluded,

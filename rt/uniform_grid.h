@@ -90,7 +90,9 @@ struct GridCounters {
 
 /// Closest hit and any hit by the 3D-DDA, leaving an empty macrocell in one step; exactly
 /// closestHitBruteForce's and anyHitBruteForce's answers (rt/ray_query.h).
-RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
+/// `filter`: what the search leaves out (rt/ray.h, HitFilter), for closest hits.
+RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr,
+                  const HitFilter* filter = nullptr);
 bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
 
 /// The most rays one packet holds: 8x8, the paper's best size below 250k triangles (§4.1).
@@ -109,7 +111,7 @@ inline constexpr int kMaxGridPacketRays = 64;
 /// hits[i] is exactly closestHit(rays[i]) (so brute force's), whatever the packet's size and
 /// shape. More than kMaxGridPacketRays rays are traced as consecutive packets of that many.
 void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
-                 GridCounters* counters = nullptr);
+                 GridCounters* counters = nullptr, const HitFilter* filter = nullptr);
 
 /// Any hit for a packet (shadow rays toward one light, the paper's shadow packets): occluded[i] is
 /// exactly anyHit(rays[i]); a ray retires at its first hit.

@@ -89,8 +89,8 @@ void refreshWideBvh(WideBvh& wide, const Bvh& binary);
 /// triangle, t and barycentrics as closestHitBruteForce; the same occlusion as anyHitBruteForce).
 RayHit closestHit(const WideBvh& bvh, const Ray& ray);
 RayHit closestHit(const WideBvh& bvh, const Ray& ray, TraversalCounters& counters);
-/// The closest hit among the triangles not skipped (rt/ray.h, SkippedTriangles).
-RayHit closestHit(const WideBvh& bvh, const Ray& ray, const SkippedTriangles& skipped);
+/// The closest hit among the triangles not skipped (rt/ray.h, HitFilter).
+RayHit closestHit(const WideBvh& bvh, const Ray& ray, const HitFilter& filter);
 bool anyHit(const WideBvh& bvh, const Ray& ray);
 
 }  // namespace cuberille::rt

@@ -142,7 +142,7 @@ HWY_INLINE unsigned hitTriangles(const WatertightRay& ray, const WideBvhTriangle
 }
 
 template <bool kAnyHit>
-RayHit traverse(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters, const SkippedTriangles* skipped = nullptr) {
+RayHit traverse(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters, const HitFilter* filter = nullptr) {
     RayHit best;
     best.t = ray.tMax;
     if (bvh.empty()) return best;
@@ -173,9 +173,10 @@ RayHit traverse(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters,
                     const glm::vec3 a(group.a[0][i], group.a[1][i], group.a[2][i]);
                     const glm::vec3 b(group.b[0][i], group.b[1][i], group.b[2][i]);
                     const glm::vec3 c(group.c[0][i], group.c[1][i], group.c[2][i]);
-                    if (skipped && skipped->contains(candidate.triangle)) continue;
+                    if (filter && filter->skips(candidate.triangle)) continue;
                     if (!triangleTest.confirmInOwnBox(a, b, c, ray.tMin, best.t, candidate.t)) [[unlikely]]
                         continue;
+                    if (filter && !filter->keepsHit(candidate.triangle, ray, candidate.u, candidate.v)) continue;
                     if (kAnyHit) return candidate;
                     if (candidate.closerThan(best.t, best.triangle)) best = candidate;
                 }
@@ -217,8 +218,8 @@ RayHit traverse(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters,
 
 }  // namespace
 
-RayHit closestHitOnTarget(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters, const SkippedTriangles* skipped) {
-    return traverse<false>(bvh, ray, counters, skipped);
+RayHit closestHitOnTarget(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters, const HitFilter* filter) {
+    return traverse<false>(bvh, ray, counters, filter);
 }
 
 bool anyHitOnTarget(const WideBvh& bvh, const Ray& ray) { return traverse<true>(bvh, ray, nullptr).hit(); }
@@ -239,8 +240,8 @@ RayHit closestHit(const WideBvh& bvh, const Ray& ray, TraversalCounters& counter
     return HWY_DYNAMIC_DISPATCH(closestHitOnTarget)(bvh, ray, &counters, nullptr);
 }
 
-RayHit closestHit(const WideBvh& bvh, const Ray& ray, const SkippedTriangles& skipped) {
-    return HWY_DYNAMIC_DISPATCH(closestHitOnTarget)(bvh, ray, nullptr, &skipped);
+RayHit closestHit(const WideBvh& bvh, const Ray& ray, const HitFilter& filter) {
+    return HWY_DYNAMIC_DISPATCH(closestHitOnTarget)(bvh, ray, nullptr, &filter);
 }
 
 bool anyHit(const WideBvh& bvh, const Ray& ray) { return HWY_DYNAMIC_DISPATCH(anyHitOnTarget)(bvh, ray); }

@@ -179,6 +179,10 @@ TEST_F(Renderer, AFrameLargerThanMemoryIsRefusedBeforeAllocating) {
     frame.width = frame.height = 16384, frame.msaa = 16;
     const render::FrameMemory need = render::frameMemory(frame);
     EXPECT_EQ(need.framebufferBytes / (uint64_t(1) << 30), 80u);  // 2^28 pixels x 16 samples x 20 bytes, plus bounds
+    EXPECT_EQ(need.visibilityBytes, 0u);
+    render::FrameSettings traced = frame;
+    traced.renderer = render::Renderer::Raytrace;  // and the camera rays' visibility buffer: 8 bytes a sample
+    EXPECT_EQ(render::frameMemory(traced).visibilityBytes, uint64_t(16384) * 16384 * 16 * 8);
     const uint64_t available = render::availableMemoryBytes();
     if (available == 0 || available >= need.totalBytes()) GTEST_SKIP() << "this machine could hold the frame";
     const render::LoadedScene scene("demo");
@@ -193,12 +197,12 @@ TEST_F(Renderer, AFrameLargerThanMemoryIsRefusedBeforeAllocating) {
     EXPECT_NO_THROW(render::requireFrameMemory(frame));
 }
 
-// --renderer raytrace on the built-in demo — textures, the BRDF, two lights, a blended sphere and an
-// alpha-tested screen (both drawn forward over the traced frame) — with ray-traced shadows and
-// occlusion: the grid's frame is the BVH's bit for bit, and the same at one and two threads; the
+// --renderer raytrace on the built-in demo — textures, the BRDF, two lights, an alpha-tested screen
+// (its alpha tested along the rays) and a blended sphere (drawn forward over the traced frame) —
+// with ray-traced shadows and occlusion: the grid's frame is the BVH's bit for bit, and the same at one and two threads; the
 // rasterizer's frame differs only where snapping decides which surface a sample sees (the camera
 // rays' own test bounds where: PrimaryRays.PartFromTheDepthTestOnlyWhereSnappingDecides), here at
-// 1 pixel of 76,800 at one sample and 43 at four; 0.2% bounds it with room for another scene's
+// 3 pixels of 76,800 at one sample and 45 at four; 0.2% bounds it with room for another scene's
 // edges. The shadow masks reach the traced frame's shading, and views of the rasterizer's own
 // stages are refused.
 TEST_F(Renderer, RayTracedFramesAreTheRasterizersButWhereSnappingDecides) {
@@ -212,7 +216,7 @@ TEST_F(Renderer, RayTracedFramesAreTheRasterizersButWhereSnappingDecides) {
         f.renderer = render::Renderer::Raytrace;
         const render::RenderResult bvh = render::render(scene, f);
         ASSERT_TRUE(bvh.rayTraced);
-        EXPECT_EQ(bvh.rayTraced->drawsRasterized, 2u);  // the blended sphere and the alpha-tested screen
+        EXPECT_EQ(bvh.rayTraced->drawsRasterized, 1u);  // the blended sphere; the alpha-tested screen is traced
         EXPECT_EQ(bvh.rayTraced->shade.samplesWithoutSetUp, 0u);
         EXPECT_EQ(bvh.rayTraced->rays.rays, uint64_t(320 * 240 * msaa));
         f.accel = rt::CasterAccel::Grid;

@@ -67,7 +67,7 @@ TEST(PrimaryRays, EverySampleSeesWhatBruteForceSees) {
         const rt::TriangleMeshView all = reference.view();
         const std::vector<uint32_t>& drawOf = reference.drawOf;
         const std::vector<uint32_t>& triangleOf = reference.triangleOf;
-        const rt::SkippedTriangles culled{reference.culled};
+        const rt::HitFilter culled{reference.culled};  // 1: skipped, as HitFilter::kSkipped
         const size_t kept = size_t(std::count(reference.culled.begin(), reference.culled.end(), 0));
         ASSERT_LT(kept, drawOf.size() * 5 / 6);
         const rt::PrimaryRayCamera camera = cameraOf(scene);
@@ -134,7 +134,7 @@ TEST(PrimaryRays, AKeptHierarchyAnswersEveryViewAndPoseAsAFreshGrid) {
                 raster::VisibilityBuffer fromKept, fromGrid;
                 fromKept.reset(kWidth, kHeight, kSamples);
                 fromGrid.reset(kWidth, kHeight, kSamples);
-                const rt::PrimaryRayStats stats = kept.trace(camera, fromKept);
+                const rt::PrimaryRayStats stats = kept.trace(draws, camera, fromKept);
                 rt::tracePrimaryVisibility(draws, traced, camera, rt::CasterAccel::Grid, fromGrid);
                 EXPECT_GT(stats.hits, uint64_t(kWidth * kHeight)) << "pose " << pose;
                 EXPECT_EQ(fromKept.draw, fromGrid.draw) << "pose " << pose;
@@ -147,6 +147,94 @@ TEST(PrimaryRays, AKeptHierarchyAnswersEveryViewAndPoseAsAFreshGrid) {
         std::vector<uint8_t> fewer = traced;
         fewer[2] = 0;
         EXPECT_FALSE(kept.sameDraws(draws, fewer));
+    }
+}
+
+/// An alpha-tested screen (a quad whose base colour texture's alpha is a checker, cut at 0.5)
+/// before an opaque wall, seen straight on at `distance`: near, the checker is magnified; far, it
+/// is minified, and only the level of detail the rasterizer takes decides what survives.
+struct MaskedScreen {
+    std::vector<glm::vec3> screen, wall;
+    std::vector<glm::vec2> uvs;
+    std::vector<uint32_t> quad{0, 1, 2, 0, 2, 3};
+    raster::Texture checker;
+    glm::mat4 clipFromWorld;
+    glm::vec3 eye{0.0f, 0.0f, 0.0f};
+
+    MaskedScreen(float distance, float tiles) : checker(makeChecker()) {
+        const float h = 1.0f;
+        screen = {{-h, -h, -distance}, {h, -h, -distance}, {h, h, -distance}, {-h, h, -distance}};
+        wall = {{-9, -9, -distance - 1}, {9, -9, -distance - 1}, {9, 9, -distance - 1}, {-9, 9, -distance - 1}};
+        uvs = {{0, 0}, {tiles, 0}, {tiles, tiles}, {0, tiles}};
+        clipFromWorld = glm::perspective(glm::radians(50.0f), 1.5f, 0.1f, 100.0f) *
+                        glm::lookAt(eye, glm::vec3(0.1f, 0.05f, -1.0f), glm::vec3(0, 1, 0));
+    }
+    static raster::Texture makeChecker() {
+        std::vector<glm::vec4> texels(8 * 8);
+        for (int y = 0; y < 8; ++y)
+            for (int x = 0; x < 8; ++x) texels[y * 8 + x] = {1.0f, 1.0f, 1.0f, (x + y) % 2 ? 1.0f : 0.0f};
+        return raster::Texture(8, 8, std::move(texels));
+    }
+    std::vector<raster::DrawCall> draws() const {
+        std::vector<raster::DrawCall> out(2);
+        for (raster::DrawCall& d : out) {
+            d.clipFromObject = clipFromWorld;
+            d.indices = quad;
+            d.state.shading = raster::ShadingModel::Unlit;
+        }
+        out[0].positions = screen;
+        out[0].texCoords = uvs;
+        out[0].state.textures.baseColor.texture = &checker;
+        out[0].state.constantColor = glm::vec4(1.0f, 0.0f, 0.0f, 1.0f);
+        out[0].state.alphaMode = raster::AlphaMode::Mask;
+        out[0].state.alphaCutoff = 0.5f;
+        out[1].positions = wall;
+        out[1].state.constantColor = glm::vec4(0.0f, 0.0f, 1.0f, 1.0f);
+        return out;
+    }
+};
+
+// The alpha test on camera rays is the rasterizer's: at one sample (the pixel centre, where the
+// rasterizer tests a pixel's alpha) the screen is seen at the samples where the forward frame
+// kept it — magnified (4 texels across the quad) and minified (512 texels across a quad of some
+// 20 pixels, so a coarse level decides) — but for the few whose alpha lies within rounding of
+// the cutoff; and the BVH and the grid, at one and two threads, name the same hits.
+TEST(PrimaryRays, AlphaTestedHitsPassWhereTheRasterizersPixelsDo) {
+    constexpr int kWidth = 96, kHeight = 64;
+    for (const auto [distance, tiles] : {std::pair{2.5f, 4.0f}, std::pair{12.0f, 512.0f}}) {
+        const MaskedScreen scene(distance, tiles);
+        const std::vector<raster::DrawCall> draws = scene.draws();
+        raster::Pipeline forward;
+        forward.beginFrame(frame(kWidth, kHeight, 1));
+        for (const raster::DrawCall& d : draws) forward.draw(d);
+        forward.endFrame();
+        rt::PrimaryRayCamera camera;
+        camera.worldFromClip = glm::inverse(glm::dmat4(scene.clipFromWorld));
+        camera.eye = scene.eye;
+        const std::vector<uint8_t> traced(draws.size(), 1);
+        raster::VisibilityBuffer bvh;
+        bvh.reset(kWidth, kHeight, 1);
+        rt::tracePrimaryVisibility(draws, traced, camera, rt::CasterAccel::Bvh, bvh);
+        int screen = 0, wall = 0, differing = 0;
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x) {
+                const bool rasterScreen = sampleColor(forward.framebuffer(), x, y, 0).r > 0.5f;
+                const uint32_t seen = bvh.draw[size_t(y) * kWidth + x];
+                screen += seen == 0, wall += seen == 1;
+                differing += rasterScreen != (seen == 0);
+            }
+        const std::string where = "distance " + std::to_string(distance);
+        EXPECT_GT(screen, 20) << where;
+        EXPECT_GT(wall, 20) << where;
+        EXPECT_LE(differing, (screen + 99) / 100) << where << ": over 1% of the screen's samples";
+        for (const ThreadCount count : {kThreadCounts[0], kThreadCounts[1]}) {
+            ThreadCountScope threads(count);
+            raster::VisibilityBuffer grid;
+            grid.reset(kWidth, kHeight, 1);
+            rt::tracePrimaryVisibility(draws, traced, camera, rt::CasterAccel::Grid, grid);
+            EXPECT_EQ(grid.draw, bvh.draw) << where;
+            EXPECT_EQ(grid.triangle, bvh.triangle) << where;
+        }
     }
 }
 
