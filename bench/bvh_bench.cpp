@@ -292,6 +292,16 @@ void benchCoherentRays(RTCDevice device, const std::string& name, const Geometry
         report("wide BVH, single rays", mrays, {}, differing(hits));
     }
     {
+        // The same rays as 8x8 packets through the wide tree (closestHits): one packet a tile.
+        const size_t packets = count / 64;
+        const double ms = medianMs(3, [&] {
+            raster::parallelFor(packets, [&](size_t p) {
+                rt::closestHits(wide, std::span(single).subspan(p * 64, 64), std::span(hits).subspan(p * 64, 64));
+            });
+        });
+        report("wide BVH, 8x8 packets", double(count) / ms / 1000.0, {}, differing(hits));
+    }
+    {
         std::vector<uint8_t> hit(count);
         const double mrays = raysPerSecondM(count, [&](size_t i) {
             uint32_t t;

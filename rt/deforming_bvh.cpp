@@ -76,6 +76,11 @@ RayHit DeformingBvh::closestHit(const Ray& ray, const HitFilter& filter) const {
     return usesWide() ? rt::closestHit(wide_, ray, filter) : rt::closestHit(*bvh_, mesh_, ray, filter);
 }
 
+void DeformingBvh::closestHits(std::span<const Ray> rays, std::span<RayHit> hits, const HitFilter& filter) const {
+    if (usesWide() && !lazy_) return rt::closestHits(wide_, rays, hits, &filter);
+    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closestHit(rays[i], filter);
+}
+
 bool DeformingBvh::anyHit(const Ray& ray) const {
     if (lazy_) return lazy_->anyHit(ray);
     return usesWide() ? rt::anyHit(wide_, ray) : rt::anyHit(*bvh_, mesh_, ray);

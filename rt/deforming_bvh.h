@@ -45,6 +45,9 @@ public:
     /// The closest hit among the triangles not skipped (HitFilter, by the mesh's ids).
     RayHit closestHit(const Ray& ray, const HitFilter& filter) const;
     bool anyHit(const Ray& ray) const;
+    /// closestHit(ray, filter) for each of `rays`: through the wide tree as packets
+    /// (rt/wide_bvh.h, closestHits), else one at a time. The same hits either way.
+    void closestHits(std::span<const Ray> rays, std::span<RayHit> hits, const HitFilter& filter) const;
 
     /// The tree with every box current (a lazy tree is brought up to date first).
     const Bvh& bvh() const;

@@ -302,17 +302,24 @@ void traceFrame(const TracedMesh& mesh, const PrimaryRayQuery& query, const Prim
     stats.traceMs = raster::nowMs() - t0;
 }
 
-// One block's rays, pixel by pixel in row order and each pixel's samples in pattern order: the
-// grid takes them as packets of up to 64, the BVH one by one.
+// One block's rays, pixel by pixel in row order and each pixel's samples in pattern order: the grid
+// and the BVH take them as packets of up to 64.
 void traceBlock(const TracedMesh& mesh, const PrimaryRayQuery& query, const PrimaryRayCamera& camera, int blockX, int blockY,
                 raster::VisibilityBuffer& out, uint64_t& hits) {
     const int S = out.samples;
     const raster::SamplePattern& sp = raster::standardSamplePattern(S);
     const int x0 = blockX * kBlockPixels, y0 = blockY * kBlockPixels;
     const int x1 = std::min(x0 + kBlockPixels, out.width), y1 = std::min(y0 + kBlockPixels, out.height);
-    Ray rays[kBlockPixels * kBlockPixels * raster::kMaxSamples];
-    RayHit found[kBlockPixels * kBlockPixels * raster::kMaxSamples];
-    size_t where[kBlockPixels * kBlockPixels * raster::kMaxSamples];
+    // A thread's scratch, grown once: arrays for sixteen samples on the stack were as many
+    // constructor runs per block as rays (48 KB written) whatever the sample count.
+    thread_local std::vector<Ray> rayScratch;
+    thread_local std::vector<RayHit> hitScratch;
+    thread_local std::vector<size_t> whereScratch;
+    const size_t most = size_t(kBlockPixels) * kBlockPixels * size_t(S);
+    if (rayScratch.size() < most) rayScratch.resize(most), hitScratch.resize(most), whereScratch.resize(most);
+    Ray* rays = rayScratch.data();
+    RayHit* found = hitScratch.data();
+    size_t* where = whereScratch.data();
     int n = 0;
     constexpr double kSampleOffsetUnitPixels = double(raster::kSampleOffsetUnitSubpixels) / raster::kSubpixelsPerPixel;
     for (int y = y0; y < y1; ++y)
@@ -326,7 +333,7 @@ void traceBlock(const TracedMesh& mesh, const PrimaryRayQuery& query, const Prim
         closestHits(*query.grid, query.mesh, std::span<const Ray>(rays, size_t(n)), std::span<RayHit>(found, size_t(n)), nullptr,
                     query.filter);
     else
-        for (int i = 0; i < n; ++i) found[i] = query.bvh->closestHit(rays[i], *query.filter);
+        query.bvh->closestHits(std::span<const Ray>(rays, size_t(n)), std::span<RayHit>(found, size_t(n)), *query.filter);
     for (int i = 0; i < n; ++i) {
         if (!found[i].hit()) continue;
         ++hits;

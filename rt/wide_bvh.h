@@ -93,4 +93,18 @@ RayHit closestHit(const WideBvh& bvh, const Ray& ray, TraversalCounters& counter
 RayHit closestHit(const WideBvh& bvh, const Ray& ray, const HitFilter& filter);
 bool anyHit(const WideBvh& bvh, const Ray& ray);
 
+/// The most rays one packet of closestHits() holds: an 8x8 tile of camera rays.
+inline constexpr int kMaxWidePacketRays = 64;
+
+/// Closest hits of rays traced together as packets of up to kMaxWidePacketRays (camera rays of a
+/// tile): a node is fetched once for the packet and its eight children tested against the packet
+/// as a whole, in interval arithmetic over the box of the rays' origins and of their reciprocal
+/// directions — a test no ray of the packet passes where it fails, so only boxes no ray can enter
+/// are skipped — and a leaf's triangles are tested for each ray that passes its own exact test of
+/// the leaf's box. hits[i] is exactly closestHit(bvh, rays[i]) (through `filter` where given),
+/// whatever the packet. A packet whose rays do not all travel the same way along every axis, or
+/// with a direction component of zero, is traced ray by ray.
+void closestHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<RayHit> hits, const HitFilter* filter = nullptr,
+                 TraversalCounters* counters = nullptr);
+
 }  // namespace cuberille::rt

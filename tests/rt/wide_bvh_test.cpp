@@ -250,3 +250,81 @@ TEST(WideBvh, TraversalVisitsFewerNodesThanTheBinaryTree) {
 
 }  // namespace
 }  // namespace cuberille::rt
+
+namespace cuberille::rt {
+namespace {
+
+/// closestHits() against closestHit() ray by ray: the same triangle, t and weights for each.
+void expectPacketsAsSingleRays(const WideBvh& bvh, const std::vector<Ray>& rays, const HitFilter* filter, const char* what) {
+    std::vector<RayHit> packed(rays.size());
+    closestHits(bvh, rays, packed, filter);
+    int differing = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        const RayHit single = filter ? closestHit(bvh, rays[i], *filter) : closestHit(bvh, rays[i]);
+        const bool same = packed[i].triangle == single.triangle && packed[i].t == single.t && packed[i].u == single.u &&
+                          packed[i].v == single.v;
+        if (!same && differing++ < 3)
+            ADD_FAILURE() << what << ": ray " << i << " hit " << packed[i].triangle << " at " << packed[i].t
+                          << " in its packet, " << single.triangle << " at " << single.t << " alone";
+    }
+    EXPECT_EQ(differing, 0) << what;
+}
+
+/// A pinhole camera's rays through a side x side grid of pixels covering the scene, in 8x8 tiles
+/// (each tile one packet), from an eye outside [-1.5, 1.5]^3.
+std::vector<Ray> cameraTiles(const glm::vec3& eye, int side, float tMax) {
+    const glm::vec3 forward = glm::normalize(-eye), right = glm::normalize(glm::cross(forward, glm::vec3(0.1f, 1.0f, 0.05f)));
+    const glm::vec3 up = glm::cross(right, forward);
+    std::vector<Ray> rays;
+    for (int ty = 0; ty < side; ty += 8)
+        for (int tx = 0; tx < side; tx += 8)
+            for (int y = ty; y < ty + 8; ++y)
+                for (int x = tx; x < tx + 8; ++x) {
+                    const float sx = (2.0f * (x + 0.5f) / side - 1.0f) * 0.6f, sy = (1.0f - 2.0f * (y + 0.5f) / side) * 0.6f;
+                    Ray r{eye, forward + sx * right + sy * up};
+                    r.tMax = tMax;
+                    rays.push_back(r);
+                }
+    return rays;
+}
+
+bool passesWhereUIsSmall(const void*, uint32_t, const Ray&, float u, float) { return u < 0.4f; }
+
+// Packets of camera rays from eyes on every side (so every direction-sign combination, and packets
+// whose rays straddle an axis and go ray by ray), segments ending inside the scene, a lattice whose
+// rays meet edges and vertices exactly, and a filter that skips some triangles and alpha-tests
+// others: each ray's hit in its packet is its hit alone, bit for bit.
+TEST(WideBvh, PacketsGiveEachRayItsOwnClosestHit) {
+    const OwnedMesh soup = testing::randomSoup(4000, 7, 0.3f);
+    const WideBvh bvh = collapseToWideBvh(buildBvh(soup.view()));
+    std::vector<uint8_t> entries(soup.view().triangleCount());
+    for (size_t t = 0; t < entries.size(); ++t) entries[t] = t % 7 == 0 ? HitFilter::kSkipped : (t % 5 == 0 ? HitFilter::kAlphaTested : HitFilter::kKept);
+    const HitFilter filter{entries, passesWhereUIsSmall, nullptr};
+    for (const glm::vec3 eye : {glm::vec3(3.0f, 2.0f, 4.0f), glm::vec3(-4.0f, 1.0f, -2.0f), glm::vec3(0.5f, -4.0f, 0.3f),
+                                glm::vec3(0.0f, 0.0f, 5.0f)}) {
+        for (const float tMax : {std::numeric_limits<float>::infinity(), 4.5f}) {
+            const std::vector<Ray> rays = cameraTiles(eye, 48, tMax);
+            expectPacketsAsSingleRays(bvh, rays, nullptr, "camera");
+            expectPacketsAsSingleRays(bvh, rays, &filter, "camera, filtered");
+            // The packets share their node visits: fewer than the rays make alone.
+            TraversalCounters packed, alone;
+            std::vector<RayHit> hits(rays.size());
+            closestHits(bvh, rays, hits, nullptr, &packed);
+            for (const Ray& r : rays) closestHit(bvh, r, alone);
+            EXPECT_LT(packed.nodesVisited, alone.nodesVisited);
+        }
+    }
+    std::vector<Ray> scattered;  // mixed signs: ray by ray
+    testing::forEachRandomRay(8, 500, [&](const Ray& r) { scattered.push_back(r); });
+    expectPacketsAsSingleRays(bvh, scattered, &filter, "scattered");
+    const OwnedMesh lattice = testing::cubeLattice(4);
+    const WideBvh latticeBvh = collapseToWideBvh(buildBvh(lattice.view()));
+    std::vector<Ray> exact;
+    testing::forEachLatticeRay([&](const Ray& r) { exact.push_back(r); });
+    expectPacketsAsSingleRays(latticeBvh, exact, nullptr, "lattice");
+    std::vector<Ray> few(exact.begin(), exact.begin() + 13);  // a packet of fewer than 64
+    expectPacketsAsSingleRays(latticeBvh, few, nullptr, "13 rays");
+}
+
+}  // namespace
+}  // namespace cuberille::rt
