@@ -203,8 +203,8 @@ TEST_F(Renderer, AFrameLargerThanMemoryIsRefusedBeforeAllocating) {
 // rasterizer's frame differs only where snapping decides which surface a sample sees (the camera
 // rays' own test bounds where: PrimaryRays.PartFromTheDepthTestOnlyWhereSnappingDecides), here at
 // 3 pixels of 76,800 at one sample and 45 at four; 0.2% bounds it with room for another scene's
-// edges. The shadow masks reach the traced frame's shading, and views of the rasterizer's own
-// stages are refused.
+// edges. The shadow masks reach the traced frame's shading; orthographic, reversed-depth and
+// zoomed projections agree as well; views of the rasterizer's own stages are refused.
 TEST_F(Renderer, RayTracedFramesAreTheRasterizersButWhereSnappingDecides) {
     const render::LoadedScene scene("demo");
     for (const int msaa : {1, 4}) {
@@ -233,6 +233,21 @@ TEST_F(Renderer, RayTracedFramesAreTheRasterizersButWhereSnappingDecides) {
         int darkened = 0;
         for (size_t p = 0; p < a.size(); p += 4) darkened += b[p] + b[p + 1] + b[p + 2] < unshadowed[p] + unshadowed[p + 1] + unshadowed[p + 2];
         EXPECT_GT(darkened, 320 * 240 / 20) << msaa << " samples";
+    }
+    // The camera rays follow every projection the rasterizer draws with: orthographic, reversed
+    // depth, a zoomed lens.
+    for (const int variant : {0, 1, 2}) {
+        render::FrameSettings f;
+        f.width = 320, f.height = 240;
+        f.orthographic = variant == 0;
+        f.depth = variant == 1 ? raster::DepthConvention::Reversed : raster::DepthConvention::Standard;
+        f.zoom = variant == 2 ? 3.0f : 1.0f;
+        const std::vector<uint8_t> a = render::displayPixels(scene, f, render::render(scene, f));
+        f.renderer = render::Renderer::Raytrace;
+        const std::vector<uint8_t> b = render::displayPixels(scene, f, render::render(scene, f));
+        int differing = 0;
+        for (size_t p = 0; p < a.size(); p += 4) differing += !std::equal(&a[p], &a[p] + 4, &b[p]);
+        EXPECT_LT(differing, 320 * 240 / 500) << "variant " << variant;
     }
     render::FrameSettings tiles;
     tiles.width = 64, tiles.height = 48, tiles.renderer = render::Renderer::Raytrace, tiles.view = render::View::Tiles;
