@@ -31,13 +31,6 @@ SetupContext setupContextFor(const DrawCall& draw, const Framebuffer& fb, const 
     return c;
 }
 
-ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {
-    ClipVertex c;
-    c.position = v.clipPositions[index];
-    std::copy_n(v.varyings.data() + index * v.layout.count, v.layout.count, c.varyings.data());
-    return c;
-}
-
 /// Completes the batch's newest triangle record `t`, written in place by set-up: its vertices'
 /// varyings in set-up's vertex order, and its flat colour.
 void completeTriangle(TriangleSetup& t, const int (&order)[3], const float* const (&varyings)[3], const glm::vec4& color,
@@ -85,25 +78,12 @@ void clipAndSetup(const TriangleInput& in, const size_t (&index)[3], uint32_t pl
                   const glm::vec4& color, TriangleBatch& batch) {
     StageCounters& k = batch.counters;
     ++k.trianglesClipped;
-    ClippedPolygon polygon;
-    clipTriangle(in.volume, planes, clipVertexOf(in.vertices, index[0]),
-                 clipVertexOf(in.vertices, index[1]), clipVertexOf(in.vertices, index[2]),
-                 batch.layout.count, polygon);
-    WindowVertex window[kMaxClippedVertices];
-    for (int i = 0; i < polygon.count; ++i) {
-        if (!projectToWindow(polygon.vertices[i].position, in.setup, window[i])) {
-            ++k.trianglesInvalid;
-            return;
-        }
-    }
-    for (int i = 2; i < polygon.count; ++i) {
-        ++k.clippedTrianglesOut;
-        const WindowVertex w[3] = {window[0], window[i - 1], window[i]};
-        const float* const v[3] = {polygon.vertices[0].varyings.data(),
-                                   polygon.vertices[i - 1].varyings.data(),
-                                   polygon.vertices[i].varyings.data()};
-        setupInto(in, w, v, color, batch);
-    }
+    const bool projected = clipAndProjectFan(in.vertices, in.volume, in.setup, index, planes,
+                                             [&](const WindowVertex (&w)[3], const float* const (&v)[3]) {
+                                                 ++k.clippedTrianglesOut;
+                                                 setupInto(in, w, v, color, batch);
+                                             });
+    if (!projected) ++k.trianglesInvalid;
 }
 
 // One chunk of triangles, in submission order: assembly (indices, outcodes), set-up in lanes for

@@ -6,6 +6,7 @@
 //   clip outcode and, when it lies inside the clip volume, its snapped window position.
 // Thread-safety: runs in parallel over fixed vertex ranges; output depends on input alone.
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -60,5 +61,34 @@ inline constexpr size_t kVerticesPerTask = 16384;
 /// out.resize(vertexCount, varyingLayoutFor(draw)).
 void runVertexStage(const DrawCall& draw, const ClipVolume& volume, const SetupContext& viewport,
                     size_t begin, size_t end, VertexStageOutput& out);
+
+/// The front end's path for a triangle that crosses clip planes (bits `crossedPlanes` of its
+/// vertices' outcodes): clipped in homogeneous space, every polygon vertex projected to the window,
+/// then piece(window[3], varyings[3]) for each triangle of its fan, in order. False, with no piece,
+/// when a polygon vertex does not project (not finite). The forward front end (pipeline.cpp) and
+/// the deferred shade's set-up (visibility_shade.cpp) both clip through it.
+template <class Piece>
+bool clipAndProjectFan(const VertexStageOutput& vertices, const ClipVolume& volume, const SetupContext& viewport,
+                       const size_t (&index)[3], uint32_t crossedPlanes, Piece&& piece) {
+    const auto clipVertex = [&](size_t i) {
+        ClipVertex c;
+        c.position = vertices.clipPositions[i];
+        std::copy_n(vertices.varyings.data() + i * vertices.layout.count, vertices.layout.count, c.varyings.data());
+        return c;
+    };
+    ClippedPolygon polygon;
+    clipTriangle(volume, crossedPlanes, clipVertex(index[0]), clipVertex(index[1]), clipVertex(index[2]), vertices.layout.count,
+                 polygon);
+    WindowVertex window[kMaxClippedVertices];
+    for (int i = 0; i < polygon.count; ++i)
+        if (!projectToWindow(polygon.vertices[i].position, viewport, window[i])) return false;
+    for (int i = 2; i < polygon.count; ++i) {
+        const WindowVertex w[3] = {window[0], window[i - 1], window[i]};
+        const float* const v[3] = {polygon.vertices[0].varyings.data(), polygon.vertices[i - 1].varyings.data(),
+                                   polygon.vertices[i].varyings.data()};
+        piece(w, v);
+    }
+    return true;
+}
 
 }  // namespace cuberille::raster

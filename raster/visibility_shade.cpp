@@ -155,13 +155,6 @@ void shadeSeenVertices(std::span<const DrawCall> draws, const Framebuffer& fb, s
     });
 }
 
-ClipVertex clipVertexOf(const VertexStageOutput& v, size_t index) {
-    ClipVertex c;
-    c.position = v.clipPositions[index];
-    std::copy_n(v.varyings.data() + index * v.layout.count, v.layout.count, c.varyings.data());
-    return c;
-}
-
 void appendSetup(const WindowVertex (&w)[3], const float* const (&varyings)[3], const glm::vec4& color,
                  const SetupContext& context, SetupChunk& chunk) {
     TriangleSetup t;
@@ -196,18 +189,8 @@ void setUpOne(const DrawCall& call, const VertexStageOutput& vertices, uint32_t 
     }
     const uint8_t* outcodes = vertices.outcodes.data();
     if (classifyTriangle(outcodes[index[0]], outcodes[index[1]], outcodes[index[2]]) == ClipOutcome::Rejected) return;
-    ClippedPolygon polygon;
-    clipTriangle(volume, codes, clipVertexOf(vertices, index[0]), clipVertexOf(vertices, index[1]),
-                 clipVertexOf(vertices, index[2]), count, polygon);
-    WindowVertex window[kMaxClippedVertices];
-    for (int i = 0; i < polygon.count; ++i)
-        if (!projectToWindow(polygon.vertices[i].position, context, window[i])) return;
-    for (int i = 2; i < polygon.count; ++i) {
-        const WindowVertex w[3] = {window[0], window[i - 1], window[i]};
-        const float* const v[3] = {polygon.vertices[0].varyings.data(), polygon.vertices[i - 1].varyings.data(),
-                                   polygon.vertices[i].varyings.data()};
-        appendSetup(w, v, color, context, chunk);
-    }
+    clipAndProjectFan(vertices, volume, context, index, codes,
+                      [&](const WindowVertex (&w)[3], const float* const (&v)[3]) { appendSetup(w, v, color, context, chunk); });
 }
 
 void setUpSeenTriangles(std::span<const DrawCall> draws, const Framebuffer& fb, std::vector<SeenDraw>& out) {

@@ -229,7 +229,8 @@ bool passesAlphaTest(const void* context, uint32_t triangle, const Ray& ray, flo
     const glm::dvec4 clip = c.clipFromWorld * glm::dvec4(glm::dvec3(ray.origin), 1.0);
     const double x = std::floor((clip.x / clip.w + 1.0) * c.width / 2.0) + 0.5;
     const double y = std::floor((1.0 - clip.y / clip.w) * c.height / 2.0) + 0.5;
-    glm::dvec2 centre = weightsOnPlane(c, x, y, world);
+    const glm::dvec2 onPlane = weightsOnPlane(c, x, y, world);
+    glm::dvec2 centre = onPlane;
     if (centre.x < 0.0 || centre.y < 0.0 || centre.x + centre.y > 1.0) {
         const double w0 = std::max(0.0, 1.0 - centre.x - centre.y), w1 = std::max(0.0, centre.x), w2 = std::max(0.0, centre.y);
         const double sum = w0 + w1 + w2;
@@ -249,7 +250,7 @@ bool passesAlphaTest(const void* context, uint32_t triangle, const Ray& ray, flo
             return glm::vec2(float(1.0 - wb.x - wb.y) * uv0 + float(wb.x) * uv1 + float(wb.y) * uv2);
         };
         const glm::vec2 uv = w[0] * uv0 + w[1] * uv1 + w[2] * uv2;
-        const glm::vec2 plane = uvAt(weightsOnPlane(c, x, y, world));  // unclamped, as the derivatives are
+        const glm::vec2 plane = uvAt(onPlane);  // unclamped, as the derivatives are
         const glm::vec2 right = uvAt(weightsOnPlane(c, x + 1.0, y, world)), down = uvAt(weightsOnPlane(c, x, y + 1.0, world));
         const glm::mat2& m = base.transform.linear;
         const raster::Texture& texture = *base.texture;

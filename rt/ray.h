@@ -166,24 +166,15 @@ struct HitFilter {
 /// One triangle offered to a closest-hit or any-hit search, as every traversal does it (the BVH's,
 /// the grid's walk and packets, brute force): a hit within [tMin, best.t] replaces `best` when it
 /// is closer by RayHit's order. Returns whether the ray hit the triangle at all, which ends an
-/// any-hit search (its first hit always replaces `best`, whose triangle is still kNone).
+/// any-hit search (its first hit always replaces `best`, whose triangle is still kNone). With a
+/// `filter` (and the `ray` its alpha test reads), a skipped triangle is not tested and an
+/// alpha-tested one's hit counts only where it passes.
 inline bool offerHit(const WatertightRay& test, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t triangle,
-                     float tMin, RayHit& best) {
+                     float tMin, RayHit& best, const HitFilter* filter = nullptr, const Ray* ray = nullptr) {
+    if (filter && filter->skips(triangle)) return false;
     RayHit candidate;
     if (!test.intersect(a, b, c, tMin, best.t, &candidate)) return false;
-    candidate.triangle = triangle;
-    if (candidate.closerThan(best.t, best.triangle)) best = candidate;
-    return true;
-}
-
-/// offerHit through a HitFilter: a skipped triangle is not tested, and an alpha-tested one's hit
-/// counts only where it passes.
-inline bool offerHit(const WatertightRay& test, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t triangle,
-                     float tMin, RayHit& best, const HitFilter& filter, const Ray& ray) {
-    if (filter.skips(triangle)) return false;
-    RayHit candidate;
-    if (!test.intersect(a, b, c, tMin, best.t, &candidate)) return false;
-    if (!filter.keepsHit(triangle, ray, candidate.u, candidate.v)) return false;
+    if (filter && !filter->keepsHit(triangle, *ray, candidate.u, candidate.v)) return false;
     candidate.triangle = triangle;
     if (candidate.closerThan(best.t, best.triangle)) best = candidate;
     return true;

@@ -36,8 +36,7 @@ RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const 
     RayHit best;
     best.t = ray.tMax;
     for (uint32_t t = 0; t < mesh.triangleCount(); ++t) {
-        if (filter) offerHit(test, mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), t, ray.tMin, best, *filter, ray);
-        else offerHit(test, mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), t, ray.tMin, best);
+        offerHit(test, mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), t, ray.tMin, best, filter, &ray);
     }
     if (!best.hit()) best.t = std::numeric_limits<float>::infinity();
     return best;

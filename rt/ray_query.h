@@ -66,10 +66,9 @@ RayHit traverse(const Bvh& bvh, const Ray& ray, BoxOf&& boxOf, VertexOf&& vertex
             for (uint32_t i = node.first; i < node.first + node.primitiveCount; ++i) {
                 const uint32_t triangle = bvh.primitiveIndices[i];
                 if (counters) ++counters->trianglesTested;
-                const bool hit = filter ? offerHit(triangleTest, vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), triangle, ray.tMin,
-                                                   best, *filter, ray)
-                                        : offerHit(triangleTest, vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), triangle, ray.tMin, best);
-                if (hit && kAnyHit) return best;
+                if (offerHit(triangleTest, vertexOf(i, 0), vertexOf(i, 1), vertexOf(i, 2), triangle, ray.tMin, best, filter, &ray) &&
+                    kAnyHit)
+                    return best;
             }
         } else {
             const Aabb left = boxOf(node.first), right = boxOf(node.first + 1);

@@ -152,10 +152,10 @@ RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ra
             const uint32_t triangle = grid.triangleRefs[i];
             if (mailbox.seen(triangle)) continue;
             if (counters) ++counters->trianglesTested;
-            const glm::vec3 a = mesh.vertex(triangle, 0), b = mesh.vertex(triangle, 1), c = mesh.vertex(triangle, 2);
-            const bool hit = filter ? offerHit(triangleTest, a, b, c, triangle, ray.tMin, best, *filter, ray)
-                                    : offerHit(triangleTest, a, b, c, triangle, ray.tMin, best);
-            if (hit && kAnyHit) return best;
+            if (offerHit(triangleTest, mesh.vertex(triangle, 0), mesh.vertex(triangle, 1), mesh.vertex(triangle, 2), triangle,
+                         ray.tMin, best, filter, &ray) &&
+                kAnyHit)
+                return best;
         }
         glm::ivec3 exitFaces;
         for (int a = 0; a < 3; ++a) exitFaces[a] = cell[a] + (step[a] > 0 ? 1 : 0);
@@ -376,9 +376,7 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                         for (; candidates; candidates &= candidates - 1) {
                             const int i = std::countr_zero(candidates);
                             if (counters) ++counters->trianglesTested;
-                            const bool hit = filter ? offerHit(*packet.test[i], p0, p1, p2, triangle, rays[i].tMin, hits[i], *filter, rays[i])
-                                                    : offerHit(*packet.test[i], p0, p1, p2, triangle, rays[i].tMin, hits[i]);
-                            if (!hit) continue;
+                            if (!offerHit(*packet.test[i], p0, p1, p2, triangle, rays[i].tMin, hits[i], filter, &rays[i])) continue;
                             packet.bestT[i] = hits[i].t;
                             if (kAnyHit) retire(i);
                         }

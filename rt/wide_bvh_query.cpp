@@ -295,24 +295,22 @@ void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n,
                        TraversalCounters* counters) {
     const DL d;
     std::optional<WatertightRay> tests[kMaxWidePacketRays];
-    std::optional<RayBoxTest> boxes[kMaxWidePacketRays];
     PacketBounds bounds;
     float tNear = std::numeric_limits<float>::infinity();
     glm::vec3 originLo(std::numeric_limits<float>::infinity()), originHi(-std::numeric_limits<float>::infinity());
     glm::vec3 inverseLo = originLo, inverseHi = originHi;
     for (int i = 0; i < n; ++i) {
         tests[i].emplace(rays[i]);
-        boxes[i].emplace(rays[i]);
         hits[i] = RayHit{};
         hits[i].t = rays[i].tMax;
         tNear = std::min(tNear, rays[i].tMin);
         originLo = glm::min(originLo, rays[i].origin), originHi = glm::max(originHi, rays[i].origin);
-        inverseLo = glm::min(inverseLo, boxes[i]->inverseDirection), inverseHi = glm::max(inverseHi, boxes[i]->inverseDirection);
+        inverseLo = glm::min(inverseLo, tests[i]->box.inverseDirection), inverseHi = glm::max(inverseHi, tests[i]->box.inverseDirection);
     }
     for (int a = 0; a < 3; ++a) {
         bounds.originLo[a] = hn::Set(d, originLo[a]), bounds.originHi[a] = hn::Set(d, originHi[a]);
         bounds.inverseLo[a] = hn::Set(d, inverseLo[a]), bounds.inverseHi[a] = hn::Set(d, inverseHi[a]);
-        bounds.nearSide[a] = boxes[0]->farSide[a];
+        bounds.nearSide[a] = tests[0]->box.farSide[a];
     }
     const auto packetFar = [&] {
         float far = -std::numeric_limits<float>::infinity();
@@ -320,7 +318,7 @@ void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n,
         return far * kEntrySlack;
     };
     LaneRay lanes[kMaxWidePacketRays];
-    for (int i = 0; i < n; ++i) lanes[i] = laneRay(*boxes[i]);
+    for (int i = 0; i < n; ++i) lanes[i] = laneRay(tests[i]->box);
     PendingForPacket stack[(kWideBvhWidth - 1) * (kMaxBvhDepth + 1) + 1];
     int top = 0;
     const uint64_t all = n == 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1;
@@ -375,7 +373,7 @@ void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n,
                     float rayT = 0.0f;
                     for (uint64_t each = p.rays; each != 0; each &= each - 1) {
                         const int i = std::countr_zero(each);
-                        if (boxes[i]->hits(lo, hi, rays[i].tMin, hits[i].t * kEntrySlack, &rayT)) in |= uint64_t(1) << i;
+                        if (tests[i]->box.hits(lo, hi, rays[i].tMin, hits[i].t * kEntrySlack, &rayT)) in |= uint64_t(1) << i;
                     }
                     childRays[c] = in;
                 }

@@ -201,7 +201,7 @@ struct MaskedScreen {
 // the cutoff; and the BVH and the grid, at one and two threads, name the same hits.
 TEST(PrimaryRays, AlphaTestedHitsPassWhereTheRasterizersPixelsDo) {
     constexpr int kWidth = 96, kHeight = 64;
-    for (const auto [distance, tiles] : {std::pair{2.5f, 4.0f}, std::pair{12.0f, 512.0f}}) {
+    for (const auto& [distance, tiles] : {std::pair{2.5f, 4.0f}, std::pair{12.0f, 512.0f}}) {
         const MaskedScreen scene(distance, tiles);
         const std::vector<raster::DrawCall> draws = scene.draws();
         raster::Pipeline forward;
