@@ -96,14 +96,15 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
         ->capture_default_str();
     render->add_option("--renderer", names.renderer,
                        "What finds the surface each sample sees: raster (the rasterizer's depth test) or raytrace "
-                       "(3D scenes: a camera ray per sample through --accel's structure; the same shading, shadows "
-                       "and occlusion)")
+                       "(3D scenes and voxel models: a camera ray per sample through --accel's structure; the same "
+                       "shading, shadows and occlusion)")
         ->capture_default_str();
     render->add_option("--accel", names.accel,
                        "What answers the rays (--renderer raytrace's camera rays, and the shadow stage's for --shadows "
                        "hybrid/raytraced/auto and --ao): bvh (built once, kept for every view and following each "
                        "--animate pose as --bvh-update says) or grid (a uniform grid rebuilt from scratch for every "
-                       "frame, Wald et al. 2006). The same images either way")
+                       "frame, Wald et al. 2006); for a voxel model's camera rays, bvh, kdtree or octree over its "
+                       "voxels (Chajdas 2015, chapter 5). The same images whichever")
         ->capture_default_str();
     render->add_option("--pixel-error", o.pixelError,
                        "Voxel models: refine blocks until a voxel's edge projects to at most this many pixels "
@@ -164,7 +165,7 @@ void applyRenderNames(const RenderNames& names, RenderOptions& o) {
     o.textureFilter = parseTextureFilter(names.textureFilter);
     o.depth = parseDepthConvention(names.depth);
     o.bvhUpdate = parseBvhUpdate(names.bvhUpdate);
-    o.accel = render::parseAccel(names.accel);
+    render::applyAccel(names.accel, o);
     o.renderer = render::parseRenderer(names.renderer);
     if (names.upAxis != "y" && names.upAxis != "z")
         throw scene::InputError("--up-axis " + names.upAxis + ": expected y or z");

@@ -96,6 +96,23 @@ void VoxelScene::frameFrom(float azimuthDegrees, float elevationDegrees) {
                                              glm::vec3(0.12f));
 }
 
+raster::DrawCall voxelFacesDraw(const glm::mat4& clipFromWorld, std::span<const glm::vec3> positions,
+                                std::span<const glm::vec3> normals, std::span<const glm::vec3> colors,
+                                std::span<const uint32_t> indices, const raster::Lighting& lighting, const glm::vec3& eye) {
+    raster::DrawCall d;
+    d.space = raster::PositionSpace::Clip;
+    d.clipFromObject = clipFromWorld;
+    d.positions = positions;
+    d.normals = normals;
+    d.vertexColors = colors;
+    d.indices = indices;
+    d.state.shading = raster::ShadingModel::Lambert;
+    d.state.cull = raster::CullMode::None;  // faces are chosen by the camera side already
+    d.state.lighting = lighting;
+    d.state.cameraPosition = eye;
+    return d;
+}
+
 void VoxelScene::resetOcclusion() { std::fill(visibility_.begin(), visibility_.end(), kUnknown); }
 
 VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int height, const VoxelRenderOptions& o) {
@@ -183,17 +200,7 @@ VoxelFrameStats VoxelScene::draw(raster::Pipeline& pipeline, int width, int heig
     auto submit = [&](std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
                       std::span<const glm::vec3> colors, std::span<const uint32_t> indices, int slot, bool testOnly) {
         if (positions.empty()) return;
-        raster::DrawCall d;
-        d.space = raster::PositionSpace::Clip;
-        d.clipFromObject = clipFromWorld;
-        d.positions = positions;
-        d.normals = normals;
-        d.vertexColors = colors;
-        d.indices = indices;
-        d.state.shading = raster::ShadingModel::Lambert;
-        d.state.cull = raster::CullMode::None;  // faces are chosen by the camera side already
-        d.state.lighting = lighting;
-        d.state.cameraPosition = eye.position;
+        raster::DrawCall d = voxelFacesDraw(clipFromWorld, positions, normals, colors, indices, lighting, eye.position);
         d.state.occlusionSlot = slot;
         if (testOnly) {
             d.state.colorWriteMask = 0;

@@ -69,6 +69,13 @@ struct VoxelRenderOptions {
     size_t voxelsPerExpansionChunk = kDefaultVoxelsPerExpansionChunk;
 };
 
+/// The draw of voxel faces (expanded quads, model space = world space) as every voxel frame draws
+/// them: clip space through the camera, Lambert-lit, both sides (faces already face the camera).
+raster::DrawCall voxelFacesDraw(const glm::mat4& clipFromWorld, std::span<const glm::vec3> positions,
+                                std::span<const glm::vec3> normals, std::span<const glm::vec3> colors,
+                                std::span<const uint32_t> indices, const raster::Lighting& lighting,
+                                const glm::vec3& eye);
+
 /// A camera beside, behind and above `main`, looking at its target from about three times as far,
 /// for --debug-camera.
 scene::Camera debugCameraFor(const scene::Camera& main);

@@ -71,7 +71,7 @@ render::FrameSettings frameSettings(int width, int height, int msaa, const py::k
         else if (k == "ground") f.ground = value.cast<bool>();
         else if (k == "shadow_catcher") f.shadowCatcher = value.cast<bool>();
         else if (k == "bvh_update") f.bvhUpdate = render::parseBvhUpdate(value.cast<std::string>());
-        else if (k == "accel") f.accel = render::parseAccel(value.cast<std::string>());
+        else if (k == "accel") render::applyAccel(value.cast<std::string>(), f);
         else if (k == "renderer") f.renderer = render::parseRenderer(value.cast<std::string>());
         else if (k == "supersample") f.supersample = value.cast<int>();
         else if (k == "texture_filter") f.textureFilter = render::parseTextureFilter(value.cast<std::string>());

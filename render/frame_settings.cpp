@@ -113,6 +113,19 @@ rt::CasterAccel parseAccel(const std::string& name) {
     throw scene::InputError("--accel: '" + name + "' is not bvh or grid");
 }
 
+void applyAccel(const std::string& name, FrameSettings& f) {
+    rt::VoxelStructure voxel;
+    if (name == "bvh" || name == "grid") {
+        f.accel = parseAccel(name);
+        f.voxelAccel = rt::VoxelStructure::Bvh;
+    } else if (rt::parseVoxelStructure(name, &voxel)) {
+        f.accel = rt::CasterAccel::Bvh;
+        f.voxelAccel = voxel;
+    } else {
+        throw scene::InputError("--accel: '" + name + "' is not bvh, grid, kdtree or octree");
+    }
+}
+
 const char* accelName(rt::CasterAccel accel) { return accel == rt::CasterAccel::Grid ? "grid" : "bvh"; }
 
 Renderer parseRenderer(const std::string& name) {

@@ -18,6 +18,7 @@
 #include "rt/caster_rays.h"
 #include "rt/deforming_bvh.h"
 #include "rt/shadows.h"
+#include "rt/voxel_trees.h"
 #include "scene/camera.h"
 
 namespace cuberille::render {
@@ -72,6 +73,9 @@ struct FrameSettings {
     /// --accel: what answers the shadow stage's rays (shadows, ambient occlusion): the BVH, or a
     /// uniform grid rebuilt for every pose (rt/caster_rays.h). The same images either way.
     rt::CasterAccel accel = rt::CasterAccel::Bvh;
+    /// --accel for a voxel model's camera rays (--renderer raytrace): a BVH, a kD tree or an
+    /// octree over the traced level's voxels (rt/voxel_trees.h). The same images from each.
+    rt::VoxelStructure voxelAccel = rt::VoxelStructure::Bvh;
     /// --renderer: raster (the default) or raytrace (3D scenes: camera rays through --accel's
     /// structure, built for the frame, decide visibility).
     Renderer renderer = Renderer::Raster;
@@ -125,6 +129,9 @@ const char* textureFilterName(TextureFilterOverride filter);
 raster::DepthConvention parseDepthConvention(const std::string& name);
 rt::BvhUpdateMethod parseBvhUpdate(const std::string& name);
 rt::CasterAccel parseAccel(const std::string& name);  // bvh or grid; throws scene::InputError
+/// --accel NAME into both fields: bvh (either kind of scene), grid (triangle scenes; voxel models
+/// refuse it when they render), kdtree or octree (voxel models). Throws scene::InputError.
+void applyAccel(const std::string& name, FrameSettings& f);
 const char* accelName(rt::CasterAccel accel);
 Renderer parseRenderer(const std::string& name);  // raster or raytrace; throws scene::InputError
 const char* rendererName(Renderer renderer);

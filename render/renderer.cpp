@@ -104,8 +104,17 @@ void validate(const State& s, const FrameSettings& o) {
         throw InputError("--view normals: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
         throw InputError("--view shadow-pixels: needs --shadows map, hybrid or raytraced");
-    if (o.renderer == Renderer::Raytrace && !threeD)
-        throw InputError("--renderer raytrace: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
+    if (o.renderer == Renderer::Raytrace && tri)
+        throw InputError("--renderer raytrace: only for 3D scenes (glTF, PLY, OBJ, built-in) and voxel models, not " + s.name);
+    if (o.renderer == Renderer::Raytrace && voxel && o.accel == rt::CasterAccel::Grid)
+        throw InputError("--accel grid: a grid over triangles; a voxel model's rays take bvh, kdtree or octree");
+    if (o.voxelAccel != rt::VoxelStructure::Bvh && !(voxel && o.renderer == Renderer::Raytrace))
+        throw InputError(std::string("--accel ") + rt::voxelStructureName(o.voxelAccel) +
+                         ": a tree over voxels, for voxel models (.cvox) with --renderer raytrace");
+    if (o.renderer == Renderer::Raytrace && voxel &&
+        (o.debugCamera || o.noHybrid || o.noOcclusion || o.pixelError != FrameSettings{}.pixelError))
+        throw InputError("--pixel-error, --no-hybrid, --no-occlusion and --debug-camera: the rasterizer's level of detail and "
+                         "culling; --renderer raytrace traces one level (--voxel-resolution) of solid voxels");
     if (o.renderer == Renderer::Raytrace && o.view != View::Color && o.view != View::Depth && o.view != View::Normals &&
         o.view != View::ShadowPixels)
         throw InputError(std::string("--view ") + viewName(o.view) + ": shows the rasterizer's stages; with --renderer "
@@ -410,6 +419,23 @@ uint32_t finestLevelFor(const voxel::VoxelModel& model, uint32_t resolution) {
                             offered + ")");
 }
 
+/// --renderer raytrace for a voxel model: one level's voxels through the --accel tree, kept for
+/// the next frame while the level and tree hold (render/voxel_ray_frame.h).
+void drawVoxelRayTracedFrame(State& st, const FrameSettings& o, RenderResult& result) {
+    lod::VoxelScene& s = *st.voxel;
+    const uint32_t level = finestLevelFor(s.model(), o.voxelResolution);
+    if (!st.voxelRays || st.voxelRays->level() != level || st.voxelRays->structure() != o.voxelAccel)
+        st.voxelRays = std::make_unique<VoxelRayScene>(s.model(), level, o.voxelAccel);
+    raster::Pipeline pipeline;
+    raster::FramebufferDesc desc = framebufferDesc(o);
+    desc.clearColor = o.background ? clearColorFor(*o.background) : s.background;
+    pipeline.beginDeferredFrame(desc);
+    result.voxelRays = st.voxelRays->drawFrame(pipeline, s.camera, s.lighting, o.width, o.height, o.msaa);
+    pipeline.endFrame();
+    result.stats = pipeline.stats();
+    finishView(pipeline, o.view, &s.camera, result.image, result.stats.times.resolveMs);
+}
+
 /// A voxel model: blocks selected, expanded and drawn through the same pipeline.
 void renderVoxelModel(State& st, const FrameSettings& o, RenderResult& result) {
     lod::VoxelScene& s = *st.voxel;
@@ -420,6 +446,10 @@ void renderVoxelModel(State& st, const FrameSettings& o, RenderResult& result) {
     applyZoom(s.camera, o.zoom);
     result.sceneTriangles = s.model().triangleCount();
     result.voxelResolution = s.model().grid.resolution;
+    if (o.renderer == Renderer::Raytrace) {
+        drawVoxelRayTracedFrame(st, o, result);
+        return;
+    }
     lod::VoxelRenderOptions vo;
     vo.selection.pixelError = o.pixelError;
     vo.selection.finestLevel = finestLevelFor(s.model(), o.voxelResolution);
@@ -551,6 +581,25 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                             {"bvhRebuilt", rt.update.rebuilt},
                             {"traceMs", rt.rays.traceMs},
                             {"shadeMs", rt.shade.vertexMs + rt.shade.setupMs + rt.shade.shadeMs}};
+    }
+    if (r.voxelRays) {
+        const VoxelRayFrameStats& v = *r.voxelRays;
+        const double rays = double(std::max<uint64_t>(v.rays, 1));
+        j["voxelRays"] = {{"accel", rt::voxelStructureName(v.structure)},
+                          {"level", v.level},
+                          {"resolution", v.resolution},
+                          {"voxels", v.voxels},
+                          {"rays", v.rays},
+                          {"hits", v.hits},
+                          {"samplesInsideAVoxel", v.samplesInside},
+                          {"facesSeen", v.facesSeen},
+                          {"interiorNodesPerRay", double(v.counters.interiorSteps) / rays},
+                          {"leavesPerRay", double(v.counters.leafSteps) / rays},
+                          {"voxelTestsPerRay", double(v.counters.voxelTests) / rays},
+                          {"gatherMs", v.gatherMs},
+                          {"buildMs", v.buildMs},
+                          {"traceMs", v.traceMs},
+                          {"shadeMs", v.shadeMs}};
     }
     if (r.culling) {
         const FrustumCullStats& c = *r.culling;

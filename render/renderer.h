@@ -25,6 +25,7 @@
 #include "render/loaded_scene.h"
 #include "render/scene_culling.h"
 #include "render/scene_shadows.h"
+#include "render/voxel_ray_frame.h"
 #include "rt/primary_rays.h"
 #include "scene/load_stats.h"
 
@@ -54,7 +55,8 @@ struct RenderResult {
     uint32_t voxelResolution = 0;               // voxel models: the finest level's
     std::optional<ShadowFrameStats> shadows;    // when a shadow mode was asked for
     std::optional<FrustumCullStats> culling;    // with frustumCull
-    std::optional<RayTracedFrameStats> rayTraced;  // with Renderer::Raytrace
+    std::optional<RayTracedFrameStats> rayTraced;  // with Renderer::Raytrace, 3D scenes
+    std::optional<VoxelRayFrameStats> voxelRays;   // with Renderer::Raytrace, voxel models
 };
 
 /// One frame. Throws scene::InputError for settings the scene cannot honour (an option it has no

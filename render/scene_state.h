@@ -12,6 +12,7 @@
 #include "render/loaded_scene.h"
 #include "render/scene_culling.h"
 #include "render/scene_shadows.h"
+#include "render/voxel_ray_frame.h"
 #include "rt/primary_rays.h"
 #include "scene/environment_map.h"
 #include "scene/gltf_loader.h"
@@ -30,6 +31,7 @@ struct LoadedScene::State {
 
     scene::TriScene tri;                       // a .tri file
     std::unique_ptr<lod::VoxelScene> voxel;    // a .cvox model
+    std::unique_ptr<VoxelRayScene> voxelRays;  // its --renderer raytrace level and tree, kept
 
     // A 3D scene: the meshes at the pose held; camera and lighting are set per frame.
     std::optional<scene::GltfDocument> gltf;

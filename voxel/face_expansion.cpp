@@ -12,25 +12,6 @@
 namespace cuberille::voxel {
 namespace {
 
-/// The four corners of the face on `axis` at the high (positive) or low side, counter-clockwise
-/// seen from outside the voxel.
-void faceCorners(const glm::dvec3& lo, const glm::dvec3& hi, int axis, bool positive, glm::dvec3 (&c)[4]) {
-    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const double w = positive ? hi[axis] : lo[axis];
-    auto corner = [&](double a, double b) {
-        glm::dvec3 p;
-        p[axis] = w;
-        p[u] = a;
-        p[v] = b;
-        return p;
-    };
-    if (positive) {
-        c[0] = corner(lo[u], lo[v]), c[1] = corner(hi[u], lo[v]), c[2] = corner(hi[u], hi[v]), c[3] = corner(lo[u], hi[v]);
-    } else {
-        c[0] = corner(lo[u], lo[v]), c[1] = corner(lo[u], hi[v]), c[2] = corner(hi[u], hi[v]), c[3] = corner(hi[u], lo[v]);
-    }
-}
-
 /// The faces of a voxel on the sides of a region: the skirt of a stand-in.
 uint8_t regionSideFaces(const glm::uvec3& p, const VoxelRegion& r) {
     uint8_t faces = 0;
@@ -496,6 +477,23 @@ struct FaceSlots {
 };
 
 }  // namespace
+
+void faceCorners(const glm::dvec3& lo, const glm::dvec3& hi, int axis, bool positive, glm::dvec3 (&c)[4]) {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const double w = positive ? hi[axis] : lo[axis];
+    auto corner = [&](double a, double b) {
+        glm::dvec3 p;
+        p[axis] = w;
+        p[u] = a;
+        p[v] = b;
+        return p;
+    };
+    if (positive) {
+        c[0] = corner(lo[u], lo[v]), c[1] = corner(hi[u], lo[v]), c[2] = corner(hi[u], hi[v]), c[3] = corner(lo[u], hi[v]);
+    } else {
+        c[0] = corner(lo[u], lo[v]), c[1] = corner(lo[u], hi[v]), c[2] = corner(hi[u], hi[v]), c[3] = corner(hi[u], lo[v]);
+    }
+}
 
 void expandVoxelFaces(const VoxelModel& model, const BlockVoxels& block, const glm::dvec3& camera, FaceMesh& out,
                       const glm::vec3* overrideColor, const VoxelRegion* region, const SampleFootprint* footprint,

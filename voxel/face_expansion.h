@@ -107,6 +107,10 @@ struct VoxelRegion {
     glm::uvec3 lo{0}, hi{0};
 };
 
+/// The four corners of the face on `axis` at the high (positive) or low side of the box [lo, hi],
+/// counter-clockwise seen from outside: a face's quad is triangles (0, 1, 2) and (0, 2, 3).
+void faceCorners(const glm::dvec3& lo, const glm::dvec3& hi, int axis, bool positive, glm::dvec3 (&c)[4]);
+
 /// Appends the camera-facing active faces of every voxel of the block (or of the region); with a
 /// footprint, only those that may cover one of its samples, and with a depth footprint as well,
 /// only those of voxels not behind it, nor, with testWithinBlock, behind the block's own nearer

@@ -91,8 +91,26 @@ def test_the_grid_answers_the_shadow_stages_rays_as_the_bvh_does(examples):
     through_grid = scene.render(accel="grid", **settings)
     assert scene.stats["shadows"]["accel"] == "grid"
     assert np.array_equal(through_grid, through_bvh)
-    with pytest.raises(cuberille.InputError, match="--accel: 'octree' is not bvh or grid"):
+    with pytest.raises(cuberille.InputError, match="--accel: 'octtree' is not bvh, grid, kdtree or octree"):
+        scene.render(accel="octtree", **settings)
+    with pytest.raises(cuberille.InputError, match="--accel octree: a tree over voxels"):
         scene.render(accel="octree", **settings)
+
+
+def test_a_voxel_model_traced_through_each_tree_is_the_same_image(examples, cli, tmp_path):
+    """renderer="raytrace" on a .cvox traces one level's voxels through accel="bvh", "kdtree" or
+    "octree": the same pixels from each, and the stats name the tree and count a ray a sample."""
+    model = tmp_path / "torus.cvox"
+    subprocess.run([cli, "voxelize", str(examples / "torus.ply"), "--resolution", "64", "-o", str(model), "--quiet"], check=True)
+    scene = cuberille.Scene(str(model))
+    images = {}
+    for accel in ("bvh", "kdtree", "octree"):
+        images[accel] = scene.render(width=96, height=72, renderer="raytrace", accel=accel)
+        assert scene.stats["voxelRays"]["accel"] == accel
+        assert scene.stats["voxelRays"]["rays"] == 96 * 72
+        assert scene.stats["voxelRays"]["hits"] > 0
+    assert np.array_equal(images["bvh"], images["kdtree"])
+    assert np.array_equal(images["bvh"], images["octree"])
 
 
 def test_the_ray_tracer_sees_what_the_rasterizer_sees(examples):
