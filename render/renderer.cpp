@@ -96,10 +96,16 @@ void validate(const State& s, const FrameSettings& o) {
                          std::to_string(kMaxOcclusionRaysPerPixel) + " (rays per pixel)");
     if (!(ao.maxDistance >= 0.0f) || !std::isfinite(ao.maxDistance))
         throw InputError("--ao-distance: must be a finite number, 0 or more (0: a tenth of the model's size)");
-    if (ao.raysPerPixel > 0 && !threeD)
-        throw InputError("--ao: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
-    if ((sh.mode != rt::ShadowMode::None || o.view == View::ShadowPixels) && !threeD)
-        throw InputError("--shadows and --view shadow-pixels: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
+    // A voxel model's rays come from the ray-tracing renderer: its camera rays' faces cast them.
+    const bool tracedVoxels = voxel && o.renderer == Renderer::Raytrace;
+    if (ao.raysPerPixel > 0 && !threeD && !tracedVoxels)
+        throw InputError("--ao: only for 3D scenes (glTF, PLY, OBJ, built-in) and, with --renderer raytrace, voxel models; not " + s.name);
+    if (tracedVoxels && sh.mode != rt::ShadowMode::None && sh.mode != rt::ShadowMode::RayTraced)
+        throw InputError(std::string("--shadows ") + shadowModeName(sh.mode) +
+                         ": a voxel model's ray-traced frame takes --shadows raytraced (its rays go through the voxel tree)");
+    if ((sh.mode != rt::ShadowMode::None && !threeD && !tracedVoxels) || (o.view == View::ShadowPixels && !threeD))
+        throw InputError("--shadows and --view shadow-pixels: only for 3D scenes (glTF, PLY, OBJ, built-in) and, with "
+                         "--renderer raytrace, voxel models (--shadows raytraced); not " + s.name);
     if (o.view == View::Normals && !threeD)
         throw InputError("--view normals: only for 3D scenes (glTF, PLY, OBJ, built-in), not " + s.name);
     if (o.view == View::ShadowPixels && sh.mode == rt::ShadowMode::None)
@@ -430,7 +436,15 @@ void drawVoxelRayTracedFrame(State& st, const FrameSettings& o, RenderResult& re
     raster::FramebufferDesc desc = framebufferDesc(o);
     desc.clearColor = o.background ? clearColorFor(*o.background) : s.background;
     pipeline.beginDeferredFrame(desc);
-    result.voxelRays = st.voxelRays->drawFrame(pipeline, s.camera, s.lighting, o.width, o.height, o.msaa);
+    VoxelRayEffects effects;
+    effects.shadows = o.shadows.mode == rt::ShadowMode::RayTraced;
+    effects.soft = o.shadows.soft;
+    effects.lightRadius = o.shadows.lightRadius;
+    effects.softSamplesPerSide = o.shadows.softSamplesPerSide;
+    effects.occlusionRays = o.ambientOcclusion.raysPerPixel;
+    effects.occlusionDistance = o.ambientOcclusion.maxDistance;
+    result.voxelRays = st.voxelRays->drawFrame(pipeline, s.camera, s.lighting, desc.widthPixels, desc.heightPixels, desc.samples,
+                                               effects);
     pipeline.endFrame();
     result.stats = pipeline.stats();
     finishView(pipeline, o.view, &s.camera, result.image, result.stats.times.resolveMs);
@@ -598,7 +612,11 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                           {"voxelTestsPerRay", double(v.counters.voxelTests) / rays},
                           {"gatherMs", v.gatherMs},
                           {"buildMs", v.buildMs},
+                          {"shadowRays", v.shadowRays},
+                          {"occlusionRays", v.occlusionRays},
+                          {"occlusionDistance", v.occlusionDistance},
                           {"traceMs", v.traceMs},
+                          {"lightMs", v.lightMs},
                           {"shadeMs", v.shadeMs}};
     }
     if (r.culling) {

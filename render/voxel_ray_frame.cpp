@@ -12,7 +12,10 @@
 #include "raster/clock.h"
 #include "raster/sample_pattern.h"
 #include "raster/visibility_shade.h"
+#include "rt/ambient_occlusion.h"
 #include "rt/primary_rays.h"
+#include "rt/screen_surfaces.h"
+#include "rt/shadows.h"
 #include "scene/mesh.h"
 #include "voxel/face_expansion.h"
 #include "voxel/packing.h"
@@ -22,6 +25,7 @@ namespace cuberille::render {
 namespace {
 
 constexpr uint64_t kNoFace = ~0ull;
+
 
 /// A face seen: voxel x 6 + the face's bit index in the active face mask (voxel/voxel_model.h:
 /// 2 x axis, + 1 for the low side). A ray entering by the low plane of an axis (direction
@@ -43,6 +47,8 @@ VoxelRayScene::VoxelRayScene(const voxel::VoxelModel& model, uint32_t level, rt:
         for (size_t i = 0; i < b.voxels.size(); ++i) {
             const glm::uvec3 p = model.gridPosition(b, i);
             coords_.push_back({uint16_t(p.x), uint16_t(p.y), uint16_t(p.z)});
+            boundsLo_ = coords_.size() == 1 ? glm::vec3(p) : glm::min(boundsLo_, glm::vec3(p));
+            boundsHi_ = glm::max(boundsHi_, glm::vec3(p) + 1.0f);
         }
         normals_.insert(normals_.end(), b.normals.begin(), b.normals.end());
         colors_.insert(colors_.end(), b.colors.begin(), b.colors.end());
@@ -66,8 +72,70 @@ rt::VoxelHit VoxelRayScene::trace(const rt::VoxelRay& ray, rt::VoxelTraversalCou
         tree_);
 }
 
+bool VoxelRayScene::occluded(rt::Ray ray, uint32_t voxel) const {
+    const rt::VoxelRay leaving(ray);
+    const glm::vec3 lo = glm::vec3(coords_[voxel].x, coords_[voxel].y, coords_[voxel].z) - float(kUnshadowingNeighbourhoodVoxels);
+    float enter, exit;
+    if (leaving.segment(lo, lo + float(2 * kUnshadowingNeighbourhoodVoxels + 1), ray.tMin, ray.tMax, &enter, &exit))
+        ray.tMin = exit;  // past the voxel's neighbourhood
+    return std::visit(
+        [&](const auto& tree) {
+            if constexpr (std::is_same_v<std::decay_t<decltype(tree)>, std::monostate>) return false;
+            else return tree.trace(rt::VoxelRay(ray), {.anyHit = true}).hit();
+        },
+        tree_);
+}
+
+void VoxelRayScene::lightFaces(const std::vector<uint64_t>& centre, const std::vector<glm::vec3>& centrePoint, int width,
+                               int height, const VoxelRayEffects& effects, raster::Lighting& lighting, VoxelRayFrameStats& stats) {
+    const bool shadows = effects.shadows && lighting.lightCount > 0, occlusion = effects.occlusionRays > 0;
+    const glm::vec3 toLight = lighting.lightCount > 0 ? -lighting.lights[0].direction : glm::vec3(0.0f);
+    const std::vector<glm::vec2> disk = rt::diskSamples(effects.soft ? std::max(1, effects.softSamplesPerSide) : 1);
+    const std::vector<glm::vec3> directions = rt::occlusionDirections(effects.occlusionRays);
+    const double diagonal = double(glm::length(boundsHi_ - boundsLo_)) * voxelSize_;
+    stats.occlusionDistance = effects.occlusionDistance > 0.0f ? effects.occlusionDistance
+                                                               : float(rt::kDefaultOcclusionDistanceOfBounds * diagonal);
+    const float reachInVoxels = float(double(stats.occlusionDistance) / voxelSize_);
+    shadowMask_.assign(size_t(width) * size_t(height), 1.0f);
+    occlusionMask_.assign(size_t(width) * size_t(height), 1.0f);
+    tbb::combinable<uint64_t> shadowRays, occlusionRays;
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y < rows.end(); ++y)
+            for (int x = 0; x < width; ++x) {
+                const size_t p = size_t(y) * size_t(width) + size_t(x);
+                if (centre[p] == kNoFace) continue;
+                const uint32_t voxel = uint32_t(centre[p] / 6);
+                const int bit = int(centre[p] % 6);
+                glm::vec3 faceNormal(0.0f);
+                faceNormal[bit / 2] = bit % 2 == 0 ? 1.0f : -1.0f;
+                const glm::vec3 point = centrePoint[p];
+                if (shadows && glm::dot(voxel::unpackNormal1010102(normals_[voxel]), toLight) > 0.0f) {
+                    glm::vec3 u, v;
+                    rt::tangentFrame(toLight, u, v);
+                    int lit = 0;
+                    for (const glm::vec2& s : disk) {
+                        const glm::vec3 d = effects.soft ? glm::normalize(toLight + effects.lightRadius * (s.x * u + s.y * v)) : toLight;
+                        lit += !occluded(rt::Ray{point, d, 0.0f, std::numeric_limits<float>::infinity()}, voxel);
+                    }
+                    shadowRays.local() += disk.size();
+                    shadowMask_[p] = float(lit) / float(disk.size());
+                }
+                if (occlusion) {
+                    occlusionMask_[p] = rt::openShare(rt::Surface{point, faceNormal}, directions, rt::occlusionTurnRadians(x, y),
+                                                      reachInVoxels, 0.0f, [&](const rt::Ray& r) { return occluded(r, voxel); });
+                    occlusionRays.local() += directions.size();
+                }
+            }
+    });
+    shadowRays.combine_each([&](uint64_t n) { stats.shadowRays += n; });
+    occlusionRays.combine_each([&](uint64_t n) { stats.occlusionRays += n; });
+    if (shadows) lighting.lights[0].visibility = shadowMask_.data();
+    if (occlusion) lighting.ambientVisibility = occlusionMask_.data();
+}
+
 VoxelRayFrameStats VoxelRayScene::drawFrame(raster::Pipeline& pipeline, const scene::Camera& camera,
-                                            const raster::Lighting& lighting, int width, int height, int samples) {
+                                            const raster::Lighting& lighting, int width, int height, int samples,
+                                            const VoxelRayEffects& effects) {
     VoxelRayFrameStats stats;
     stats.structure = structure_;
     stats.level = level_;
@@ -86,45 +154,68 @@ VoxelRayFrameStats VoxelRayScene::drawFrame(raster::Pipeline& pipeline, const sc
     const size_t sampleCount = size_t(width) * size_t(height) * size_t(samples);
     std::vector<uint64_t> faceOf(sampleCount, kNoFace);
     std::vector<uint8_t> secondTriangle(sampleCount, 0);
+    // The face at each pixel centre, where shadow and occlusion rays leave from (the one sample's
+    // own ray at 1 sample, else a ray of its own).
+    const bool lit = effects.shadows || effects.occlusionRays > 0;
+    std::vector<uint64_t> centreFace(lit ? size_t(width) * size_t(height) : 0, kNoFace);
+    std::vector<glm::vec3> centrePoint(centreFace.size());
     tbb::combinable<rt::VoxelTraversalCounters> counters;
     tbb::combinable<uint64_t> inside;
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
         rt::VoxelTraversalCounters& c = counters.local();
+        // The face a window position's ray enters, and where: the hit point put on the face's plane.
+        auto faceAt = [&](double wx, double wy, glm::vec3* point, uint8_t* second) -> uint64_t {
+            const rt::Ray world = rt::primaryRay(rays, wx, wy, width, height);
+            rt::Ray grid;
+            grid.origin = glm::vec3((glm::dvec3(world.origin) - origin_) / voxelSize_);
+            grid.direction = glm::vec3(glm::dvec3(world.direction) / voxelSize_);
+            grid.tMin = world.tMin;
+            grid.tMax = world.tMax;
+            const rt::VoxelRay ray(grid);
+            const rt::VoxelHit hit = trace(ray, &c);
+            if (!hit.hit()) return kNoFace;
+            if (hit.axis < 0) {
+                ++inside.local();
+                return kNoFace;
+            }
+            const int a = hit.axis, u = (a + 1) % 3, v = (a + 2) % 3;
+            const bool lowSide = !ray.farSide[a];
+            const rt::VoxelCoord& vc = coords_[hit.voxel];
+            const glm::vec3 corner(vc.x, vc.y, vc.z);
+            glm::vec3 p = grid.origin + hit.t * grid.direction;
+            p[a] = corner[a] + (lowSide ? 0.0f : 1.0f);
+            *point = p;
+            // Which triangle of the face's quad holds the hit: they meet on the diagonal from
+            // corner 0 to corner 2 (voxel::faceCorners' order for each side).
+            const float fu = p[u] - corner[u], fv = p[v] - corner[v];
+            *second = lowSide ? fu > fv : fv > fu;
+            return faceKey(hit.voxel, a, lowSide);
+        };
         for (int y = rows.begin(); y < rows.end(); ++y)
-            for (int x = 0; x < width; ++x)
+            for (int x = 0; x < width; ++x) {
+                const size_t pixel = size_t(y) * size_t(width) + size_t(x);
+                glm::vec3 point;
                 for (int s = 0; s < samples; ++s) {
-                    const rt::Ray world = rt::primaryRay(rays, x + 0.5 + pattern.dx[s] * kSampleOffsetUnitPixels,
-                                                         y + 0.5 + pattern.dy[s] * kSampleOffsetUnitPixels, width, height);
-                    rt::Ray grid;
-                    grid.origin = glm::vec3((glm::dvec3(world.origin) - origin_) / voxelSize_);
-                    grid.direction = glm::vec3(glm::dvec3(world.direction) / voxelSize_);
-                    grid.tMin = world.tMin;
-                    grid.tMax = world.tMax;
-                    const rt::VoxelRay ray(grid);
-                    const rt::VoxelHit hit = trace(ray, &c);
-                    if (!hit.hit()) continue;
-                    if (hit.axis < 0) {
-                        ++inside.local();
-                        continue;
-                    }
-                    const size_t i = (size_t(y) * size_t(width) + size_t(x)) * size_t(samples) + size_t(s);
-                    const int a = hit.axis, u = (a + 1) % 3, v = (a + 2) % 3;
-                    const bool lowSide = !ray.farSide[a];
-                    faceOf[i] = faceKey(hit.voxel, a, lowSide);
-                    // Which triangle of the face's quad holds the hit: they meet on the diagonal
-                    // from corner 0 to corner 2 (voxel::faceCorners' order for each side).
-                    const glm::vec3 p = grid.origin + hit.t * grid.direction;
-                    const rt::VoxelCoord& vc = coords_[hit.voxel];
-                    const float cu = u == 0 ? vc.x : u == 1 ? vc.y : vc.z, cv = v == 0 ? vc.x : v == 1 ? vc.y : vc.z;
-                    const float fu = p[u] - cu, fv = p[v] - cv;
-                    secondTriangle[i] = lowSide ? fu > fv : fv > fu;
+                    const size_t i = pixel * size_t(samples) + size_t(s);
+                    faceOf[i] = faceAt(x + 0.5 + pattern.dx[s] * kSampleOffsetUnitPixels, y + 0.5 + pattern.dy[s] * kSampleOffsetUnitPixels,
+                                       &point, &secondTriangle[i]);
+                    if (lit && samples == 1) centreFace[pixel] = faceOf[i], centrePoint[pixel] = point;
                 }
+                uint8_t unused;
+                if (lit && samples > 1) centreFace[pixel] = faceAt(x + 0.5, y + 0.5, &centrePoint[pixel], &unused);
+            }
     });
     counters.combine_each([&](const rt::VoxelTraversalCounters& c) { stats.counters.add(c); });
     inside.combine_each([&](uint64_t n) { stats.samplesInside += n; });
     stats.rays = stats.counters.rays;
     stats.hits = stats.counters.hits;
     stats.traceMs = raster::nowMs() - t0;
+    raster::Lighting lightingWithMasks = lighting;
+    if (lit) {
+        const double tl = raster::nowMs();
+        lightFaces(centreFace, centrePoint, width, height, effects, lightingWithMasks, stats);
+        stats.lightMs = raster::nowMs() - tl;
+    }
 
     // Shade: the faces seen as the rasterizer's quads, in key order (deterministic), one draw.
     const double t1 = raster::nowMs();
@@ -156,7 +247,7 @@ VoxelRayFrameStats VoxelRayScene::drawFrame(raster::Pipeline& pipeline, const sc
         const uint32_t quad[6] = {v0, v0 + 1, v0 + 2, v0, v0 + 2, v0 + 3};
         std::copy(quad, quad + 6, indices_.begin() + ptrdiff_t(6 * k));
     }
-    pipeline.draw(lod::voxelFacesDraw(clipFromWorld, positions_, normals3_, colors3_, indices_, lighting, camera.position));
+    pipeline.draw(lod::voxelFacesDraw(clipFromWorld, positions_, normals3_, colors3_, indices_, lightingWithMasks, camera.position));
     raster::VisibilityBuffer seen;
     seen.reset(width, height, samples);
     for (size_t i = 0; i < sampleCount; ++i) {

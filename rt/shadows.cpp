@@ -113,29 +113,6 @@ void keepMinimum(float& target, float value) {
     }
 }
 
-/// Stratified points on the unit disk (Shirley and Chiu's concentric map of an N x N grid of
-/// cell centres): fixed, so soft shadows are deterministic.
-std::vector<glm::vec2> diskSamples(int n) {
-    std::vector<glm::vec2> samples;
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            const float a = 2.0f * (float(i) + 0.5f) / float(n) - 1.0f, b = 2.0f * (float(j) + 0.5f) / float(n) - 1.0f;
-            float r, phi;
-            if (a == 0.0f && b == 0.0f) {  // the centre (odd N): the angle is undefined
-                samples.push_back({0.0f, 0.0f});
-                continue;
-            }
-            if (std::abs(a) > std::abs(b)) {
-                r = a;
-                phi = 0.78539816f * (b / a);
-            } else {
-                r = b;
-                phi = 1.57079633f - 0.78539816f * (a / b);
-            }
-            samples.push_back({r * std::cos(phi), r * std::sin(phi)});
-        }
-    return samples;
-}
 
 /// Levels of a min pyramid over size x size texels, halved (rounding up) down to one.
 int pyramidLevels(int size) {
@@ -759,6 +736,28 @@ public:
 };
 
 }  // namespace
+
+std::vector<glm::vec2> diskSamples(int n) {
+    std::vector<glm::vec2> samples;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const float a = 2.0f * (float(i) + 0.5f) / float(n) - 1.0f, b = 2.0f * (float(j) + 0.5f) / float(n) - 1.0f;
+            float r, phi;
+            if (a == 0.0f && b == 0.0f) {  // the centre (odd N): the angle is undefined
+                samples.push_back({0.0f, 0.0f});
+                continue;
+            }
+            if (std::abs(a) > std::abs(b)) {
+                r = a;
+                phi = 0.78539816f * (b / a);
+            } else {
+                r = b;
+                phi = 1.57079633f - 0.78539816f * (a / b);
+            }
+            samples.push_back({r * std::cos(phi), r * std::sin(phi)});
+        }
+    return samples;
+}
 
 uint64_t nextCastersVersion() {
     static std::atomic<uint64_t> next{1};

@@ -63,6 +63,10 @@ struct ShadowOptions {
     int sequenceFrames = 1;
 };
 
+/// The N x N points on the unit disk soft shadows aim at (Shirley and Chiu's concentric map of an
+/// N x N grid of cell centres): fixed, so soft shadows are deterministic.
+std::vector<glm::vec2> diskSamples(int samplesPerSide);
+
 struct ShadowStats {
     int lightsShadowed = 0;
     uint64_t receiverPixels = 0;  // pixel-light pairs whose surface faces the light

@@ -12,6 +12,7 @@
 #include "rt/primary_rays.h"
 #include "scene/input_error.h"
 #include "tests/lod/lod_test_support.h"
+#include "voxel/packing.h"
 #include "voxel/voxel_model.h"
 
 namespace cuberille {
@@ -99,7 +100,9 @@ struct FaceTracer {
         }
         bvh.emplace(coords);
     }
-    uint64_t face(const rt::PrimaryRayCamera& camera, double x, double y, int width, int height) const {
+    /// With `point`, where the ray meets the face, on its plane (grid units).
+    uint64_t face(const rt::PrimaryRayCamera& camera, double x, double y, int width, int height,
+                  glm::vec3* point = nullptr) const {
         const rt::Ray world = rt::primaryRay(camera, x, y, width, height);
         rt::Ray grid = world;
         grid.origin = glm::vec3((glm::dvec3(world.origin) - origin) / voxelSize);
@@ -107,6 +110,11 @@ struct FaceTracer {
         const rt::VoxelRay ray(grid);
         const rt::VoxelHit h = bvh->trace(ray, {});
         if (!h.hit() || h.axis < 0) return ~0ull;
+        if (point) {
+            const rt::VoxelCoord& v = coords[h.voxel];
+            *point = grid.origin + h.t * grid.direction;
+            (*point)[h.axis] = float(h.axis == 0 ? v.x : h.axis == 1 ? v.y : v.z) + (ray.farSide[h.axis] ? 1.0f : 0.0f);
+        }
         return uint64_t(h.voxel) * 6 + uint64_t(2 * h.axis + (ray.farSide[h.axis] ? 0 : 1));
     }
     bool active(uint64_t face) const { return activeFaces[face / 6] & (1u << (face % 6)); }
@@ -186,6 +194,86 @@ TEST_F(VoxelRayFrame, ShowsTheRasterizersFacesButWhereAFaceIsInactiveOrAnEdgeIsW
     EXPECT_GT(behind.inactive, 1000) << behind.differ << " pixels differ, " << behind.inactive << " on inactive faces";
 }
 
+TEST_F(VoxelRayFrame, ShadowsAndOcclusionAreTheSameBitsFromEveryTreeAndThreadCount) {
+    const render::LoadedScene scene(path_->string());
+    render::FrameSettings f = frame();
+    f.shadows.mode = rt::ShadowMode::RayTraced;
+    f.shadows.soft = true;
+    f.shadows.lightRadius = 0.2f;
+    f.ambientOcclusion.raysPerPixel = 8;
+    const render::RenderResult reference = render::render(scene, f);
+    EXPECT_GT(reference.voxelRays->shadowRays, 0u);
+    EXPECT_GT(reference.voxelRays->occlusionRays, 0u);
+    f.shadows.mode = rt::ShadowMode::None;
+    f.ambientOcclusion.raysPerPixel = 0;
+    EXPECT_NE(render::render(scene, f).image.rgba, reference.image.rgba);  // the effects show
+    f = frame();
+    f.shadows = {.mode = rt::ShadowMode::RayTraced, .soft = true, .lightRadius = 0.2f};
+    f.ambientOcclusion.raysPerPixel = 8;
+    for (rt::VoxelStructure tree : {rt::VoxelStructure::KdTree, rt::VoxelStructure::Octree})
+        for (int threads : {1, 7}) {
+            const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+            f.voxelAccel = tree;
+            EXPECT_EQ(render::render(scene, f).image.rgba, reference.image.rgba) << rt::voxelStructureName(tree) << ", " << threads;
+        }
+}
+
+// A plate of voxels over a floor of voxels: every floor pixel is darker with --shadows raytraced
+// exactly where a brute-force ray from its face toward the light meets a voxel past the
+// neighbourhood the rule leaves out (decided where the light's cosine makes the difference plain).
+TEST(VoxelRayShadows, AFacesShadowIsWhereBruteForceRaysToTheLightAreBlocked) {
+    std::vector<testing::Triangle> scene{{glm::vec3(-2, 0, -2), glm::vec3(2, 0, 2), glm::vec3(2, 0, -2)},
+                                         {glm::vec3(-2, 0, -2), glm::vec3(-2, 0, 2), glm::vec3(2, 0, 2)},
+                                         {glm::vec3(-0.8, 0.9, -0.8), glm::vec3(0.8, 0.9, 0.8), glm::vec3(0.8, 0.9, -0.8)},
+                                         {glm::vec3(-0.8, 0.9, -0.8), glm::vec3(-0.8, 0.9, 0.8), glm::vec3(0.8, 0.9, 0.8)}};
+    voxel::VoxelizeOptions o;
+    o.resolution = 64;
+    voxel::VoxelModel model = voxel::voxelizeMesh(*testing::viewOf(scene, 1000), o);
+    lod::buildLodPyramid(model, {});
+    const auto path = testing::writeTemp("_voxel_ray_shadows.cvox", testing::cvoxBytes(model));
+    const render::LoadedScene loaded(path.string());
+    render::FrameSettings f;
+    f.width = 160;
+    f.height = 120;
+    f.renderer = render::Renderer::Raytrace;
+    f.elevation = 50.0f;  // from above, so the floor under the plate shows
+    const std::vector<uint8_t> unshadowed = render::displayPixels(loaded, f, render::render(loaded, f));
+    f.shadows.mode = rt::ShadowMode::RayTraced;
+    const std::vector<uint8_t> shadowed = render::displayPixels(loaded, f, render::render(loaded, f));
+    std::filesystem::remove(path);
+
+    const lod::VoxelScene& voxels = *render::SceneAccess::state(loaded).voxel;
+    const glm::vec3 toLight = -voxels.lighting.lights[0].direction;
+    rt::PrimaryRayCamera rays;
+    rays.worldFromClip = glm::inverse(glm::dmat4(voxels.camera.clipFromWorld(float(f.width) / float(f.height))));
+    const FaceTracer tracer(model);
+    std::vector<uint32_t> normals;
+    for (const voxel::VoxelBlock& b : model.blocks)
+        if (b.level == 0) normals.insert(normals.end(), b.normals.begin(), b.normals.end());
+    int blocked = 0, open = 0;
+    for (int y = 0; y < f.height; ++y)
+        for (int x = 0; x < f.width; ++x) {
+            glm::vec3 point;
+            const uint64_t face = tracer.face(rays, x + 0.5, y + 0.5, f.width, f.height, &point);
+            if (face == ~0ull) continue;
+            const uint32_t voxel = uint32_t(face / 6);
+            if (glm::dot(voxel::unpackNormal1010102(normals[voxel]), toLight) < 0.3f) continue;  // the shadow barely shows
+            rt::Ray ray{point, toLight, 0.0f, std::numeric_limits<float>::infinity()};
+            const rt::VoxelCoord& v = tracer.coords[voxel];
+            const glm::vec3 lo = glm::vec3(v.x, v.y, v.z) - float(render::kUnshadowingNeighbourhoodVoxels);
+            float enter, exit;
+            if (rt::VoxelRay(ray).segment(lo, lo + float(2 * render::kUnshadowingNeighbourhoodVoxels + 1), 0.0f, ray.tMax, &enter, &exit))
+                ray.tMin = exit;
+            const bool expectShadow = rt::closestVoxelBruteForce(tracer.coords, rt::VoxelRay(ray)).hit();
+            const size_t i = 4 * (size_t(y) * size_t(f.width) + size_t(x));
+            const int darker = int(unshadowed[i]) + unshadowed[i + 1] + unshadowed[i + 2] - shadowed[i] - shadowed[i + 1] - shadowed[i + 2];
+            EXPECT_EQ(darker > 30, expectShadow) << "pixel " << x << ", " << y << " darker by " << darker;
+            (expectShadow ? blocked : open) += 1;
+        }
+    EXPECT_GT(blocked, 100);
+    EXPECT_GT(open, 1000);
+}
+
 TEST_F(VoxelRayFrame, RefusesWhatOneTracedLevelCannotHonour) {
     const render::LoadedScene scene(path_->string());
     render::FrameSettings f = frame();
@@ -196,6 +284,12 @@ TEST_F(VoxelRayFrame, RefusesWhatOneTracedLevelCannotHonour) {
     EXPECT_THROW(render::render(scene, f), scene::InputError);
     f = frame();
     f.debugCamera = true;
+    EXPECT_THROW(render::render(scene, f), scene::InputError);
+    f = frame();
+    f.shadows.mode = rt::ShadowMode::Hybrid;  // no shadow map of voxels: rays only
+    EXPECT_THROW(render::render(scene, f), scene::InputError);
+    f.renderer = render::Renderer::Raster;
+    f.shadows.mode = rt::ShadowMode::RayTraced;  // the rasterized voxel frame casts no rays
     EXPECT_THROW(render::render(scene, f), scene::InputError);
     f = frame();
     f.renderer = render::Renderer::Raster;
