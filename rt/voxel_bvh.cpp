@@ -31,49 +31,35 @@ Bounds boundsOf(std::span<const VoxelCoord> voxels) {
     return b;
 }
 
-uint16_t coordinate(const VoxelCoord& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
-
 }  // namespace
 
 struct VoxelBvhBuilder {
-    VoxelBvh& bvh;
+    VoxelLeaves& data;
 
-    /// The subtree over data.voxels[first, first + count), whose bounds are b.
-    uint32_t build(uint32_t first, uint32_t count, const Bounds& b) {
-        VoxelLeaves& data = bvh.data_;
-        if (count <= kVoxelLeafSize) {
-            data.leaves.push_back({first, count});
-            return uint32_t(data.leaves.size() - 1) | VoxelNodeRef::kLeafBit;
-        }
+    /// The subtree over data.voxels[first, first + count), whose bounds are b, into `out`.
+    uint32_t build(VoxelSubtree<VoxelBvhNode>& out, uint32_t first, uint32_t count, const Bounds& b) {
+        if (count <= kVoxelLeafSize) return out.leaf(first, count);
         // More than one voxel: the longest axis spans at least two, so the middle plane m has
         // voxels on both sides (the lowest below it, the highest at or above it).
         const glm::ivec3 extent = glm::ivec3(b.hi) - glm::ivec3(b.lo) + 1;
         const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
         const int middle = b.lo[axis] + extent[axis] / 2;
-        auto* begin = data.voxels.data() + first;
-        auto* indexBegin = data.sourceIndex.data() + first;
-        // Partition voxels and their source indices together (a hand loop: two arrays, one order).
-        uint32_t below = 0;
-        for (uint32_t i = 0; i < count; ++i)
-            if (coordinate(begin[i], axis) < middle) {
-                std::swap(begin[i], begin[below]);
-                std::swap(indexBegin[i], indexBegin[below]);
-                ++below;
-            }
-        const Bounds left = boundsOf({begin, below}), right = boundsOf({begin + below, count - below});
-        const uint32_t node = uint32_t(bvh.nodes_.size());
-        bvh.nodes_.emplace_back();
-        const uint32_t c0 = build(first, below, left);
-        const uint32_t c1 = build(first + below, count - below, right);
-        VoxelBvhNode& n = bvh.nodes_[node];
-        const Bounds* children[2] = {&left, &right};
+        const uint32_t below = partitionBelow(data, first, count, axis, middle);
+        const VoxelCoord* begin = data.voxels.data() + first;
+        const Bounds children[2] = {boundsOf({begin, below}), boundsOf({begin + below, count - below})};
+        const uint32_t node = uint32_t(out.nodes.size());
+        out.nodes.emplace_back();
         for (int c = 0; c < 2; ++c)
             for (int a = 0; a < 3; ++a) {
-                n.lo[c][a] = children[c]->lo[a];
-                n.hi[c][a] = children[c]->hi[a];
+                out.nodes[node].lo[c][a] = children[c].lo[a];
+                out.nodes[node].hi[c][a] = children[c].hi[a];
             }
-        n.child[0] = c0;
-        n.child[1] = c1;
+        uint32_t refs[2];
+        buildChildren(out, 2, count >= kParallelBuildVoxels, [&](int c, VoxelSubtree<VoxelBvhNode>& into) {
+            return c == 0 ? build(into, first, below, children[0]) : build(into, first + below, count - below, children[1]);
+        }, refs);
+        out.nodes[node].child[0] = refs[0];
+        out.nodes[node].child[1] = refs[1];
         return node;
     }
 };
@@ -83,7 +69,10 @@ VoxelBvh::VoxelBvh(std::span<const VoxelCoord> voxels) : VoxelTreeStorage(voxels
     const Bounds b = boundsOf(voxels);
     rootLo_ = glm::vec3(b.lo);
     rootHi_ = glm::vec3(b.hi) + 1.0f;
-    root_ = VoxelBvhBuilder{*this}.build(0, uint32_t(voxels.size()), b);
+    VoxelSubtree<VoxelBvhNode> tree;
+    root_ = VoxelBvhBuilder{data_}.build(tree, 0, uint32_t(voxels.size()), b);
+    nodes_ = std::move(tree.nodes);
+    data_.leaves = std::move(tree.leaves);
 }
 
 VoxelHit VoxelBvh::trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTraversalCounters* counters,

@@ -34,18 +34,14 @@ double halfArea(const glm::ivec3& lo, const glm::ivec3& hi) {
 }  // namespace
 
 struct VoxelKdBuilder {
-    VoxelKdTree& tree;
+    VoxelLeaves& data;
 
-    /// The subtree over data.voxels[first, first + count) in the cell [lo, hi).
-    uint32_t build(uint32_t first, uint32_t count, const glm::ivec3& lo, const glm::ivec3& hi, int depth) {
-        VoxelLeaves& data = tree.data_;
+    /// The subtree over data.voxels[first, first + count) in the cell [lo, hi), into `out`.
+    uint32_t build(VoxelSubtree<VoxelKdNode>& out, uint32_t first, uint32_t count, const glm::ivec3& lo, const glm::ivec3& hi,
+                   int depth) {
         if (count == 0) return VoxelNodeRef::kNull;
-        if (count <= kVoxelLeafSize || depth >= kMaxKdDepth) {
-            data.leaves.push_back({first, count});
-            return uint32_t(data.leaves.size() - 1) | VoxelNodeRef::kLeafBit;
-        }
-        VoxelCoord* begin = data.voxels.data() + first;
-        uint32_t* indexBegin = data.sourceIndex.data() + first;
+        if (count <= kVoxelLeafSize || depth >= kMaxKdDepth) return out.leaf(first, count);
+        const VoxelCoord* begin = data.voxels.data() + first;
         glm::ivec3 tightLo(65536), tightHi(-1);
         for (uint32_t i = 0; i < count; ++i) {
             const glm::ivec3 p(begin[i].x, begin[i].y, begin[i].z);
@@ -104,21 +100,18 @@ struct VoxelKdBuilder {
                 }
             }
         }
-        uint32_t nBelow = 0;
-        for (uint32_t i = 0; i < count; ++i)
-            if (coordinate(begin[i], splitAxis) < split) {
-                std::swap(begin[i], begin[nBelow]);
-                std::swap(indexBegin[i], indexBegin[nBelow]);
-                ++nBelow;
-            }
-        const uint32_t node = uint32_t(tree.nodes_.size());
-        tree.nodes_.push_back({{0, 0}, uint16_t(split), uint8_t(splitAxis)});
+        const uint32_t nBelow = partitionBelow(data, first, count, splitAxis, split);
+        const uint32_t node = uint32_t(out.nodes.size());
+        out.nodes.push_back({{0, 0}, uint16_t(split), uint8_t(splitAxis)});
         glm::ivec3 belowHi = hi, aboveLo = lo;
         belowHi[splitAxis] = aboveLo[splitAxis] = split;
-        const uint32_t c0 = build(first, nBelow, lo, belowHi, depth + 1);
-        const uint32_t c1 = build(first + nBelow, count - nBelow, aboveLo, hi, depth + 1);
-        tree.nodes_[node].child[0] = c0;
-        tree.nodes_[node].child[1] = c1;
+        uint32_t refs[2];
+        buildChildren(out, 2, count >= kParallelBuildVoxels, [&](int c, VoxelSubtree<VoxelKdNode>& into) {
+            return c == 0 ? build(into, first, nBelow, lo, belowHi, depth + 1)
+                          : build(into, first + nBelow, count - nBelow, aboveLo, hi, depth + 1);
+        }, refs);
+        out.nodes[node].child[0] = refs[0];
+        out.nodes[node].child[1] = refs[1];
         return node;
     }
 };
@@ -132,7 +125,10 @@ VoxelKdTree::VoxelKdTree(std::span<const VoxelCoord> voxels) : VoxelTreeStorage(
     }
     rootLo_ = glm::vec3(lo);
     rootHi_ = glm::vec3(hi);
-    root_ = VoxelKdBuilder{*this}.build(0, uint32_t(voxels.size()), lo, hi, 0);
+    VoxelSubtree<VoxelKdNode> tree;
+    root_ = VoxelKdBuilder{data_}.build(tree, 0, uint32_t(voxels.size()), lo, hi, 0);
+    nodes_ = std::move(tree.nodes);
+    data_.leaves = std::move(tree.leaves);
 }
 
 VoxelHit VoxelKdTree::trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTraversalCounters* counters,

@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <numeric>
 
+#include <tbb/parallel_sort.h>
+
 #include "rt/voxel_traversal.h"
 #include "rt/voxel_trees.h"
 
@@ -36,17 +38,12 @@ uint64_t mortonCode(const VoxelCoord& v) { return spreadBits(v.x) | spreadBits(v
 }  // namespace
 
 struct VoxelOctreeBuilder {
-    VoxelOctree& tree;
-    const std::vector<uint64_t>& codes;  // sorted, one per voxel of data
+    const std::vector<uint64_t>& codes;  // sorted, one per voxel
 
-    /// The subtree over voxels [first, first + count), a cube of 2^level voxels a side.
-    uint32_t build(uint32_t first, uint32_t count, int level) {
-        VoxelLeaves& data = tree.data_;
+    /// The subtree over voxels [first, first + count), a cube of 2^level voxels a side, into `out`.
+    uint32_t build(VoxelSubtree<VoxelOctreeNode>& out, uint32_t first, uint32_t count, int level) {
         if (count == 0) return VoxelNodeRef::kNull;
-        if (count <= kVoxelLeafSize || level == 0) {
-            data.leaves.push_back({first, count});
-            return uint32_t(data.leaves.size() - 1) | VoxelNodeRef::kLeafBit;
-        }
+        if (count <= kVoxelLeafSize || level == 0) return out.leaf(first, count);
         const int shift = 3 * (level - 1);
         uint32_t bounds[9];
         bounds[0] = first;
@@ -54,12 +51,13 @@ struct VoxelOctreeBuilder {
             while (i < first + count && ((codes[i] >> shift) & 7) == octant) ++i;
             bounds[octant + 1] = i;
         }
-        const uint32_t node = uint32_t(tree.nodes_.size());
-        tree.nodes_.emplace_back();
-        for (int octant = 0; octant < 8; ++octant) {
-            const uint32_t c = build(bounds[octant], bounds[octant + 1] - bounds[octant], level - 1);
-            tree.nodes_[node].child[octant] = c;
-        }
+        const uint32_t node = uint32_t(out.nodes.size());
+        out.nodes.emplace_back();
+        uint32_t refs[8];
+        buildChildren(out, 8, count >= kParallelBuildVoxels, [&](int octant, VoxelSubtree<VoxelOctreeNode>& into) {
+            return build(into, bounds[octant], bounds[octant + 1] - bounds[octant], level - 1);
+        }, refs);
+        std::copy(refs, refs + 8, out.nodes[node].child);
         return node;
     }
 };
@@ -75,7 +73,8 @@ VoxelOctree::VoxelOctree(std::span<const VoxelCoord> voxels) : VoxelTreeStorage(
     while ((1u << rootLevel_) <= largest) ++rootLevel_;
     std::vector<uint32_t> order(voxels.size());
     std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
+    // A total order (ties by index), so the parallel sort's result is the one order there is.
+    tbb::parallel_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
     std::vector<uint64_t> codes(voxels.size());
     data_.voxels.resize(voxels.size());
     data_.sourceIndex = order;
@@ -83,7 +82,10 @@ VoxelOctree::VoxelOctree(std::span<const VoxelCoord> voxels) : VoxelTreeStorage(
         data_.voxels[i] = voxels[order[i]];
         codes[i] = key[order[i]];
     }
-    root_ = VoxelOctreeBuilder{*this, codes}.build(0, uint32_t(voxels.size()), rootLevel_);
+    VoxelSubtree<VoxelOctreeNode> tree;
+    root_ = VoxelOctreeBuilder{codes}.build(tree, 0, uint32_t(voxels.size()), rootLevel_);
+    nodes_ = std::move(tree.nodes);
+    data_.leaves = std::move(tree.leaves);
 }
 
 VoxelHit VoxelOctree::trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTraversalCounters* counters,

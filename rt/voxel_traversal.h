@@ -1,6 +1,6 @@
 #pragma once
-// What the three voxel traversals (rt/voxel_trees.h) share besides the leaf test: the short stack
-// and the per-ray counts.
+// What the three voxel trees (rt/voxel_trees.h) share besides the leaf test: their parallel build
+// (subtrees spliced in order) and, for traversal, the short stack and the per-ray counts.
 //
 // The short stack of Chajdas's voxel traversals (2015, §5.4.4): a ring of a fixed number of
 // entries; a push always succeeds, overwriting the oldest entry when the ring is full, and the
@@ -8,12 +8,80 @@
 // structure's nodes are disjoint along a ray, so a restart needs nothing but the point the ray
 // has been followed to.
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
+#include <vector>
+
+#include <tbb/parallel_for.h>
 
 #include "rt/voxel_rays.h"
 #include "rt/voxel_trees.h"
 
 namespace cuberille::rt {
+
+/// A subtree built on its own, its nodes and leaves numbered from 0. A node is appended before its
+/// children and children in order (preorder), and a child subtree built on another thread is
+/// spliced into its parent's arrays in that same order, so the tree's layout is the serial
+/// build's whatever ran in parallel: the same bits at every thread count.
+template <class Node>
+struct VoxelSubtree {
+    std::vector<Node> nodes;
+    std::vector<VoxelLeaf> leaves;
+
+    uint32_t leaf(uint32_t first, uint32_t count) {
+        leaves.push_back({first, count});
+        return uint32_t(leaves.size() - 1) | VoxelNodeRef::kLeafBit;
+    }
+    /// Appends `child` (whose root reference is `root`) and returns that root in this numbering.
+    uint32_t splice(VoxelSubtree&& child, uint32_t root) {
+        const uint32_t nodeOffset = uint32_t(nodes.size()), leafOffset = uint32_t(leaves.size());
+        auto moved = [&](uint32_t r) {
+            if (r == VoxelNodeRef::kNull) return r;
+            return VoxelNodeRef::isLeaf(r) ? (VoxelNodeRef::index(r) + leafOffset) | VoxelNodeRef::kLeafBit : r + nodeOffset;
+        };
+        for (Node& n : child.nodes)
+            for (uint32_t& c : n.child) c = moved(c);
+        nodes.insert(nodes.end(), child.nodes.begin(), child.nodes.end());
+        leaves.insert(leaves.end(), child.leaves.begin(), child.leaves.end());
+        return moved(root);
+    }
+};
+
+/// Voxels [first, first + count) of `data` put in two runs, those whose coordinate on `axis` is
+/// below `plane` first (their source indices with them); returns how many are below.
+inline uint32_t partitionBelow(VoxelLeaves& data, uint32_t first, uint32_t count, int axis, int plane) {
+    VoxelCoord* v = data.voxels.data() + first;
+    uint32_t* index = data.sourceIndex.data() + first;
+    uint32_t below = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        const int c = axis == 0 ? v[i].x : axis == 1 ? v[i].y : v[i].z;
+        if (c < plane) {
+            std::swap(v[i], v[below]);
+            std::swap(index[i], index[below]);
+            ++below;
+        }
+    }
+    return below;
+}
+
+/// A node over at least this many voxels builds its children on other threads (below it, a
+/// subtree's build is shorter than handing it over).
+constexpr uint32_t kParallelBuildVoxels = 1u << 15;
+
+/// The `count` children of a node, child c built by build(c, subtree) into refs[c]: straight into
+/// `out` in order, or, for a large node, each into a subtree of its own in parallel, then spliced.
+template <class Node, class BuildChild>
+void buildChildren(VoxelSubtree<Node>& out, int count, bool parallel, BuildChild&& build, uint32_t* refs) {
+    if (!parallel) {
+        for (int c = 0; c < count; ++c) refs[c] = build(c, out);
+        return;
+    }
+    std::array<VoxelSubtree<Node>, 8> parts;
+    std::array<uint32_t, 8> roots{};
+    tbb::parallel_for(0, count, [&](int c) { roots[size_t(c)] = build(c, parts[size_t(c)]); });
+    for (int c = 0; c < count; ++c) refs[c] = out.splice(std::move(parts[size_t(c)]), roots[size_t(c)]);
+}
 
 template <class Entry>
 class VoxelTraversalStack {

@@ -95,6 +95,10 @@ public:
         return s;
     }
 
+    /// The arrays as laid out (the same bits at every thread count the build ran on).
+    std::span<const Node> nodes() const { return nodes_; }
+    const VoxelLeaves& leafData() const { return data_; }
+
 protected:
     /// Copies the voxels, each remembering its index in `voxels`.
     explicit VoxelTreeStorage(std::span<const VoxelCoord> voxels) {
@@ -136,7 +140,6 @@ public:
 
 private:
     glm::vec3 rootLo_{0.0f}, rootHi_{0.0f};
-    friend struct VoxelBvhBuilder;
 };
 
 class VoxelKdTree : public VoxelTreeStorage<VoxelKdNode> {
@@ -148,7 +151,6 @@ public:
 
 private:
     glm::vec3 rootLo_{0.0f}, rootHi_{0.0f};
-    friend struct VoxelKdBuilder;
 };
 
 class VoxelOctree : public VoxelTreeStorage<VoxelOctreeNode> {
@@ -159,7 +161,6 @@ public:
 
 private:
     int rootLevel_ = 0;  // the root's cube is [0, 2^rootLevel) on each axis
-    friend struct VoxelOctreeBuilder;
 };
 
 }  // namespace cuberille::rt

@@ -8,9 +8,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <optional>
 #include <random>
 #include <set>
 
+#include <tbb/global_control.h>
+
+#include "rt/voxel_traversal.h"
 #include "rt/voxel_trees.h"
 
 namespace cuberille::rt {
@@ -199,6 +204,45 @@ TEST(VoxelTrees, ShortStacksRestartAndFullStacksNever) {
     EXPECT_GT(none.interiorSteps, full.interiorSteps);
     EXPECT_EQ(none.voxelTests, full.voxelTests);
     EXPECT_EQ(none.hits, full.hits);
+}
+
+/// The tree's arrays byte for byte: nodes, leaves, voxels and their source indices.
+template <class Tree>
+void expectSameLayout(const Tree& a, const Tree& b) {
+    ASSERT_EQ(a.nodes().size(), b.nodes().size());
+    EXPECT_EQ(std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size_bytes()), 0);
+    ASSERT_EQ(a.leafData().leaves.size(), b.leafData().leaves.size());
+    for (size_t i = 0; i < a.leafData().leaves.size(); ++i) {
+        EXPECT_EQ(a.leafData().leaves[i].first, b.leafData().leaves[i].first);
+        EXPECT_EQ(a.leafData().leaves[i].count, b.leafData().leaves[i].count);
+    }
+    EXPECT_EQ(a.leafData().voxels, b.leafData().voxels);
+    EXPECT_EQ(a.leafData().sourceIndex, b.leafData().sourceIndex);
+}
+
+TEST(VoxelTrees, BuildsAreTheSameBitsAtEveryThreadCount) {
+    // A shell big enough that the top levels build their children in parallel.
+    std::vector<VoxelCoord> voxels;
+    for (int z = 0; z < 160; ++z)
+        for (int y = 0; y < 160; ++y)
+            for (int x = 0; x < 160; ++x) {
+                const int r2 = (x - 80) * (x - 80) + (y - 75) * (y - 75) + (z - 82) * (z - 82);
+                if (r2 >= 70 * 70 && r2 < 72 * 72) voxels.push_back({uint16_t(x), uint16_t(y), uint16_t(z)});
+            }
+    ASSERT_GT(voxels.size(), 2 * size_t(kParallelBuildVoxels));
+    std::optional<VoxelBvh> bvh;
+    std::optional<VoxelKdTree> kd;
+    std::optional<VoxelOctree> octree;
+    {
+        const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        bvh.emplace(voxels), kd.emplace(voxels), octree.emplace(voxels);
+    }
+    for (int threads : {2, 7}) {
+        const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        expectSameLayout(*bvh, VoxelBvh(voxels));
+        expectSameLayout(*kd, VoxelKdTree(voxels));
+        expectSameLayout(*octree, VoxelOctree(voxels));
+    }
 }
 
 TEST(VoxelLaneOccupancy, CountsUsefulLaneSlotsOfLockstepIterations) {
