@@ -7,7 +7,10 @@
 //   Lauterbach et al.), queried through the eight-wide tree.
 // - Grid (`--accel grid`): a uniform grid rebuilt from scratch for every pose, so any motion costs
 //   the same linear build (Wald et al. 2006, rt/uniform_grid.h): single rays walk it by the
-//   3D-DDA, and the shadow stage sends rays that travel together as its packets (rt/shadows.cpp).
+//   3D-DDA.
+//
+// The shadow stage sends rays that travel together as packets through either (rt/shadows.cpp):
+// the grid's slice by slice, the wide BVH's node by node (rt/wide_bvh.h).
 //
 // Both answer exactly as brute force over every caster does (the same watertight test and hit
 // definition, rt/ray.h), so the masks, and the images, are the same bits whichever answers.
@@ -28,6 +31,13 @@ struct CasterRays {
     TriangleMeshView mesh;  // the grid's triangles (the BVH keeps its own)
 
     bool anyHit(const Ray& ray) const { return grid ? rt::anyHit(*grid, mesh, ray) : bvh->anyHit(ray); }
+    /// Rays that travel together (a tile's receivers toward one light, one receiver's rays toward
+    /// a light's disk) as packets: the grid's frustum packets or the wide BVH's. Each answer is
+    /// its ray's anyHit.
+    void anyHits(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+        if (grid) rt::anyHits(*grid, mesh, rays, occluded);
+        else bvh->anyHits(rays, occluded);
+    }
 };
 
 }  // namespace cuberille::rt

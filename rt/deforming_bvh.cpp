@@ -86,6 +86,11 @@ bool DeformingBvh::anyHit(const Ray& ray) const {
     return usesWide() ? rt::anyHit(wide_, ray) : rt::anyHit(*bvh_, mesh_, ray);
 }
 
+void DeformingBvh::anyHits(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+    if (usesWide() && !lazy_) return rt::anyHits(wide_, rays, occluded);
+    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = anyHit(rays[i]);
+}
+
 const Bvh& DeformingBvh::bvh() const {
     if (lazy_) lazy_->refreshAll();
     return *bvh_;

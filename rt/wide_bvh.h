@@ -107,4 +107,8 @@ inline constexpr int kMaxWidePacketRays = 64;
 void closestHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<RayHit> hits, const HitFilter* filter = nullptr,
                  TraversalCounters* counters = nullptr);
 
+/// Shadow and occlusion rays as packets the same way (a tile's surface points toward one light):
+/// occluded[i] is exactly anyHit(bvh, rays[i]); a ray leaves its packet at its first hit.
+void anyHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<uint8_t> occluded);
+
 }  // namespace cuberille::rt

@@ -171,6 +171,16 @@ HWY_INLINE bool laneHit(const WatertightRay& test, const WideBvhTriangles& group
     return !filter || filter->keepsHit(candidate.triangle, ray, candidate.u, candidate.v);
 }
 
+/// Asks for a child's node or triangle groups ahead of its pop, so that a packet's cache misses
+/// overlap.
+HWY_INLINE void prefetchChild(const WideBvh& bvh, const WideBvhNode& node, int c) {
+    const bool leaf = node.leafGroups[c] != 0;
+    const char* next = leaf ? reinterpret_cast<const char*>(&bvh.triangleGroups[node.child[c]])
+                            : reinterpret_cast<const char*>(&bvh.nodes[node.child[c]]);
+    const size_t bytes = leaf ? sizeof(WideBvhTriangles) : sizeof(WideBvhNode);
+    for (size_t line = 0; line < bytes; line += 64) __builtin_prefetch(next + line);
+}
+
 template <bool kAnyHit>
 RayHit traverse(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters, const HitFilter* filter = nullptr) {
     RayHit best;
@@ -227,11 +237,7 @@ RayHit traverse(const WideBvh& bvh, const Ray& ray, TraversalCounters* counters,
             // Rays that scatter miss the cache at nearly every node (profiled on the dragon: the
             // node's first load was 40% of a shadow ray's time): ask for every hit child now, so
             // the misses overlap instead of following one another.
-            const bool leaf = node.leafGroups[i] != 0;
-            const char* next = leaf ? reinterpret_cast<const char*>(&bvh.triangleGroups[node.child[i]])
-                                    : reinterpret_cast<const char*>(&bvh.nodes[node.child[i]]);
-            const size_t bytes = leaf ? sizeof(WideBvhTriangles) : sizeof(WideBvhNode);
-            for (size_t line = 0; line < bytes; line += 64) __builtin_prefetch(next + line);
+            prefetchChild(bvh, node, i);
         }
     }
     if (!best.hit()) best.t = std::numeric_limits<float>::infinity();
@@ -291,38 +297,54 @@ constexpr uint32_t kIntervalLevels = 3;
 // greatest of the rays' best hits, each no nearer than its final one), and the leaf's own box
 // passes the ray's exact test with a far value no nearer than its final best — and extra triangle
 // tests cannot change a closest hit whose ties go to the lower id.
-void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n, const HitFilter* filter,
-                       TraversalCounters* counters) {
-    const DL d;
+/// A packet's rays prepared: each ray's own tests and the packet's intervals.
+struct PacketRays {
     std::optional<WatertightRay> tests[kMaxWidePacketRays];
+    LaneRay lanes[kMaxWidePacketRays];
     PacketBounds bounds;
     float tNear = std::numeric_limits<float>::infinity();
-    glm::vec3 originLo(std::numeric_limits<float>::infinity()), originHi(-std::numeric_limits<float>::infinity());
-    glm::vec3 inverseLo = originLo, inverseHi = originHi;
+    uint64_t all = 0;  // a bit per ray
+
+    PacketRays(const Ray* rays, int n) {
+        const DL d;
+        glm::vec3 originLo(std::numeric_limits<float>::infinity()), originHi(-std::numeric_limits<float>::infinity());
+        glm::vec3 inverseLo = originLo, inverseHi = originHi;
+        for (int i = 0; i < n; ++i) {
+            tests[i].emplace(rays[i]);
+            lanes[i] = laneRay(tests[i]->box);
+            tNear = std::min(tNear, rays[i].tMin);
+            originLo = glm::min(originLo, rays[i].origin), originHi = glm::max(originHi, rays[i].origin);
+            inverseLo = glm::min(inverseLo, tests[i]->box.inverseDirection), inverseHi = glm::max(inverseHi, tests[i]->box.inverseDirection);
+        }
+        for (int a = 0; a < 3; ++a) {
+            bounds.originLo[a] = hn::Set(d, originLo[a]), bounds.originHi[a] = hn::Set(d, originHi[a]);
+            bounds.inverseLo[a] = hn::Set(d, inverseLo[a]), bounds.inverseHi[a] = hn::Set(d, inverseHi[a]);
+            bounds.nearSide[a] = tests[0]->box.farSide[a];
+        }
+        all = n == 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1;
+    }
+};
+
+
+void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n, const HitFilter* filter,
+                       TraversalCounters* counters) {
+    const PacketRays packet(rays, n);
+    const auto& tests = packet.tests;
+    const auto& lanes = packet.lanes;
+    const PacketBounds& bounds = packet.bounds;
+    const float tNear = packet.tNear;
     for (int i = 0; i < n; ++i) {
-        tests[i].emplace(rays[i]);
         hits[i] = RayHit{};
         hits[i].t = rays[i].tMax;
-        tNear = std::min(tNear, rays[i].tMin);
-        originLo = glm::min(originLo, rays[i].origin), originHi = glm::max(originHi, rays[i].origin);
-        inverseLo = glm::min(inverseLo, tests[i]->box.inverseDirection), inverseHi = glm::max(inverseHi, tests[i]->box.inverseDirection);
-    }
-    for (int a = 0; a < 3; ++a) {
-        bounds.originLo[a] = hn::Set(d, originLo[a]), bounds.originHi[a] = hn::Set(d, originHi[a]);
-        bounds.inverseLo[a] = hn::Set(d, inverseLo[a]), bounds.inverseHi[a] = hn::Set(d, inverseHi[a]);
-        bounds.nearSide[a] = tests[0]->box.farSide[a];
     }
     const auto packetFar = [&] {
         float far = -std::numeric_limits<float>::infinity();
         for (int i = 0; i < n; ++i) far = std::max(far, hits[i].t);
         return far * kEntrySlack;
     };
-    LaneRay lanes[kMaxWidePacketRays];
-    for (int i = 0; i < n; ++i) lanes[i] = laneRay(tests[i]->box);
     PendingForPacket stack[(kWideBvhWidth - 1) * (kMaxBvhDepth + 1) + 1];
     int top = 0;
-    const uint64_t all = n == 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1;
-    if (!bvh.empty()) stack[top++] = {0u, 0u, tNear, 0u, all};
+    if (!bvh.empty()) stack[top++] = {0u, 0u, tNear, 0u, packet.all};
     alignas(32) float entry[kWideBvhWidth], rayEntry[kWideBvhWidth];
     alignas(16) float t[kTriangleGroupWidth], u[kTriangleGroupWidth], v[kTriangleGroupWidth];
     float far = packetFar();  // the packet's far value, found again after each leaf (hits only come nearer)
@@ -386,15 +408,77 @@ void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n,
         for (int k = 0; k < count; ++k) {
             const int c = order[k];
             stack[top++] = {node.child[c], node.leafGroups[c], entry[c], p.depth + 1, childRays[c]};
-            const bool leaf = node.leafGroups[c] != 0;
-            const char* next = leaf ? reinterpret_cast<const char*>(&bvh.triangleGroups[node.child[c]])
-                                    : reinterpret_cast<const char*>(&bvh.nodes[node.child[c]]);
-            const size_t bytes = leaf ? sizeof(WideBvhTriangles) : sizeof(WideBvhNode);
-            for (size_t line = 0; line < bytes; line += 64) __builtin_prefetch(next + line);
+            prefetchChild(bvh, node, c);
         }
     }
     for (int i = 0; i < n; ++i)
         if (!hits[i].hit()) hits[i].t = std::numeric_limits<float>::infinity();
+}
+
+// One packet of shadow or occlusion rays: packetClosestHits' traversal, with a ray leaving the
+// packet at its first hit and the packet's far value the greatest tMax of the rays still in it.
+// Exact as any-hit is: a ray is occluded when some triangle it reaches is hit, and every leaf a
+// hit of the ray lies in is reached for it while it is in the packet (its ancestors pass the packet
+// test because they pass its own, with a far value no nearer than its tMax).
+void packetAnyHits(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n) {
+    const PacketRays packet(rays, n);
+    uint64_t active = packet.all;
+    const auto packetFar = [&] {
+        float far = -std::numeric_limits<float>::infinity();
+        for (uint64_t each = active; each != 0; each &= each - 1) far = std::max(far, rays[std::countr_zero(each)].tMax);
+        return far * kEntrySlack;
+    };
+    for (int i = 0; i < n; ++i) occluded[i] = 0;
+    PendingForPacket stack[(kWideBvhWidth - 1) * (kMaxBvhDepth + 1) + 1];
+    int top = 0;
+    if (!bvh.empty()) stack[top++] = {0u, 0u, packet.tNear, 0u, packet.all};
+    alignas(32) float entry[kWideBvhWidth], rayEntry[kWideBvhWidth];
+    alignas(16) float t[kTriangleGroupWidth], u[kTriangleGroupWidth], v[kTriangleGroupWidth];
+    float far = packetFar();
+    while (top > 0 && active != 0) {
+        const PendingForPacket p = stack[--top];
+        const uint64_t pending = p.rays & active;
+        if (pending == 0 || p.entry > far) continue;
+        if (p.leafGroups != 0) {
+            for (uint64_t each = pending; each != 0; each &= each - 1) {
+                const int i = std::countr_zero(each);
+                const Ray& ray = rays[i];
+                for (uint32_t g = p.child; g < p.child + p.leafGroups && !occluded[i]; ++g) {
+                    const WideBvhTriangles& group = bvh.triangleGroups[g];
+                    for (unsigned found = hitTriangles(*packet.tests[i], group, ray.tMin, ray.tMax, t, u, v); found != 0;
+                         found &= found - 1) {
+                        RayHit candidate;
+                        if (!laneHit(*packet.tests[i], group, __builtin_ctz(found), ray, ray.tMax, t, u, v, nullptr, candidate)) continue;
+                        occluded[i] = 1;
+                        active &= ~(uint64_t(1) << i);
+                        break;
+                    }
+                }
+            }
+            far = packetFar();
+            continue;
+        }
+        const WideBvhNode& node = bvh.nodes[p.child];
+        unsigned open = packetHitsChildren(packet.bounds, node, packet.tNear, far, entry);
+        uint64_t childRays[kWideBvhWidth] = {};
+        if (p.depth >= kIntervalLevels) {
+            for (uint64_t each = pending; each != 0; each &= each - 1) {
+                const int i = std::countr_zero(each);
+                for (unsigned in = hitChildren(packet.lanes[i], node, rays[i].tMin, rays[i].tMax * kEntrySlack, rayEntry) & open; in != 0;
+                     in &= in - 1)
+                    childRays[__builtin_ctz(in)] |= uint64_t(1) << i;
+            }
+        } else {
+            for (unsigned in = open; in != 0; in &= in - 1) childRays[__builtin_ctz(in)] = pending;
+        }
+        // Children in lane order, as a single any-hit ray takes them (rt/wide_bvh_query.cpp, traverse).
+        for (; open != 0; open &= open - 1) {
+            const int c = __builtin_ctz(open);
+            if (node.child[c] == WideBvhNode::kNoChild || childRays[c] == 0) continue;
+            stack[top++] = {node.child[c], node.leafGroups[c], entry[c], p.depth + 1, childRays[c]};
+            prefetchChild(bvh, node, c);
+        }
+    }
 }
 
 }  // namespace
@@ -410,6 +494,8 @@ RayHit closestHitOnTarget(const WideBvh& bvh, const Ray& ray, TraversalCounters*
 
 bool anyHitOnTarget(const WideBvh& bvh, const Ray& ray) { return traverse<true>(bvh, ray, nullptr).hit(); }
 
+void anyHitsOnTarget(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n) { packetAnyHits(bvh, rays, occluded, n); }
+
 }  // namespace HWY_NAMESPACE
 }  // namespace cuberille::rt
 HWY_AFTER_NAMESPACE();
@@ -420,6 +506,7 @@ namespace cuberille::rt {
 HWY_EXPORT(closestHitOnTarget);
 HWY_EXPORT(closestHitsOnTarget);
 HWY_EXPORT(anyHitOnTarget);
+HWY_EXPORT(anyHitsOnTarget);
 
 RayHit closestHit(const WideBvh& bvh, const Ray& ray) { return HWY_DYNAMIC_DISPATCH(closestHitOnTarget)(bvh, ray, nullptr, nullptr); }
 
@@ -461,6 +548,18 @@ void closestHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<RayHit
         }
         for (size_t i = 0; i < count; ++i)
             hits[first + i] = HWY_DYNAMIC_DISPATCH(closestHitOnTarget)(bvh, packet[i], counters, filter);
+    }
+}
+
+void anyHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<uint8_t> occluded) {
+    for (size_t first = 0; first < rays.size(); first += kMaxWidePacketRays) {
+        const size_t count = std::min(rays.size() - first, size_t(kMaxWidePacketRays));
+        const std::span<const Ray> packet = rays.subspan(first, count);
+        if (travelsAsOnePacket(packet)) {
+            HWY_DYNAMIC_DISPATCH(anyHitsOnTarget)(bvh, packet.data(), occluded.data() + first, int(count));
+            continue;
+        }
+        for (size_t i = 0; i < count; ++i) occluded[first + i] = HWY_DYNAMIC_DISPATCH(anyHitOnTarget)(bvh, packet[i]);
     }
 }
 

@@ -326,5 +326,51 @@ TEST(WideBvh, PacketsGiveEachRayItsOwnClosestHit) {
     expectPacketsAsSingleRays(latticeBvh, few, nullptr, "13 rays");
 }
 
+/// Each ray's answer through the packets is its own anyHit's.
+void expectShadowPacketsAsSingleRays(const WideBvh& bvh, std::span<const Ray> rays, const char* what) {
+    std::vector<uint8_t> occluded(rays.size(), 2);
+    anyHits(bvh, rays, occluded);
+    for (size_t i = 0; i < rays.size(); ++i) ASSERT_EQ(bool(occluded[i]), anyHit(bvh, rays[i])) << what << " ray " << i;
+}
+
+TEST(WideBvh, ShadowPacketsGiveEachRayItsOwnAnswer) {
+    // Shadow rays from the camera's hits toward one light, a tile's hits a packet, each leaving its
+    // surface a little along the normal's side toward the light; and toward a light inside the
+    // soup (finite tMax), and from the lattice's faces, edges and vertices.
+    const OwnedMesh soup = testing::randomSoup(4000, 11, 0.3f);
+    const WideBvh bvh = collapseToWideBvh(buildBvh(soup.view()));
+    size_t occludedCount = 0, total = 0;
+    for (const glm::vec3 eye : {glm::vec3(3.0f, 2.0f, 4.0f), glm::vec3(-4.0f, 1.0f, -2.0f)})
+        for (const glm::vec3 light : {glm::normalize(glm::vec3(0.4f, 1.0f, 0.3f)), glm::normalize(glm::vec3(-1.0f, 0.2f, 0.5f))})
+            for (const float reach : {std::numeric_limits<float>::infinity(), 0.6f}) {
+                const std::vector<Ray> camera = cameraTiles(eye, 48, std::numeric_limits<float>::infinity());
+                std::vector<Ray> shadow;
+                for (const Ray& r : camera) {
+                    const RayHit h = closestHit(bvh, r);
+                    if (!h.hit()) continue;
+                    const glm::vec3 a = soup.positions[soup.indices[3 * h.triangle]], b = soup.positions[soup.indices[3 * h.triangle + 1]],
+                                    c = soup.positions[soup.indices[3 * h.triangle + 2]];
+                    const glm::vec3 n = glm::normalize(glm::cross(b - a, c - a));
+                    const glm::vec3 p = r.origin + h.t * r.direction + n * (1e-4f * (glm::dot(n, light) >= 0.0f ? 1.0f : -1.0f));
+                    shadow.push_back(Ray{p, light, 0.0f, reach});
+                }
+                expectShadowPacketsAsSingleRays(bvh, shadow, "shadow");
+                std::vector<uint8_t> occluded(shadow.size());
+                anyHits(bvh, shadow, occluded);
+                for (uint8_t o : occluded) occludedCount += o;
+                total += shadow.size();
+            }
+    EXPECT_GT(occludedCount, total / 10);  // both answers are exercised
+    EXPECT_LT(occludedCount, total * 9 / 10);
+    const OwnedMesh lattice = testing::cubeLattice(4);
+    const WideBvh latticeBvh = collapseToWideBvh(buildBvh(lattice.view()));
+    std::vector<Ray> exact;
+    testing::forEachLatticeRay([&](const Ray& r) { exact.push_back(r); });
+    expectShadowPacketsAsSingleRays(latticeBvh, exact, "lattice");
+    std::vector<Ray> scattered;
+    testing::forEachRandomRay(9, 300, [&](const Ray& r) { scattered.push_back(r); });
+    expectShadowPacketsAsSingleRays(bvh, scattered, "scattered");
+}
+
 }  // namespace
 }  // namespace cuberille::rt
