@@ -244,7 +244,7 @@ struct Knobs {
     uint32_t voxelResolution = 0;  // 0: the model's finest
     int supersample = 1;
     int occlusionRays = 0;  // --ao, for 3D scenes; 0: none
-    std::string renderer = "raster";  // 3D scenes: --renderer
+    std::string renderer = "raster";  // 3D scenes and voxel models: --renderer
     std::string accel = "bvh";        // with --renderer raytrace: --accel
 };
 
@@ -266,7 +266,7 @@ std::vector<std::string> knobArgs(const Knobs& k, const SceneTraits& t, bool sof
         if (soft && k.shadows != "none") a.push_back("--soft");
     }
     if (t.threeD && k.occlusionRays > 0) a.insert(a.end(), {"--ao", std::to_string(k.occlusionRays)});
-    if (t.threeD && k.renderer != "raster") a.insert(a.end(), {"--renderer", k.renderer, "--accel", k.accel});
+    if ((t.threeD || t.voxel) && k.renderer != "raster") a.insert(a.end(), {"--renderer", k.renderer, "--accel", k.accel});
     if (t.voxel) a.insert(a.end(), {"--pixel-error", formatNumber(k.pixelError)});
     if ((t.threeD || t.voxel) && k.reversedDepth) a.insert(a.end(), {"--depth", "reversed"});
     if (t.voxel && k.voxelResolution) a.insert(a.end(), {"--voxel-resolution", std::to_string(k.voxelResolution)});
@@ -316,14 +316,18 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft, int 
             k.occlusionRays = n;
             add("ambient occlusion rays", std::to_string(n), n, k);
         }
-    // What finds each sample's surface: the depth test, or camera rays through either structure
-    // (the same image from both; the time differs).
-    if (t.threeD)
-        for (const char* accel : {"", "bvh", "grid"}) {
+    // What finds each sample's surface: the depth test, or camera rays through each structure
+    // (the same image from each; the time differs). A voxel model's rays see its finest level of
+    // solid voxels, where the rasterizer draws the level of detail's active faces.
+    if (t.threeD || t.voxel) {
+        const std::vector<const char*> structures = t.voxel ? std::vector<const char*>{"", "bvh", "kdtree", "octree"}
+                                                            : std::vector<const char*>{"", "bvh", "grid"};
+        for (size_t i = 0; i < structures.size(); ++i) {
             Knobs k = balanced;
-            if (*accel) k.renderer = "raytrace", k.accel = accel;
-            add("renderer", *accel ? std::string("raytrace, ") + accel : std::string("raster"), *accel ? (accel[0] == 'b' ? 1 : 2) : 0, k);
+            if (*structures[i]) k.renderer = "raytrace", k.accel = structures[i];
+            add("renderer", *structures[i] ? std::string("raytrace, ") + structures[i] : std::string("raster"), double(i), k);
         }
+    }
     if (t.threeD || t.voxel)
         for (bool reversed : {false, true}) {
             Knobs k = balanced;

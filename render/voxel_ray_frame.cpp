@@ -26,7 +26,6 @@ namespace {
 
 constexpr uint64_t kNoFace = ~0ull;
 
-
 /// A face seen: voxel x 6 + the face's bit index in the active face mask (voxel/voxel_model.h:
 /// 2 x axis, + 1 for the low side). A ray entering by the low plane of an axis (direction
 /// positive along it) sees the low face.

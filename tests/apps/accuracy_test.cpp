@@ -231,11 +231,9 @@ TEST(AccuracySweep, CoversTheKnobsThatApplyAroundTheBalancedPreset) {
 
 // A 3D scene's sweep compares the rasterizer's visibility with the camera rays' through each
 // structure (the same image, another time); scenes without camera rays get no such rows.
-TEST(AccuracySweep, TheRendererKnobSetsRaysThroughEachStructureFor3dScenesOnly) {
-    SceneTraits threeD;
-    threeD.threeD = true;
-    std::vector<std::string> values;
-    for (const AccuracySetting& s : accuracySweep(threeD, false)) {
+/// The renderer knob's values for a scene kind into `values`, checking each setting's arguments.
+void rendererKnobValues(const SceneTraits& traits, std::vector<std::string>& values) {
+    for (const AccuracySetting& s : accuracySweep(traits, false)) {
         const auto renderer = std::find(s.args.begin(), s.args.end(), "--renderer");
         if (s.knob != "renderer") {
             EXPECT_EQ(renderer, s.args.end()) << s.knob << " " << s.value << ": the balanced preset rasterizes";
@@ -252,11 +250,19 @@ TEST(AccuracySweep, TheRendererKnobSetsRaysThroughEachStructureFor3dScenesOnly) 
         EXPECT_EQ(renderer[2], "--accel");
         EXPECT_EQ("raytrace, " + renderer[3], s.value);
     }
-    EXPECT_EQ(values, (std::vector<std::string>{"raster", "raytrace, bvh", "raytrace, grid"}));
-    SceneTraits voxel;
+}
+
+TEST(AccuracySweep, TheRendererKnobSetsRaysThroughEachStructureFor3dScenesAndVoxelModels) {
+    SceneTraits threeD, voxel;
+    threeD.threeD = true;
     voxel.voxel = true;
-    for (const AccuracySetting& s : accuracySweep(voxel, false)) EXPECT_NE(s.knob, "renderer");
-    for (const AccuracySetting& s : accuracySweep(SceneTraits{}, false)) EXPECT_NE(s.knob, "renderer");
+    std::vector<std::string> forThreeD, forVoxel, forTri;
+    rendererKnobValues(threeD, forThreeD);
+    rendererKnobValues(voxel, forVoxel);
+    rendererKnobValues(SceneTraits{}, forTri);
+    EXPECT_EQ(forThreeD, (std::vector<std::string>{"raster", "raytrace, bvh", "raytrace, grid"}));
+    EXPECT_EQ(forVoxel, (std::vector<std::string>{"raster", "raytrace, bvh", "raytrace, kdtree", "raytrace, octree"}));
+    EXPECT_TRUE(forTri.empty());  // a 2D .tri scene has no rays
 }
 
 TEST(AccuracySweep, AmbientOcclusionIsSweptInEverySettingWhenAsked) {
