@@ -1,6 +1,7 @@
 // BVHs and shadows, side by side with Embree in the same run (docs/performance.md).
 //
 //   bvh_bench [--models dragon,horse,1m] [--animation brainstem] [--shadow-scenes vc,dragon,brainstem]
+//             [--frame-scenes vc,helmet,brainstem,dragon]
 //
 // Part 1, per model: build (binned SAH against Embree's default quality, spatial median against
 // Embree's low quality), refit after a deformation (ours, full and lazy, against Embree's refit
@@ -8,7 +9,8 @@
 // surface) against Embree's rtcIntersect1 / rtcOccluded1, one ray at a time on every core.
 // Part 2: a skinned animation, every frame refitted, lazily updated and rebuilt, with
 // Lauterbach's degradation. Part 3: each shadow mode and map size, its time and the share of
-// pixels that differ from the ray-traced reference.
+// pixels that differ from the ray-traced reference. Part 4: the renderer's camera-ray stage on each
+// frame scene beside Embree's rays.
 
 #include <embree3/rtcore.h>
 
@@ -27,6 +29,7 @@
 #include "rt/bvh_build.h"
 #include "rt/bvh_refit.h"
 #include "rt/lazy_refit.h"
+#include "rt/primary_rays.h"
 #include "rt/ray_query.h"
 #include "rt/uniform_grid.h"
 #include "rt/wide_bvh.h"
@@ -49,6 +52,7 @@ fs::path dataPath(const std::string& name) {
     if (name == "vc") return data / "gltf" / "VC" / "VC.glb";
     if (name == "brainstem") return data / "gltf" / "BrainStem" / "BrainStem.glb";
     if (name == "cesiumman") return data / "gltf" / "CesiumMan" / "CesiumMan.glb";
+    if (name == "helmet") return data / "gltf" / "DamagedHelmet" / "DamagedHelmet.glb";
     return bench::scanPath(name, CUBERILLE_SOURCE_DIR);
 }
 
@@ -630,14 +634,85 @@ void benchShadows(const std::string& name, int width, int height, const std::vec
 
 }  // namespace
 
+// ---- part 4: the renderer's camera rays beside Embree --------------------------------------
+
+/// The camera-ray stage of `render --renderer raytrace` (rt::PrimaryRayHierarchy: the kept BVH,
+/// the view's culled triangles skipped, 8x8 packets, one sample at each pixel centre) on a scene's
+/// default frame, and Embree's rtcIntersect1 with the same rays over the same opaque draws'
+/// triangles in world space, in the same run. Embree culls nothing: where a draw is back-face
+/// culled, it may report a hit on a face ours skips (the hit counts say how often).
+void benchFrames(RTCDevice device, const std::string& name, int width, int height) {
+    const std::optional<scene::Scene> s = loadScene(name, name == "brainstem" ? 1.0f : 0.0f);
+    if (!s) {
+        std::printf("%s skipped: not found\n", name.c_str());
+        return;
+    }
+    raster::Pipeline pipeline;
+    raster::FramebufferDesc desc;
+    desc.widthPixels = width, desc.heightPixels = height;
+    pipeline.beginDeferredFrame(desc);
+    const float aspect = float(width) / float(height);
+    s->draw(pipeline, aspect);
+    const std::vector<raster::DrawCall> draws(pipeline.recordedDraws().begin(), pipeline.recordedDraws().end());
+    std::vector<uint8_t> traced(draws.size());
+    Geometry world;
+    for (size_t d = 0; d < draws.size(); ++d) {
+        traced[d] = draws[d].state.depthWrite;
+        if (!traced[d]) continue;
+        const uint32_t base = uint32_t(world.positions.size());
+        for (const glm::vec3& p : draws[d].positions) world.positions.push_back(glm::vec3(draws[d].worldFromObject * glm::vec4(p, 1.0f)));
+        if (draws[d].indices.empty())
+            for (uint32_t i = 0; i < draws[d].positions.size(); ++i) world.indices.push_back(base + i);
+        else
+            for (uint32_t i : draws[d].indices) world.indices.push_back(base + i);
+    }
+    rt::PrimaryRayCamera camera;
+    camera.worldFromClip = glm::inverse(glm::dmat4(s->camera.clipFromWorld(aspect)));
+    camera.reversedDepth = s->camera.reversedDepth;
+    camera.orthographic = s->camera.orthographic;
+    camera.eye = s->camera.position;
+    camera.viewDirection = glm::normalize(s->camera.target - s->camera.position);
+    rt::PrimaryRayHierarchy hierarchy(draws, traced, rt::BvhUpdateMethod::Refit);
+    raster::VisibilityBuffer seen;
+    std::vector<double> oursMs;
+    rt::PrimaryRayStats ours;
+    for (int run = 0; run < 3; ++run) {
+        seen.reset(width, height, 1);
+        ours = hierarchy.trace(draws, camera, seen);
+        oursMs.push_back(ours.traceMs);
+    }
+    EmbreeScene embree(device, world, RTC_BUILD_QUALITY_MEDIUM, false);
+    embree.commit();
+    // Each ray made as the renderer makes it (rt::primaryRay, in double), inside the timing as
+    // the renderer's trace includes its own.
+    const size_t n = size_t(width) * size_t(height);
+    std::vector<uint8_t> hit(n);
+    const double embreeMs = medianMs(3, [&] {
+        raster::parallelFor(n, [&](size_t i) {
+            uint32_t triangle;
+            const rt::Ray ray = rt::primaryRay(camera, double(i % size_t(width)) + 0.5, double(i / size_t(width)) + 0.5, width, height);
+            hit[i] = embree.closest(ray, &triangle);
+        });
+    });
+    size_t embreeHits = 0;
+    for (uint8_t h : hit) embreeHits += h;
+    const double oursMedian = bench::median(oursMs);
+    std::printf("%-10s %9zu triangles, %dx%d camera rays: renderer's trace %7.1f ms (%zu hits) | Embree rtcIntersect1 %7.1f ms (%zu "
+                "hits) | ours %.2fx Embree's speed\n",
+                name.c_str(), world.triangles(), width, height, oursMedian, size_t(ours.hits), embreeMs, embreeHits, embreeMs / oursMedian);
+}
+
 int main(int argc, char** argv) {
     CLI::App app{"BVH build, refit and rays against Embree; shadow modes against ray-traced shadows"};
-    std::string models = "bunny,horse,dragon,1m", animation = "brainstem", shadowScenes = "vc,dragon,brainstem", sizes = "1024,2048,4096", penumbrae = "hard,soft";
+    std::string models = "bunny,horse,dragon,1m", animation = "brainstem", shadowScenes = "vc,dragon,brainstem",
+                frameScenes = "vc,helmet,brainstem,dragon", sizes = "1024,2048,4096", penumbrae = "hard,soft";
     int frames = 12, width = 1280, height = 720;
     app.add_option("--models", models, "bunny, horse, dragon, 1m, 10m (bumpy spheres)")->capture_default_str();
     app.add_option("--animation", animation, "A skinned glTF (brainstem, cesiumman)")->capture_default_str();
     app.add_option("--frames", frames, "Animation frames (at least 2: the first pose is the one refitted from)")->check(CLI::Range(2, 100000))->capture_default_str();
     app.add_option("--shadow-scenes", shadowScenes, "vc (Virtual City), a scan on a ground plane, brainstem")->capture_default_str();
+    app.add_option("--frame-scenes", frameScenes, "Scenes whose camera rays the renderer traces beside Embree (vc, brainstem, helmet, a scan)")
+        ->capture_default_str();
     app.add_option("--map-sizes", sizes, "Shadow map sizes")->capture_default_str();
     app.add_option("--shadows", penumbrae, "hard, soft or both")->capture_default_str();
     app.add_option("--width", width)->capture_default_str();
@@ -657,6 +732,8 @@ int main(int argc, char** argv) {
     std::vector<int> mapSizes;
     for (const std::string& s : bench::splitList(sizes)) mapSizes.push_back(std::stoi(s));
     for (const std::string& s : bench::splitList(shadowScenes)) benchShadows(s, width, height, mapSizes, penumbrae);
+    if (!frameScenes.empty()) std::printf("\n# the renderer's camera rays beside Embree's (median of 3, trace only: builds not included)\n");
+    for (const std::string& s : bench::splitList(frameScenes)) benchFrames(device, s, width, height);
     rtcReleaseDevice(device);
     return 0;
 }
