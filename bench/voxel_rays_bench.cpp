@@ -115,10 +115,7 @@ SurfacePoint surfaceOf(const rt::Ray& primary, const rt::VoxelHit& h, const rt::
     SurfacePoint p;
     if (!h.hit() || h.axis < 0) return p;
     const rt::VoxelRay ray(primary);
-    p.position = primary.origin + h.t * primary.direction;
-    const int a = h.axis;
-    const float lo = a == 0 ? v.x : a == 1 ? v.y : v.z;
-    p.position[a] = ray.farSide[a] ? lo + 1.0f : lo;
+    p.position = h.entryPoint(ray, v);
     p.normal = h.faceNormal(ray);
     p.valid = true;
     return p;

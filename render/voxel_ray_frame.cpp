@@ -62,11 +62,11 @@ VoxelRayScene::VoxelRayScene(const voxel::VoxelModel& model, uint32_t level, rt:
     buildMs_ = raster::nowMs() - t1;
 }
 
-rt::VoxelHit VoxelRayScene::trace(const rt::VoxelRay& ray, rt::VoxelTraversalCounters* counters) const {
+rt::VoxelHit VoxelRayScene::trace(const rt::VoxelRay& ray, const rt::VoxelTraversal& how, rt::VoxelTraversalCounters* counters) const {
     return std::visit(
         [&](const auto& tree) -> rt::VoxelHit {
             if constexpr (std::is_same_v<std::decay_t<decltype(tree)>, std::monostate>) return {};
-            else return tree.trace(ray, {}, counters);
+            else return tree.trace(ray, how, counters);
         },
         tree_);
 }
@@ -77,12 +77,7 @@ bool VoxelRayScene::occluded(rt::Ray ray, uint32_t voxel) const {
     float enter, exit;
     if (leaving.segment(lo, lo + float(2 * kUnshadowingNeighbourhoodVoxels + 1), ray.tMin, ray.tMax, &enter, &exit))
         ray.tMin = exit;  // past the voxel's neighbourhood
-    return std::visit(
-        [&](const auto& tree) {
-            if constexpr (std::is_same_v<std::decay_t<decltype(tree)>, std::monostate>) return false;
-            else return tree.trace(rt::VoxelRay(ray), {.anyHit = true}).hit();
-        },
-        tree_);
+    return trace(rt::VoxelRay(ray), {.anyHit = true}, nullptr).hit();
 }
 
 void VoxelRayScene::lightFaces(const std::vector<uint64_t>& centre, const std::vector<glm::vec3>& centrePoint, int width,
@@ -171,7 +166,7 @@ VoxelRayFrameStats VoxelRayScene::drawFrame(raster::Pipeline& pipeline, const sc
             grid.tMin = world.tMin;
             grid.tMax = world.tMax;
             const rt::VoxelRay ray(grid);
-            const rt::VoxelHit hit = trace(ray, &c);
+            const rt::VoxelHit hit = trace(ray, {}, &c);
             if (!hit.hit()) return kNoFace;
             if (hit.axis < 0) {
                 ++inside.local();
@@ -181,8 +176,7 @@ VoxelRayFrameStats VoxelRayScene::drawFrame(raster::Pipeline& pipeline, const sc
             const bool lowSide = !ray.farSide[a];
             const rt::VoxelCoord& vc = coords_[hit.voxel];
             const glm::vec3 corner(vc.x, vc.y, vc.z);
-            glm::vec3 p = grid.origin + hit.t * grid.direction;
-            p[a] = corner[a] + (lowSide ? 0.0f : 1.0f);
+            const glm::vec3 p = hit.entryPoint(ray, vc);
             *point = p;
             // Which triangle of the face's quad holds the hit: they meet on the diagonal from
             // corner 0 to corner 2 (voxel::faceCorners' order for each side).

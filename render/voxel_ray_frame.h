@@ -90,7 +90,7 @@ public:
                                  int width, int height, int samples, const VoxelRayEffects& effects = {});
 
 private:
-    rt::VoxelHit trace(const rt::VoxelRay& ray, rt::VoxelTraversalCounters* counters) const;
+    rt::VoxelHit trace(const rt::VoxelRay& ray, const rt::VoxelTraversal& how, rt::VoxelTraversalCounters* counters) const;
     /// Whether anything but `voxel` lies on the ray (grid units): shadow and occlusion rays.
     bool occluded(rt::Ray ray, uint32_t voxel) const;
     /// The shadow and occlusion masks from each pixel centre's face (`centre`: voxel and face key

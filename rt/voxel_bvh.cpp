@@ -15,44 +15,26 @@
 
 namespace cuberille::rt {
 
-namespace {
-
-struct Bounds {
-    glm::u16vec3 lo{0xFFFF}, hi{0};  // inclusive voxel coordinates
-    void grow(const VoxelCoord& v) {
-        lo = glm::min(lo, glm::u16vec3(v.x, v.y, v.z));
-        hi = glm::max(hi, glm::u16vec3(v.x, v.y, v.z));
-    }
-};
-
-Bounds boundsOf(std::span<const VoxelCoord> voxels) {
-    Bounds b;
-    for (const VoxelCoord& v : voxels) b.grow(v);
-    return b;
-}
-
-}  // namespace
-
 struct VoxelBvhBuilder {
     VoxelLeaves& data;
 
     /// The subtree over data.voxels[first, first + count), whose bounds are b, into `out`.
-    uint32_t build(VoxelSubtree<VoxelBvhNode>& out, uint32_t first, uint32_t count, const Bounds& b) {
+    uint32_t build(VoxelSubtree<VoxelBvhNode>& out, uint32_t first, uint32_t count, const VoxelBounds& b) {
         if (count <= kVoxelLeafSize) return out.leaf(first, count);
         // More than one voxel: the longest axis spans at least two, so the middle plane m has
         // voxels on both sides (the lowest below it, the highest at or above it).
-        const glm::ivec3 extent = glm::ivec3(b.hi) - glm::ivec3(b.lo) + 1;
+        const glm::ivec3 extent = b.hi - b.lo;
         const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
         const int middle = b.lo[axis] + extent[axis] / 2;
         const uint32_t below = partitionBelow(data, first, count, axis, middle);
         const VoxelCoord* begin = data.voxels.data() + first;
-        const Bounds children[2] = {boundsOf({begin, below}), boundsOf({begin + below, count - below})};
+        const VoxelBounds children[2] = {voxelBounds({begin, below}), voxelBounds({begin + below, count - below})};
         const uint32_t node = uint32_t(out.nodes.size());
         out.nodes.emplace_back();
         for (int c = 0; c < 2; ++c)
             for (int a = 0; a < 3; ++a) {
-                out.nodes[node].lo[c][a] = children[c].lo[a];
-                out.nodes[node].hi[c][a] = children[c].hi[a];
+                out.nodes[node].lo[c][a] = uint16_t(children[c].lo[a]);
+                out.nodes[node].hi[c][a] = uint16_t(children[c].hi[a] - 1);
             }
         uint32_t refs[2];
         buildChildren(out, 2, count >= kParallelBuildVoxels, [&](int c, VoxelSubtree<VoxelBvhNode>& into) {
@@ -66,13 +48,10 @@ struct VoxelBvhBuilder {
 
 VoxelBvh::VoxelBvh(std::span<const VoxelCoord> voxels) : VoxelTreeStorage(voxels) {
     if (voxels.empty()) return;
-    const Bounds b = boundsOf(voxels);
-    rootLo_ = glm::vec3(b.lo);
-    rootHi_ = glm::vec3(b.hi) + 1.0f;
+    const VoxelBounds b = voxelBounds(voxels);
     VoxelSubtree<VoxelBvhNode> tree;
-    root_ = VoxelBvhBuilder{data_}.build(tree, 0, uint32_t(voxels.size()), b);
-    nodes_ = std::move(tree.nodes);
-    data_.leaves = std::move(tree.leaves);
+    const uint32_t root = VoxelBvhBuilder{data_}.build(tree, 0, uint32_t(voxels.size()), b);
+    adopt(std::move(tree.nodes), std::move(tree.leaves), root, glm::vec3(b.lo), glm::vec3(b.hi));
 }
 
 VoxelHit VoxelBvh::trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTraversalCounters* counters,
@@ -80,8 +59,7 @@ VoxelHit VoxelBvh::trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTr
     VoxelStepCounts counts{.trace = steps};
     VoxelHit best;
     float sceneEnter, sceneExit;
-    if (root_ == VoxelNodeRef::kNull || !ray.segment(rootLo_, rootHi_, ray.tMin, ray.tMax, &sceneEnter, &sceneExit))
-        return counts.finish(best, data_, counters);
+    if (!enterRoot(ray, &sceneEnter, &sceneExit)) return counts.finish(best, data_, counters);
 
     VoxelTraversalStack<VoxelSegmentEntry> stack(how.stackEntries);
     float restartFrom = sceneEnter;  // the ray before this point has been followed through the tree

@@ -42,12 +42,8 @@ struct VoxelKdBuilder {
         if (count == 0) return VoxelNodeRef::kNull;
         if (count <= kVoxelLeafSize || depth >= kMaxKdDepth) return out.leaf(first, count);
         const VoxelCoord* begin = data.voxels.data() + first;
-        glm::ivec3 tightLo(65536), tightHi(-1);
-        for (uint32_t i = 0; i < count; ++i) {
-            const glm::ivec3 p(begin[i].x, begin[i].y, begin[i].z);
-            tightLo = glm::min(tightLo, p);
-            tightHi = glm::max(tightHi, p + 1);
-        }
+        const VoxelBounds tight = voxelBounds({begin, count});
+        const glm::ivec3 &tightLo = tight.lo, &tightHi = tight.hi;
         // Bin along the voxels' longest axis (it spans at least two: the voxels are distinct).
         const glm::ivec3 extent = tightHi - tightLo;
         const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
@@ -118,17 +114,10 @@ struct VoxelKdBuilder {
 
 VoxelKdTree::VoxelKdTree(std::span<const VoxelCoord> voxels) : VoxelTreeStorage(voxels) {
     if (voxels.empty()) return;
-    glm::ivec3 lo(65536), hi(-1);
-    for (const VoxelCoord& v : voxels) {
-        lo = glm::min(lo, glm::ivec3(v.x, v.y, v.z));
-        hi = glm::max(hi, glm::ivec3(v.x, v.y, v.z) + 1);
-    }
-    rootLo_ = glm::vec3(lo);
-    rootHi_ = glm::vec3(hi);
+    const VoxelBounds b = voxelBounds(voxels);  // the root cell
     VoxelSubtree<VoxelKdNode> tree;
-    root_ = VoxelKdBuilder{data_}.build(tree, 0, uint32_t(voxels.size()), lo, hi, 0);
-    nodes_ = std::move(tree.nodes);
-    data_.leaves = std::move(tree.leaves);
+    const uint32_t root = VoxelKdBuilder{data_}.build(tree, 0, uint32_t(voxels.size()), b.lo, b.hi, 0);
+    adopt(std::move(tree.nodes), std::move(tree.leaves), root, glm::vec3(b.lo), glm::vec3(b.hi));
 }
 
 VoxelHit VoxelKdTree::trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTraversalCounters* counters,
@@ -136,8 +125,7 @@ VoxelHit VoxelKdTree::trace(const VoxelRay& ray, const VoxelTraversal& how, Voxe
     VoxelStepCounts counts{.trace = steps};
     VoxelHit best;
     float sceneEnter, sceneExit;
-    if (root_ == VoxelNodeRef::kNull || !ray.segment(rootLo_, rootHi_, ray.tMin, ray.tMax, &sceneEnter, &sceneExit))
-        return counts.finish(best, data_, counters);
+    if (!enterRoot(ray, &sceneEnter, &sceneExit)) return counts.finish(best, data_, counters);
 
     VoxelTraversalStack<VoxelSegmentEntry> stack(how.stackEntries);
     uint32_t ref = root_;

@@ -83,9 +83,8 @@ VoxelOctree::VoxelOctree(std::span<const VoxelCoord> voxels) : VoxelTreeStorage(
         codes[i] = key[order[i]];
     }
     VoxelSubtree<VoxelOctreeNode> tree;
-    root_ = VoxelOctreeBuilder{codes}.build(tree, 0, uint32_t(voxels.size()), rootLevel_);
-    nodes_ = std::move(tree.nodes);
-    data_.leaves = std::move(tree.leaves);
+    const uint32_t root = VoxelOctreeBuilder{codes}.build(tree, 0, uint32_t(voxels.size()), rootLevel_);
+    adopt(std::move(tree.nodes), std::move(tree.leaves), root, glm::vec3(0.0f), glm::vec3(float(1u << rootLevel_)));
 }
 
 VoxelHit VoxelOctree::trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTraversalCounters* counters,
@@ -93,9 +92,7 @@ VoxelHit VoxelOctree::trace(const VoxelRay& ray, const VoxelTraversal& how, Voxe
     VoxelStepCounts counts{.trace = steps};
     VoxelHit best;
     float sceneEnter, sceneExit;
-    const glm::vec3 rootHi(float(1u << rootLevel_));
-    if (root_ == VoxelNodeRef::kNull || !ray.segment(glm::vec3(0.0f), rootHi, ray.tMin, ray.tMax, &sceneEnter, &sceneExit))
-        return counts.finish(best, data_, counters);
+    if (!enterRoot(ray, &sceneEnter, &sceneExit)) return counts.finish(best, data_, counters);
 
     struct Entry {
         uint32_t ref;

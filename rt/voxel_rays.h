@@ -109,6 +109,16 @@ struct VoxelHit {
         if (axis >= 0) n[axis] = ray.farSide[axis] ? 1.0f : -1.0f;
         return n;
     }
+    /// Where the ray enters `voxel` (the voxel hit), put exactly on the entered face's plane: the
+    /// origin a shadow or occlusion ray leaves from, which the hit rule lets leave without an offset.
+    glm::vec3 entryPoint(const VoxelRay& ray, const VoxelCoord& voxel) const {
+        glm::vec3 p = ray.origin + t * ray.direction;
+        if (axis >= 0) {
+            const float lo = axis == 0 ? voxel.x : axis == 1 ? voxel.y : voxel.z;
+            p[axis] = ray.farSide[axis] ? lo + 1.0f : lo;
+        }
+        return p;
+    }
 };
 
 /// What a traversal did, summed over rays: the measures of Chajdas's Tables 10-13 that a CPU can

@@ -1,8 +1,19 @@
-// Names of the voxel acceleration structures, as the command line and the benchmark spell them.
+// What the voxel trees share outside their builds and traversals: voxels' bounds, and the
+// structures' names as the command line and the benchmark spell them.
 
 #include "rt/voxel_trees.h"
 
 namespace cuberille::rt {
+
+VoxelBounds voxelBounds(std::span<const VoxelCoord> voxels) {
+    VoxelBounds b;
+    for (const VoxelCoord& v : voxels) {
+        const glm::ivec3 p(v.x, v.y, v.z);
+        b.lo = glm::min(b.lo, p);
+        b.hi = glm::max(b.hi, p + 1);
+    }
+    return b;
+}
 
 const char* voxelStructureName(VoxelStructure s) {
     switch (s) {

@@ -63,8 +63,14 @@ const char* voxelStructureName(VoxelStructure s);
 /// "bvh", "kdtree", "octree"; false for anything else.
 bool parseVoxelStructure(const std::string& name, VoxelStructure* out);
 
+/// Voxels' bounds as a cell range: [lo, hi) on each axis, in grid units (empty: lo > hi).
+struct VoxelBounds {
+    glm::ivec3 lo{65536}, hi{-1};
+};
+VoxelBounds voxelBounds(std::span<const VoxelCoord> voxels);
+
 /// What the three trees hold alike: interior nodes (each with a `child` array of VoxelNodeRef),
-/// the root reference, and the leaves with their voxels.
+/// the root reference and the box a traversal starts in, and the leaves with their voxels.
 template <class NodeType>
 class VoxelTreeStorage {
 public:
@@ -106,8 +112,23 @@ protected:
         data_.sourceIndex.resize(voxels.size());
         for (uint32_t i = 0; i < voxels.size(); ++i) data_.sourceIndex[i] = i;
     }
+    /// Takes a build's arrays: the tree rooted at `root`, starting in the box [lo, hi).
+    void adopt(std::vector<Node>&& nodes, std::vector<VoxelLeaf>&& leaves, uint32_t root, const glm::vec3& lo,
+               const glm::vec3& hi) {
+        nodes_ = std::move(nodes);
+        data_.leaves = std::move(leaves);
+        root_ = root;
+        rootLo_ = lo;
+        rootHi_ = hi;
+    }
+    /// The ray's segment in the root's box, where every traversal starts: false for an empty
+    /// tree or a ray that misses it.
+    bool enterRoot(const VoxelRay& ray, float* enter, float* exit) const {
+        return root_ != VoxelNodeRef::kNull && ray.segment(rootLo_, rootHi_, ray.tMin, ray.tMax, enter, exit);
+    }
     std::vector<Node> nodes_;
     uint32_t root_ = VoxelNodeRef::kNull;
+    glm::vec3 rootLo_{0.0f}, rootHi_{0.0f};
     VoxelLeaves data_;
 };
 
@@ -137,9 +158,6 @@ public:
     /// iteration's step in `steps` when given. The other trees' trace is the same.
     VoxelHit trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTraversalCounters* counters = nullptr,
                    VoxelStepTrace* steps = nullptr) const;
-
-private:
-    glm::vec3 rootLo_{0.0f}, rootHi_{0.0f};
 };
 
 class VoxelKdTree : public VoxelTreeStorage<VoxelKdNode> {
@@ -148,9 +166,6 @@ public:
     explicit VoxelKdTree(std::span<const VoxelCoord> voxels);
     VoxelHit trace(const VoxelRay& ray, const VoxelTraversal& how, VoxelTraversalCounters* counters = nullptr,
                    VoxelStepTrace* steps = nullptr) const;
-
-private:
-    glm::vec3 rootLo_{0.0f}, rootHi_{0.0f};
 };
 
 class VoxelOctree : public VoxelTreeStorage<VoxelOctreeNode> {

@@ -297,6 +297,20 @@ constexpr uint32_t kIntervalLevels = 3;
 // greatest of the rays' best hits, each no nearer than its final one), and the leaf's own box
 // passes the ray's exact test with a far value no nearer than its final best — and extra triangle
 // tests cannot change a closest hit whose ties go to the lower id.
+/// Below the interval levels: each ray of `rays` (a bit per ray) tests the node's children itself,
+/// within [its tMin, farOf(i)], and is handed to each open child it enters (childRays, a mask per
+/// child).
+template <class FarOf>
+HWY_INLINE void raysEnteringChildren(const LaneRay* lanes, const Ray* rays, const WideBvhNode& node, uint64_t raysIn, unsigned open,
+                                     FarOf&& farOf, uint64_t (&childRays)[kWideBvhWidth]) {
+    alignas(32) float rayEntry[kWideBvhWidth];
+    for (uint64_t each = raysIn; each != 0; each &= each - 1) {
+        const int i = std::countr_zero(each);
+        for (unsigned in = hitChildren(lanes[i], node, rays[i].tMin, farOf(i), rayEntry) & open; in != 0; in &= in - 1)
+            childRays[__builtin_ctz(in)] |= uint64_t(1) << i;
+    }
+}
+
 /// A packet's rays prepared: each ray's own tests and the packet's intervals.
 struct PacketRays {
     std::optional<WatertightRay> tests[kMaxWidePacketRays];
@@ -345,7 +359,7 @@ void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n,
     PendingForPacket stack[(kWideBvhWidth - 1) * (kMaxBvhDepth + 1) + 1];
     int top = 0;
     if (!bvh.empty()) stack[top++] = {0u, 0u, tNear, 0u, packet.all};
-    alignas(32) float entry[kWideBvhWidth], rayEntry[kWideBvhWidth];
+    alignas(32) float entry[kWideBvhWidth];
     alignas(16) float t[kTriangleGroupWidth], u[kTriangleGroupWidth], v[kTriangleGroupWidth];
     float far = packetFar();  // the packet's far value, found again after each leaf (hits only come nearer)
     while (top > 0) {
@@ -376,14 +390,8 @@ void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n,
         int order[kWideBvhWidth], count = 0;
         uint64_t childRays[kWideBvhWidth] = {};
         const bool exact = p.depth >= kIntervalLevels;
-        if (exact) {  // each ray's own test of the eight children
-            for (uint64_t each = p.rays; each != 0; each &= each - 1) {
-                const int i = std::countr_zero(each);
-                for (unsigned in = hitChildren(lanes[i], node, rays[i].tMin, hits[i].t * kEntrySlack, rayEntry) & open; in != 0;
-                     in &= in - 1)
-                    childRays[__builtin_ctz(in)] |= uint64_t(1) << i;
-            }
-        }
+        if (exact)  // each ray's own test of the eight children
+            raysEnteringChildren(lanes, rays, node, p.rays, open, [&](int i) { return hits[i].t * kEntrySlack; }, childRays);
         for (; open != 0; open &= open - 1) {
             const int c = __builtin_ctz(open);
             if (node.child[c] == WideBvhNode::kNoChild) continue;
@@ -432,7 +440,7 @@ void packetAnyHits(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n
     PendingForPacket stack[(kWideBvhWidth - 1) * (kMaxBvhDepth + 1) + 1];
     int top = 0;
     if (!bvh.empty()) stack[top++] = {0u, 0u, packet.tNear, 0u, packet.all};
-    alignas(32) float entry[kWideBvhWidth], rayEntry[kWideBvhWidth];
+    alignas(32) float entry[kWideBvhWidth];
     alignas(16) float t[kTriangleGroupWidth], u[kTriangleGroupWidth], v[kTriangleGroupWidth];
     float far = packetFar();
     while (top > 0 && active != 0) {
@@ -462,12 +470,7 @@ void packetAnyHits(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n
         unsigned open = packetHitsChildren(packet.bounds, node, packet.tNear, far, entry);
         uint64_t childRays[kWideBvhWidth] = {};
         if (p.depth >= kIntervalLevels) {
-            for (uint64_t each = pending; each != 0; each &= each - 1) {
-                const int i = std::countr_zero(each);
-                for (unsigned in = hitChildren(packet.lanes[i], node, rays[i].tMin, rays[i].tMax * kEntrySlack, rayEntry) & open; in != 0;
-                     in &= in - 1)
-                    childRays[__builtin_ctz(in)] |= uint64_t(1) << i;
-            }
+            raysEnteringChildren(packet.lanes, rays, node, pending, open, [&](int i) { return rays[i].tMax * kEntrySlack; }, childRays);
         } else {
             for (unsigned in = open; in != 0; in &= in - 1) childRays[__builtin_ctz(in)] = pending;
         }

@@ -110,11 +110,7 @@ struct FaceTracer {
         const rt::VoxelRay ray(grid);
         const rt::VoxelHit h = bvh->trace(ray, {});
         if (!h.hit() || h.axis < 0) return ~0ull;
-        if (point) {
-            const rt::VoxelCoord& v = coords[h.voxel];
-            *point = grid.origin + h.t * grid.direction;
-            (*point)[h.axis] = float(h.axis == 0 ? v.x : h.axis == 1 ? v.y : v.z) + (ray.farSide[h.axis] ? 1.0f : 0.0f);
-        }
+        if (point) *point = h.entryPoint(ray, coords[h.voxel]);
         return uint64_t(h.voxel) * 6 + uint64_t(2 * h.axis + (ray.farSide[h.axis] ? 0 : 1));
     }
     bool active(uint64_t face) const { return activeFaces[face / 6] & (1u << (face % 6)); }
