@@ -178,8 +178,10 @@ void Pipeline::beginDeferredFrame(const FramebufferDesc& desc) {
     deferred_ = true;
 }
 
-VisibilityShadeStats Pipeline::shadeVisible(const VisibilityBuffer& seen) {
+VisibilityShadeStats Pipeline::shadeVisible(const VisibilityBuffer& seen, const Lighting* lighting) {
     if (!deferred_) throw std::logic_error("shadeVisible: not a deferred frame (beginDeferredFrame)");
+    if (lighting)
+        for (DrawCall& d : draws_) d.state.lighting = *lighting;
     const VisibilityShadeStats s = shadeVisibility(draws_, seen, framebuffer_, stats_.counters);
     stats_.times.vertexMs += s.vertexMs;
     stats_.times.frontEndMs += s.setupMs;

@@ -57,7 +57,10 @@ public:
     void beginDeferredFrame(const FramebufferDesc& desc);
     /// The draws recorded since beginDeferredFrame, in order: what a visibility buffer indexes.
     std::span<const DrawCall> recordedDraws() const { return draws_; }
-    VisibilityShadeStats shadeVisible(const VisibilityBuffer& seen);
+    /// `lighting`, when given, replaces the lighting of the draws the buffer names: what a
+    /// deferred frame learns between finding visibility and shading it (the shadow stage's masks,
+    /// found for the surfaces the buffer holds). Draws after shadeVisible keep their own.
+    VisibilityShadeStats shadeVisible(const VisibilityBuffer& seen, const Lighting* lighting = nullptr);
 
     const Framebuffer& framebuffer() const { return framebuffer_; }
     const PipelineStats& stats() const { return stats_; }

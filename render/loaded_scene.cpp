@@ -228,14 +228,19 @@ SceneShadows* LoadedScene::State::shadowsFor(const FrameSettings& f) {
     if (f.shadows.mode == rt::ShadowMode::None && f.ambientOcclusion.raysPerPixel == 0) return nullptr;
     const rt::ShadowOptions& o = f.shadows;
     const rt::AmbientOcclusionOptions& ao = f.ambientOcclusion;
-    const bool same = shadows && shadowsMethod == f.bvhUpdate && shadowsAccel == f.accel && occlusionOptions.raysPerPixel == ao.raysPerPixel &&
+    // A ray-traced frame's shadow rays share its camera rays' tree (over the same triangles) unless
+    // the frustum cull builds that tree over the view's triangles alone.
+    const bool shareCameraRays = f.renderer == Renderer::Raytrace && f.accel == rt::CasterAccel::Bvh && !f.frustumCull;
+    const bool same = shadows && shadowsMethod == f.bvhUpdate && shadowsAccel == f.accel && shadowsShareCameraRays == shareCameraRays &&
+                      occlusionOptions.raysPerPixel == ao.raysPerPixel &&
                       occlusionOptions.maxDistance == ao.maxDistance && shadowsOptions.mode == o.mode && shadowsOptions.soft == o.soft &&
                       shadowsOptions.lightRadius == o.lightRadius && shadowsOptions.mapSizeTexels == o.mapSizeTexels &&
                       shadowsOptions.softSamplesPerSide == o.softSamplesPerSide && shadowsOptions.focus == o.focus &&
                       shadowsOptions.sequenceFrames == o.sequenceFrames;
     if (!same) {
-        shadows.emplace(posed, o, f.bvhUpdate, ao, f.accel);
+        shadows.emplace(posed, o, f.bvhUpdate, ao, f.accel, shareCameraRays);
         shadowsAccel = f.accel;
+        shadowsShareCameraRays = shareCameraRays;
         shadowsOptions = o;
         occlusionOptions = ao;
         shadowsMethod = f.bvhUpdate;

@@ -215,13 +215,13 @@ void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::C
 // over it by the rasterizer, in their order, against the depths the shade stage wrote, as a
 // deferred GPU renderer draws its transparent pass forward (docs/ray_tracing.md).
 void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene& drawn, const scene::Camera& camera,
-                        const raster::Lighting* shadowed, RenderResult& result) {
+                        SceneShadows* shadows, RenderResult& result) {
     raster::Pipeline pipeline;
     raster::FramebufferDesc desc = framebufferDesc(o);
     desc.clearColor = o.background ? clearColorFor(*o.background) : drawn.background;
     pipeline.beginDeferredFrame(desc);
     const float aspect = float(o.width) / float(o.height);
-    drawn.draw(pipeline, aspect, shadowed);
+    drawn.draw(pipeline, aspect, nullptr);  // the shadow stage's lighting comes after the rays, at shadeVisible
     const std::vector<raster::DrawCall> draws(pipeline.recordedDraws().begin(), pipeline.recordedDraws().end());
     std::vector<uint8_t> traced(draws.size());
     RayTracedFrameStats st;
@@ -252,9 +252,35 @@ void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene
         }
         state.primaryRaysPoseStale = false;
         st.rays = kept->trace(draws, rays, seen);
-        if (o.frustumCull) kept.reset();
     }
-    st.shade = pipeline.shadeVisible(seen);
+    std::optional<raster::Lighting> shadowed;
+    if (shadows) {
+        // The shadow stage and occlusion start from the surfaces the camera rays met at pixel
+        // centres: the frame's own rays at one sample (the pattern's sample is the centre), a
+        // ray a pixel through the same structure at more.
+        result.shadows.emplace();
+        const double t0 = raster::nowMs();
+        if (shadows->active()) {
+            raster::VisibilityBuffer centres;
+            if (desc.samples > 1) {
+                centres.reset(desc.widthPixels, desc.heightPixels, 1);
+                if (o.accel == rt::CasterAccel::Grid)
+                    rt::tracePrimaryVisibility(draws, traced, rays, o.accel, centres);
+                else
+                    state.primaryRays->trace(draws, rays, centres);
+            }
+            scene::Camera standard = camera;
+            standard.reversedDepth = false;
+            rt::surfacesFromVisibility(desc.samples > 1 ? centres : seen, draws, standard.clipFromWorld(aspect), state.tracedSurfaces);
+            const double surfacesMs = raster::nowMs() - t0;
+            shadowed = shadows->run(drawn, state.tracedSurfaces, *result.shadows,
+                                    o.accel == rt::CasterAccel::Bvh ? &*state.primaryRays : nullptr);
+            result.shadows->surfacesMs = surfacesMs;
+        }
+        result.shadows->totalMs = raster::nowMs() - t0;
+    }
+    if (o.frustumCull) state.primaryRays.reset();
+    st.shade = pipeline.shadeVisible(seen, shadowed ? &*shadowed : nullptr);
     for (size_t d = 0; d < draws.size(); ++d)
         if (!traced[d]) pipeline.draw(draws[d]);
     pipeline.endFrame();
@@ -392,7 +418,10 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
     SceneShadows* shadows = st.shadowsFor(o);
     SceneFrustumCull* culling = st.cullingFor(o);
     std::optional<raster::Lighting> shadowed;
-    if (shadows) {
+    // A raster frame runs the shadow stage first, on its own visibility buffer; a ray-traced one
+    // after its camera rays, on the surfaces they met (drawRayTracedFrame).
+    const bool traced = o.renderer == Renderer::Raytrace;
+    if (shadows && !traced) {
         result.shadows.emplace();
         const double t0 = raster::nowMs();
         if (shadows->active()) shadowed = shadows->run(s, o.width, o.height, *result.shadows);
@@ -401,8 +430,8 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
     if (culling) result.culling = culling->cull(s, float(o.width) / float(o.height));
     const std::optional<scene::Scene> normals = o.view == View::Normals ? std::optional(normalsScene(s)) : std::nullopt;
     const scene::Scene& drawn = normals ? *normals : s;
-    if (o.renderer == Renderer::Raytrace) {
-        drawRayTracedFrame(st, o, drawn, s.camera, shadowed ? &*shadowed : nullptr, result);
+    if (traced) {
+        drawRayTracedFrame(st, o, drawn, s.camera, shadows, result);
     } else {
         drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) {
             drawn.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
@@ -648,6 +677,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                         {"thinTriangles", st.thinTriangles},
                         {"accel", accelName(sh.accel)},
                         {"bvhBuildMs", sh.bvhBuildMs},
+                        {"bvhShared", sh.bvhShared},
                         {"adjacencyMs", sh.adjacencyMs},
                         {"bvhUpdated", sh.bvhUpdated},
                         {"bvhRebuilt", sh.bvhRebuilt},

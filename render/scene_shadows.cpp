@@ -10,8 +10,8 @@
 namespace cuberille::render {
 
 SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& options, rt::BvhUpdateMethod bvhUpdate,
-                           const rt::AmbientOcclusionOptions& occlusion, rt::CasterAccel accel)
-    : options_(options), occlusion_(occlusion), accel_(accel) {
+                           const rt::AmbientOcclusionOptions& occlusion, rt::CasterAccel accel, bool bvhFromCameraRays)
+    : options_(options), occlusion_(occlusion), accel_(accel), bvhUpdate_(bvhUpdate) {
     if (options.mode != rt::ShadowMode::None)
         for (int l = 0; l < s.lighting.lightCount; ++l) shadowed_ = shadowed_ || rt::castsShadows(s.lighting.lights[l]);
     if (!shadowed_ && occlusion.raysPerPixel == 0) return;
@@ -19,17 +19,18 @@ SceneShadows::SceneShadows(const scene::Scene& s, const rt::ShadowOptions& optio
     gatherCasters(s);
     if (indices_.empty()) return;
     active_ = true;
-    visibility_.setCasters({positions_, indices_}, ranges_);
     pending_.castersMs = raster::nowMs() - t0;
     const bool rays = options_.mode == rt::ShadowMode::Hybrid || options_.mode == rt::ShadowMode::RayTraced ||
                       options_.mode == rt::ShadowMode::Auto;
-    if ((shadowed_ && rays) || occlusion.raysPerPixel > 0) {
-        t0 = raster::nowMs();
-        if (accel_ == rt::CasterAccel::Grid)
+    raysNeeded_ = (shadowed_ && rays) || occlusion.raysPerPixel > 0;
+    if (raysNeeded_) {
+        if (accel_ == rt::CasterAccel::Grid) {
+            t0 = raster::nowMs();
             grid_ = rt::buildUniformGrid({positions_, indices_});
-        else
-            bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, bvhUpdate);
-        pending_.bvhBuildMs = raster::nowMs() - t0;
+            pending_.bvhBuildMs = raster::nowMs() - t0;
+        } else if (!bvhFromCameraRays) {
+            buildBvh();
+        }
     }
     if (shadowed_ && options_.mode == rt::ShadowMode::Hybrid) {
         t0 = raster::nowMs();
@@ -62,13 +63,28 @@ void SceneShadows::findAdjacency() {
     adjacencyFound_ = true;
 }
 
+void SceneShadows::buildBvh() {
+    const double t0 = raster::nowMs();
+    bvh_.emplace(rt::TriangleMeshView{positions_, indices_}, bvhUpdate_);
+    pending_.bvhBuildMs += raster::nowMs() - t0;
+}
+
+// The camera rays' mesh holds the casters' triangles: the same indices and the same positions.
+// Compared by value each frame (about a millisecond on the dragon's 871k triangles), so a tree
+// over anything else is never taken for the casters'.
+bool SceneShadows::sameTriangles(const rt::TracedMesh& mesh) const {
+    return mesh.indices == indices_ && mesh.positions.size() == positions_.size() &&
+           std::equal(positions_.begin(), positions_.end(), mesh.positions.begin(),
+                      [](const glm::vec3& a, const glm::vec3& b) { return a == b; });
+}
+
 void SceneShadows::update(const scene::Scene& s) {
     if (!active_) return;
     const double t0 = raster::nowMs();
     const std::vector<uint32_t> before = indices_;
     gatherCasters(s);
     if (indices_ != before) throw std::runtime_error("the animated scene changed its shadow casters' triangles");
-    visibility_.moveCasters({positions_, indices_});
+    visibilityPose_ = VisibilityPose::Moved;
     pending_.castersMs = raster::nowMs() - t0;
     pending_.bvhUpdated = true;
     const double t1 = raster::nowMs();
@@ -87,7 +103,34 @@ void SceneShadows::update(const scene::Scene& s) {
 }
 
 raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height, ShadowFrameStats& stats) {
+    if (!active_) return maskFor(s, {}, stats, nullptr);
+    const double t0 = raster::nowMs();
+    if (visibilityPose_ == VisibilityPose::None) visibility_.setCasters({positions_, indices_}, ranges_);
+    if (visibilityPose_ == VisibilityPose::Moved) visibility_.moveCasters({positions_, indices_});
+    visibilityPose_ = VisibilityPose::Current;
+    // The visibility buffer is a pass of its own, always in the standard depth convention.
+    scene::Camera standard = s.camera;
+    standard.reversedDepth = false;
+    const rt::ScreenSurfaces& surfaces = visibility_.draw(standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
+    const double surfacesMs = raster::nowMs() - t0;
+    raster::Lighting lighting = maskFor(s, surfaces, stats, nullptr);
+    stats.surfacesMs = surfacesMs;
+    return lighting;
+}
+
+raster::Lighting SceneShadows::run(const scene::Scene& s, const rt::ScreenSurfaces& seen, ShadowFrameStats& stats,
+                                   const rt::PrimaryRayHierarchy* cameraRays) {
+    const bool shared = active_ && raysNeeded_ && accel_ == rt::CasterAccel::Bvh && !bvh_ && cameraRays &&
+                        sameTriangles(cameraRays->mesh());
+    return maskFor(s, seen, stats, shared ? &cameraRays->bvh() : nullptr);
+}
+
+// The frame's masks from its surfaces: the stage's own visibility buffer or the caller's.
+raster::Lighting SceneShadows::maskFor(const scene::Scene& s, const rt::ScreenSurfaces& surfaces, ShadowFrameStats& stats,
+                                       const rt::DeformingBvh* shared) {
+    if (active_ && raysNeeded_ && accel_ == rt::CasterAccel::Bvh && !bvh_ && !shared) buildBvh();  // not shareable after all
     stats = std::exchange(pending_, {});
+    stats.bvhShared = shared != nullptr;
     stats.mode = options_.mode;
     stats.soft = options_.soft;
     stats.focus = options_.focus;
@@ -96,14 +139,8 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
     raster::Lighting lighting = s.lighting;
     if (!active_) return lighting;
     const rt::TriangleMeshView casters{positions_, indices_};
-    double t0 = raster::nowMs();
-    // The visibility buffer is a pass of its own, always in the standard depth convention.
-    scene::Camera standard = s.camera;
-    standard.reversedDepth = false;
-    const rt::ScreenSurfaces& surfaces = visibility_.draw(standard.clipFromWorld(float(width) / float(height)), width, height, gpu_);
-    stats.surfacesMs = raster::nowMs() - t0;
     const rt::ShadowCasters shadowCasters{.mesh = casters,
-                                          .rays = {.bvh = bvh_ ? &*bvh_ : nullptr, .grid = grid_ ? &*grid_ : nullptr, .mesh = casters},
+                                          .rays = {.bvh = bvh_ ? &*bvh_ : shared, .grid = grid_ ? &*grid_ : nullptr, .mesh = casters},
                                           .bounds = bounds_,
                                           .adjacency = adjacencyFound_ ? &adjacency_ : nullptr,
                                           .version = castersVersion_,

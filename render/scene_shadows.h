@@ -14,6 +14,7 @@
 #include "rt/ambient_occlusion.h"
 #include "rt/bvh.h"
 #include "rt/deforming_bvh.h"
+#include "rt/primary_rays.h"
 #include "rt/screen_surfaces.h"
 #include "rt/shadows.h"
 #include "scene/scene.h"
@@ -26,17 +27,22 @@ struct ShadowFrameStats {
     rt::MapFocus focus = rt::MapFocus::View;
     rt::ShadowStats shadows;
     size_t casterTriangles = 0;
-    double bvhBuildMs = 0.0;   // once per scene, reported with the first frame
+    double bvhBuildMs = 0.0;   // once per scene, reported with the first frame that needs it
+    /// The rays went through the camera rays' tree (--renderer raytrace): no tree of the stage's own.
+    bool bvhShared = false;
     double adjacencyMs = 0.0;  // hybrid: the casters' edge adjacency, likewise
     // Animated scenes: how the hierarchy followed the casters to this frame's pose (update()).
     bool bvhUpdated = false;   // the casters moved since the last frame; the fields below say how
     bool bvhRebuilt = false;   // Lauterbach's criterion passed its threshold: rebuilt, not refitted
     double degradation = 0.0;  // the criterion's value after the refit (rt/bvh_refit.h)
     double bvhUpdateMs = 0.0;  // the refit or rebuild, and for hybrid the edge adjacency found again
-    /// The casters gathered from the scene and their planes found for the visibility buffer: once
-    /// per pose (at construction, reported with the first frame, and in each update()).
+    /// The casters gathered from the scene: once per pose (at construction, reported with the
+    /// first frame, and in each update()).
     double castersMs = 0.0;
-    double surfacesMs = 0.0;  // the visibility buffer and surface reconstruction
+    /// The surfaces the masks start from: the visibility buffer drawn and read (with its casters'
+    /// planes, the first frame of a pose that draws it), or under --renderer raytrace the
+    /// surfaces taken from the camera rays (render/renderer.cpp).
+    double surfacesMs = 0.0;
     rt::AmbientOcclusionStats occlusion;  // --ao: its rays and time (in totalMs too); raysPerPixel 0: not run
     /// What answered the rays; the bvh* fields above then describe the grid (built at
     /// construction, and built again, never refitted, for every pose: bvhRebuilt).
@@ -51,9 +57,12 @@ public:
     /// `occlusion`: ambient occlusion by rays from the same surfaces through the same BVH, with
     /// or without shadows. `accel`: Grid answers the rays with a uniform grid built for each
     /// pose instead of the BVH (rt/caster_rays.h): the same masks, another cost.
+    /// `bvhFromCameraRays`: the frames will hand run() the camera rays' tree over the same
+    /// triangles (render --renderer raytrace, rt::PrimaryRayHierarchy), so none is built here.
     SceneShadows(const scene::Scene& scene, const rt::ShadowOptions& options,
                  rt::BvhUpdateMethod bvhUpdate = rt::BvhUpdateMethod::Refit,
-                 const rt::AmbientOcclusionOptions& occlusion = {}, rt::CasterAccel accel = rt::CasterAccel::Bvh);
+                 const rt::AmbientOcclusionOptions& occlusion = {}, rt::CasterAccel accel = rt::CasterAccel::Bvh,
+                 bool bvhFromCameraRays = false);
 
     /// Whether the stage runs at all: casters, and a mode other than none with a shadow-casting
     /// light, or ambient occlusion.
@@ -68,12 +77,25 @@ public:
     /// One frame's masks for the scene's current camera; returns the lighting to shade with
     /// (the scene's lights, each pointing at its mask). Valid until the next call.
     raster::Lighting run(const scene::Scene& scene, int width, int height, ShadowFrameStats& stats);
+    /// The same frame's masks for surfaces found by the caller instead of the stage's own
+    /// visibility buffer: the ray-tracing renderer's camera rays (rt::surfacesFromVisibility).
+    /// Valid until the next call; `seen` must outlive the returned lighting's use.
+    /// `cameraRays`: the camera rays' tree and the mesh it is over; its rays answer the stage's
+    /// when that mesh holds the casters' triangles (the traced draws are the scene's opaque and
+    /// alpha-tested meshes in order: the same triangles, so the same answers, rt/caster_rays.h).
+    /// Otherwise, or when null, the stage builds its own tree the first time it needs one.
+    raster::Lighting run(const scene::Scene& scene, const rt::ScreenSurfaces& seen, ShadowFrameStats& stats,
+                         const rt::PrimaryRayHierarchy* cameraRays = nullptr);
 
     /// Per pixel of the last frame: rays were traced there for some light.
     const std::vector<uint8_t>& markedPixels() const { return masks_.marked; }
 
 private:
     void gatherCasters(const scene::Scene& scene);
+    raster::Lighting maskFor(const scene::Scene& scene, const rt::ScreenSurfaces& surfaces, ShadowFrameStats& stats,
+                             const rt::DeformingBvh* shared);
+    void buildBvh();
+    bool sameTriangles(const rt::TracedMesh& mesh) const;
     void findAdjacency();
 
     rt::ShadowOptions options_;
@@ -87,7 +109,9 @@ private:
     rt::Aabb bounds_;
     uint64_t castersVersion_ = 0;  // a fresh rt::nextCastersVersion() per pose: maps are kept while it stays
     rt::CasterAccel accel_;
-    std::optional<rt::DeformingBvh> bvh_;  // hybrid, raytraced, auto and --ao, under --accel bvh
+    rt::BvhUpdateMethod bvhUpdate_;
+    bool raysNeeded_ = false;              // hybrid, raytraced, auto and --ao
+    std::optional<rt::DeformingBvh> bvh_;  // the rays' tree under --accel bvh, unless the camera rays' is shared
     std::optional<rt::UniformGrid> grid_;  // the same under --accel grid
     /// Hybrid: thin casters are looked for at silhouettes. Built per pose for hybrid; for auto on
     /// the first light given hybrid (adjacencyFound_ says whether it is this pose's).
@@ -97,6 +121,10 @@ private:
     /// report: each is reported once, with the frame that follows it.
     ShadowFrameStats pending_;
     rt::VisibilityBuffer visibility_;  // per pose: the casters' planes and id colours
+    /// The visibility buffer's casters are set when a frame first draws it (a ray-traced frame
+    /// never does: its surfaces come from its camera rays), and moved to a new pose when one
+    /// draws it after update().
+    enum class VisibilityPose { None, Moved, Current } visibilityPose_ = VisibilityPose::None;
     rt::ShadowMasks masks_;            // reused from frame to frame
     // The software GPU the visibility buffer and the shadow maps are drawn with, one pass after
     // another: its render targets are allocated once and reused by every later frame.

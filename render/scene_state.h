@@ -54,6 +54,7 @@ struct LoadedScene::State {
     rt::AmbientOcclusionOptions occlusionOptions;
     rt::BvhUpdateMethod shadowsMethod = rt::BvhUpdateMethod::Refit;
     rt::CasterAccel shadowsAccel = rt::CasterAccel::Bvh;
+    bool shadowsShareCameraRays = false;  // built to take the camera rays' tree (SceneShadows)
     bool shadowsPoseStale = false;  // the pose changed since they were built or updated
     std::optional<SceneFrustumCull> culling;
     rt::BvhUpdateMethod cullingMethod = rt::BvhUpdateMethod::Refit;
@@ -63,6 +64,9 @@ struct LoadedScene::State {
     std::optional<rt::PrimaryRayHierarchy> primaryRays;
     rt::BvhUpdateMethod primaryRaysMethod = rt::BvhUpdateMethod::Refit;
     bool primaryRaysPoseStale = false;
+    /// --renderer raytrace with shadows or --ao: the surfaces its camera rays met at pixel
+    /// centres, handed to the shadow stage (storage reused from frame to frame).
+    rt::ScreenSurfaces tracedSurfaces;
 
     /// A 3D scene at the frame's pose (glTF: its animation and time; posed again only when they
     /// differ from the pose held). Returns the milliseconds spent posing.

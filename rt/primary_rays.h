@@ -105,6 +105,11 @@ public:
     /// their materials' alpha); buildMs is the build or update since the last trace (0 when the
     /// tree was reused as it was).
     PrimaryRayStats trace(std::span<const raster::DrawCall> draws, const PrimaryRayCamera& camera, raster::VisibilityBuffer& out);
+    /// The tree, at the pose of the last update, and the world-space mesh it is over (the traced
+    /// draws' triangles in draw order): for other queries about the same triangles to share
+    /// instead of building a tree of their own (the ray-traced frame's shadow stage).
+    const DeformingBvh& bvh() const { return *bvh_; }
+    const TracedMesh& mesh() const { return mesh_; }
 
 private:
     struct DrawKey {

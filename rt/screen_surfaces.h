@@ -18,6 +18,7 @@
 
 #include "raster/draw.h"
 #include "raster/pipeline.h"
+#include "raster/visibility_shade.h"
 #include "rt/triangle_mesh.h"
 
 namespace cuberille::rt {
@@ -132,6 +133,17 @@ private:
     std::vector<glm::vec4> idColors_;     // per triangle, its id as ConstantColor draws it
     ScreenSurfaces surfaces_;             // planes set per pose, the rest per frame
 };
+
+/// The surfaces a visibility buffer of one sample a pixel names, found by something other than
+/// drawing the casters: the camera rays of the ray-tracing renderer through pixel centres
+/// (rt/primary_rays.h), so its shadows and occlusion start from what its rays saw instead of from
+/// a second, rasterized look at the scene. `draws` are what the buffer indexes; each covered pixel
+/// gets a plane entry of its own (triangle[pixel] = pixel), the plane of the triangle it sees in
+/// world space, computed as moveCasters computes a caster's: where a draw's positions are world
+/// space (worldFromObject the identity, as scene::Scene draws), the same bits as that caster's
+/// plane. `clipFromWorld`: the camera in the standard depth convention, as draw() takes it.
+void surfacesFromVisibility(const raster::VisibilityBuffer& centres, std::span<const raster::DrawCall> draws,
+                            const glm::mat4& clipFromWorld, ScreenSurfaces& out);
 
 /// One visibility buffer, drawn with `gpu` (a VisibilityBuffer used once).
 ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,

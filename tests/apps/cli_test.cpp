@@ -672,7 +672,9 @@ TEST_F(Cli, AnAnimationsShadowsFromARefittedHierarchyAreThoseOfAFreshOne) {
 TEST_F(Cli, ARayTracedAnimationIsTheSameFromEveryHierarchyAndFromAFreshOne) {
     const fs::path gltf = dir_ / "slide.gltf";
     writeAnimatedGltf(gltf);
-    const std::string common = "render " + gltf.string() + " --camera-index 0 --width 96 --height 64 --renderer raytrace --msaa 4";
+    // With shadows on a floor: the shadow rays share the camera rays' tree through every pose.
+    const std::string common = "render " + gltf.string() +
+                               " --camera-index 0 --width 96 --height 64 --renderer raytrace --msaa 4 --shadows raytraced --ground";
     ASSERT_EQ(run(common + " --time 1 --out " + (dir_ / "alone.png").string()).exitCode, 0);
     const std::string alone = fileBytes(dir_ / "alone.png");
     ASSERT_FALSE(alone.empty());
@@ -687,6 +689,9 @@ TEST_F(Cli, ARayTracedAnimationIsTheSameFromEveryHierarchyAndFromAFreshOne) {
         EXPECT_EQ(rays["accel"].get<std::string>(), accel) << how;
         EXPECT_EQ(rays["bvhUpdated"].get<bool>(), accel == "bvh") << how;
         EXPECT_EQ(rays["bvhRebuilt"].get<bool>(), method == "rebuild" && accel == "bvh") << how;
+        const nlohmann::json shadows = nlohmann::json::parse(std::ifstream(dir_ / (tag + ".json")))["frames"][1]["shadows"];
+        EXPECT_EQ(shadows["bvhShared"].get<bool>(), accel == "bvh") << how;
+        EXPECT_GT(shadows["raysTraced"].get<uint64_t>(), 0u) << how;
     }
     EXPECT_NE(fileBytes(dir_ / "bvh_refit_000.png"), alone) << "the animation moves";
     const fs::path tri = write("flat.tri", "10 10 100 20 30 90 1 0.2 0.2\n");

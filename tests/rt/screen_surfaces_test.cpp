@@ -3,10 +3,13 @@
 // camera. surfaceAt takes one division per pixel (rt/screen_surfaces.h); this is what it must
 // still agree with.
 
+#include <cstring>
+
 #include <gtest/gtest.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "rt/primary_rays.h"
 #include "rt/screen_surfaces.h"
 #include "tests/rt/rt_test_support.h"
 
@@ -74,6 +77,64 @@ TEST(ScreenSurfaces, EachSurfaceIsWherePixelsRayMeetsItsTriangleForAPerspectiveC
 TEST(ScreenSurfaces, EachSurfaceIsWherePixelsRayMeetsItsTriangleForAnOrthographicCamera) {
     const glm::mat4 view = glm::lookAtRH(glm::vec3(-3.0f, 1.0f, 2.0f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
     expectSurfacesMatchTheReference(glm::orthoRH_ZO(-1.6f, 1.6f, -1.2f, 1.2f, 0.1f, 20.0f) * view, "orthographic");
+}
+
+// The ray-tracing renderer's receivers (surfacesFromVisibility): the pixels its camera rays hit
+// are the covered ones; each gets the plane of the triangle its ray hit with the bits the casters'
+// visibility buffer gives that triangle (so shadows match wherever both name one triangle), the
+// surface where the pixel's ray meets it (the double reference, within the bound above), and the
+// hull reaches exactly as deep as the deepest surface.
+TEST(ScreenSurfaces, FromCameraRaysEachPixelGetsThePlaneOfTheTriangleItsRayHit) {
+    const OwnedMesh scene = testing::uvSphere(16, 32, glm::vec3(0.0f, 0.5f, 0.0f), 1.0f);
+    const TriangleMeshView mesh = scene.view();
+    constexpr int kWidth = 160, kHeight = 120;
+    const glm::vec3 eye(2.0f, 2.5f, 3.5f), target(0.0f, 0.5f, 0.0f);
+    const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), 160.0f / 120.0f, 0.1f, 50.0f) *
+                                    glm::lookAtRH(eye, target, glm::vec3(0, 1, 0));
+    raster::DrawCall draw;
+    draw.clipFromObject = clipFromWorld;
+    draw.positions = mesh.positions;
+    draw.indices = mesh.indices;
+    draw.state.cull = raster::CullMode::Back;
+    PrimaryRayCamera camera;
+    camera.worldFromClip = glm::inverse(glm::dmat4(clipFromWorld));
+    camera.eye = eye;
+    camera.viewDirection = glm::normalize(target - eye);
+    raster::VisibilityBuffer seen;
+    seen.reset(kWidth, kHeight, 1);
+    const std::vector<uint8_t> traced{1};
+    tracePrimaryVisibility(std::span(&draw, 1), traced, camera, CasterAccel::Bvh, seen);
+    ScreenSurfaces s;
+    surfacesFromVisibility(seen, std::span(&draw, 1), clipFromWorld, s);
+
+    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::Back};
+    raster::Pipeline gpu;
+    const ScreenSurfaces drawn = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, kWidth, kHeight, gpu);
+    size_t covered = 0;
+    double worst = 0.0;
+    float deepest = -1.0f;
+    for (int y = 0; y < kHeight; ++y)
+        for (int x = 0; x < kWidth; ++x) {
+            const size_t i = size_t(y) * kWidth + x;
+            ASSERT_EQ(s.covered(i), seen.draw[i] != raster::VisibilityBuffer::kNone) << "pixel " << x << ", " << y;
+            if (!s.covered(i)) continue;
+            ++covered;
+            const uint32_t t = seen.triangle[i];
+            const TrianglePlane& plane = s.planes[s.triangle[i]];
+            ASSERT_EQ(std::memcmp(&plane, &drawn.planes[t], sizeof(TrianglePlane)), 0) << "pixel " << x << ", " << y;
+            Surface surface;
+            Reference reference;
+            ASSERT_EQ(s.surfaceAt(x, y, surface), referenceSurface(mesh, t, clipFromWorld, kWidth, kHeight, x, y, reference));
+            worst = std::max(worst, glm::length(glm::dvec3(surface.position) - reference.position));
+            EXPECT_GT(glm::dot(glm::dvec3(surface.normal), reference.normal), 0.999) << "pixel " << x << ", " << y;
+            const glm::vec4 clip = clipFromWorld * glm::vec4(surface.position, 1.0f);
+            deepest = std::max(deepest, clip.z / clip.w);
+        }
+    EXPECT_GT(covered, size_t(kWidth * kHeight / 10));
+    EXPECT_LT(worst, 1e-3);
+    ASSERT_EQ(s.seenHull.size(), 8u);
+    const glm::vec4 far = clipFromWorld * glm::vec4(s.seenHull[4], 1.0f);
+    EXPECT_NEAR(far.z / far.w, deepest, 1e-6f);  // the far corners come back through the inverse
 }
 
 }  // namespace
