@@ -43,17 +43,39 @@ void SceneShadows::gatherCasters(const scene::Scene& s) {
     positions_.clear();
     indices_.clear();
     ranges_.clear();
+    maskAlphas_.clear();
+    maskTexCoords_.clear();
     for (const scene::Mesh& m : s.meshes) {
         if (m.seeThrough()) continue;
         const uint32_t base = uint32_t(positions_.size());
         positions_.insert(positions_.end(), m.positions.begin(), m.positions.end());
         ranges_.push_back({uint32_t(indices_.size() / 3), uint32_t(m.triangleCount()), base,
-                           uint32_t(m.positions.size()), m.doubleSided ? raster::CullMode::None : s.cull});
+                           uint32_t(m.positions.size()), m.doubleSided ? raster::CullMode::None : s.cull, alphaTestOf(m)});
         for (const uint32_t i : m.indices) indices_.push_back(base + i);
     }
     bounds_ = {};
     for (const glm::vec3& p : positions_) bounds_.grow(p);
     castersVersion_ = rt::nextCastersVersion();  // a new pose: every light's map is drawn again
+}
+
+// What the frame's alpha test reads of an alpha-tested mesh, as the vertex and shade stages take
+// it: vertex alphas and texture coordinates only where there is one a vertex, the texture only with
+// coordinates. The arrays are copied (the visibility buffer reads them when it next sets its
+// casters, which a re-posed scene may outlive).
+std::optional<rt::CasterAlphaTest> SceneShadows::alphaTestOf(const scene::Mesh& m) {
+    if (m.alphaMode != raster::AlphaMode::Mask) return std::nullopt;
+    rt::CasterAlphaTest a;
+    a.cutoff = m.alphaCutoff;
+    a.factor = m.alpha;
+    const size_t vertices = m.positions.size();
+    if (m.alphas.size() == vertices && vertices > 0) a.vertexAlphas = maskAlphas_.emplace_back(m.alphas);
+    if (m.textures.baseColor && m.texCoords.size() == vertices && vertices > 0) {
+        a.texCoords = maskTexCoords_.emplace_back(m.texCoords);
+        std::shared_ptr<const raster::Texture>& white = alphaTextures_[m.textures.baseColor.texture.get()];
+        if (!white) white = rt::alphaTestTexture(*m.textures.baseColor.texture);
+        a.alphaOnly = {white.get(), m.textures.baseColor.transform};
+    }
+    return a;
 }
 
 // The adjacency matches edges by position, so a pose that pulls apart two vertices that shared a

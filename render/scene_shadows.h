@@ -8,7 +8,10 @@
 // cast nor take masks (scene::Scene::draw). Nothing here runs unless a mode is asked for and a
 // light casts shadows: the promise that a stage a scene does not need costs nothing.
 
+#include <list>
+#include <memory>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include "rt/ambient_occlusion.h"
@@ -92,6 +95,7 @@ public:
 
 private:
     void gatherCasters(const scene::Scene& scene);
+    std::optional<rt::CasterAlphaTest> alphaTestOf(const scene::Mesh& mesh);
     raster::Lighting maskFor(const scene::Scene& scene, const rt::ScreenSurfaces& surfaces, ShadowFrameStats& stats,
                              const rt::DeformingBvh* shared);
     void buildBvh();
@@ -106,6 +110,12 @@ private:
     std::vector<glm::vec3> positions_;
     std::vector<uint32_t> indices_;
     std::vector<rt::CasterRange> ranges_;
+    // Alpha-tested casters: copies of their vertex alphas and texture coordinates (lists, so the
+    // ranges' spans stay put as more are added) and their base colour textures made white, per
+    // texture (a lookup only: nothing is ordered by address).
+    std::list<std::vector<float>> maskAlphas_;
+    std::list<std::vector<glm::vec2>> maskTexCoords_;
+    std::unordered_map<const raster::Texture*, std::shared_ptr<const raster::Texture>> alphaTextures_;
     rt::Aabb bounds_;
     uint64_t castersVersion_ = 0;  // a fresh rt::nextCastersVersion() per pose: maps are kept while it stays
     rt::CasterAccel accel_;

@@ -5,14 +5,19 @@
 #include <stdexcept>
 
 #include "raster/parallel.h"
+#include "raster/texture.h"
 
 namespace cuberille::rt {
 namespace {
 
 // Triangle ids as flat colours: r = 1 marks a surface, g and b hold the id's low and high 16 bits,
 // each exactly representable in float and copied unchanged through ConstantColor.
+// An alpha-tested range's ids come through the Unlit shade stage as three equal vertex colours
+// interpolated, off by a few ulps of 65535 at most (2e-2), so they are rounded back.
 glm::vec4 idColor(uint32_t id) { return {1.0f, float(id & 0xFFFFu), float(id >> 16), 1.0f}; }
-uint32_t idFrom(const glm::vec4& c) { return c.r == 1.0f ? uint32_t(c.g) | (uint32_t(c.b) << 16) : ScreenSurfaces::kNone; }
+uint32_t idFrom(const glm::vec4& c) {
+    return c.r > 0.5f ? uint32_t(std::lround(c.g)) | (uint32_t(std::lround(c.b)) << 16) : ScreenSurfaces::kNone;
+}
 
 /// Each pixel's id read straight from the one-sample colour tiles (no resolved image); returns
 /// the farthest window depth of a pixel with an id (-1: none).
@@ -86,6 +91,25 @@ ScreenSurfaces::CameraRow ScreenSurfaces::cameraRow(int y) const {
     return row;
 }
 
+std::shared_ptr<const raster::Texture> alphaTestTexture(const raster::Texture& t) {
+    const int w = t.width(), h = t.height();
+    if (t.format() == raster::TexelFormat::LinearFloat) {
+        std::vector<glm::vec4> rgba(size_t(w) * size_t(h));
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) rgba[size_t(y) * w + x] = {1.0f, 1.0f, 1.0f, t.texel(0, x, y).a};
+        return std::make_shared<raster::Texture>(w, h, std::move(rgba), t.wrapU(), t.wrapV(), t.filter());
+    }
+    // The mip chain is built again from level 0 by the same box filter, a channel at a time, so
+    // every level's alpha bytes are the original's.
+    const std::vector<uint32_t> packed = t.packedRows(0);
+    std::vector<uint8_t> bytes(4 * packed.size());
+    for (size_t i = 0; i < packed.size(); ++i) {
+        bytes[4 * i] = bytes[4 * i + 1] = bytes[4 * i + 2] = 255;
+        bytes[4 * i + 3] = uint8_t(packed[i] >> 24);
+    }
+    return std::make_shared<raster::Texture>(w, h, bytes, t.format(), t.wrapU(), t.wrapV(), t.filter());
+}
+
 void VisibilityBuffer::setCasters(const TriangleMeshView& casters, std::span<const CasterRange> ranges) {
     ranges_.assign(ranges.begin(), ranges.end());
     const size_t triangles = casters.triangleCount();
@@ -97,11 +121,38 @@ void VisibilityBuffer::setCasters(const TriangleMeshView& casters, std::span<con
     for (const CasterRange& r : ranges)
         for (size_t i = size_t(r.firstTriangle) * 3; i < size_t(r.firstTriangle + r.triangleCount) * 3; ++i)
             rangeIndices_[i] -= r.firstVertex;
+    // Alpha-tested ranges, unindexed: per corner its triangle's id, alpha and texture coordinates.
+    masked_.clear();
+    for (size_t k = 0; k < ranges.size(); ++k) {
+        const CasterRange& r = ranges[k];
+        if (!r.alphaTest) continue;
+        const CasterAlphaTest& a = *r.alphaTest;
+        MaskedRange m;
+        m.range = k;
+        for (uint32_t t = r.firstTriangle; t < r.firstTriangle + r.triangleCount; ++t)
+            for (int corner = 0; corner < 3; ++corner) {
+                const uint32_t v = rangeIndices_[3 * size_t(t) + size_t(corner)];
+                m.ids.push_back(glm::vec3(idColor(t)));
+                if (!a.vertexAlphas.empty()) m.alphas.push_back(a.vertexAlphas[v]);
+                if (a.alphaOnly && !a.texCoords.empty()) m.texCoords.push_back(a.texCoords[v]);
+            }
+        masked_.push_back(std::move(m));
+    }
     moveCasters(casters);
+}
+
+void VisibilityBuffer::expandMaskedPositions() {
+    for (MaskedRange& m : masked_) {
+        const CasterRange& r = ranges_[m.range];
+        m.positions.resize(size_t(r.triangleCount) * 3);
+        for (size_t i = 0; i < m.positions.size(); ++i)
+            m.positions[i] = casters_.positions[casters_.indices[size_t(r.firstTriangle) * 3 + i]];
+    }
 }
 
 void VisibilityBuffer::moveCasters(const TriangleMeshView& casters) {
     casters_ = casters;
+    expandMaskedPositions();
     const size_t triangles = casters.triangleCount();
     std::vector<TrianglePlane>& planes = surfaces_.planes;
     planes.assign(triangles, TrianglePlane{});
@@ -118,7 +169,13 @@ const ScreenSurfaces& VisibilityBuffer::draw(const glm::mat4& clipFromWorld, int
     desc.heightPixels = height;
     desc.samples = 1;
     gpu.beginFrame(desc);
-    for (const CasterRange& r : ranges_) {
+    auto masked = masked_.begin();
+    for (size_t k = 0; k < ranges_.size(); ++k) {
+        const CasterRange& r = ranges_[k];
+        if (masked != masked_.end() && masked->range == k) {
+            gpu.draw(maskedDraw(*masked++, clipFromWorld));
+            continue;
+        }
         raster::DrawCall d;
         d.space = raster::PositionSpace::Clip;
         d.clipFromObject = clipFromWorld;
@@ -193,6 +250,27 @@ void surfacesFromVisibility(const raster::VisibilityBuffer& centres, std::span<c
     const float deepest = *std::max_element(farthest.begin(), farthest.end());
     s.seenHull.clear();
     if (deepest >= 0.0f) s.seenHull = frustumCorners(s.worldFromClip, std::min(deepest, 1.0f));
+}
+
+// An alpha-tested range as the frame's alpha test sees it: Unlit, white (the id is the vertex
+// colour, times a white factor and a white texture), with the material's alpha and cutoff.
+raster::DrawCall VisibilityBuffer::maskedDraw(const MaskedRange& m, const glm::mat4& clipFromWorld) const {
+    const CasterRange& r = ranges_[m.range];
+    const CasterAlphaTest& a = *r.alphaTest;
+    raster::DrawCall d;
+    d.space = raster::PositionSpace::Clip;
+    d.clipFromObject = clipFromWorld;
+    d.positions = m.positions;
+    d.vertexColors = m.ids;
+    d.vertexAlphas = m.alphas;
+    d.texCoords = m.texCoords;
+    d.state.shading = raster::ShadingModel::Unlit;
+    d.state.constantColor = glm::vec4(1.0f, 1.0f, 1.0f, a.factor);
+    d.state.alphaMode = raster::AlphaMode::Mask;
+    d.state.alphaCutoff = a.cutoff;
+    if (!m.texCoords.empty()) d.state.textures.baseColor = a.alphaOnly;
+    d.state.cull = r.cull;
+    return d;
 }
 
 ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,

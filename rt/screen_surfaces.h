@@ -2,8 +2,10 @@
 // What the camera sees at each pixel centre, for the shadow stage: a visibility buffer (Burns
 // and Hunt, 2013). The casters are drawn once through the software GPU with one sample per pixel
 // at its centre (the position the shade stage evaluates), each triangle writing its own id as a
-// flat colour. A pixel's surface is then recovered on demand: the camera ray through its centre
-// met with that triangle's plane, and the triangle's normal turned toward the camera. Drawn with
+// flat colour (an alpha-tested caster through the frame's own alpha test, so its holes are seen
+// through: CasterAlphaTest). A pixel's surface is then recovered on demand: the camera ray
+// through its centre met with that triangle's plane, and the triangle's normal turned toward the
+// camera. Drawn with
 // the scene's own order, culling and depth test, so the surface found is the one the frame shades.
 //
 // Only the ids are stored (4 bytes a pixel), with each triangle's plane: positions and normals
@@ -11,6 +13,8 @@
 // pixel through memory twice.
 
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -23,12 +27,33 @@
 
 namespace cuberille::rt {
 
+/// What the rasterizer's alpha test reads of an alpha-tested range (raster::AlphaMode::Mask), so
+/// the visibility buffer sees through its holes where the frame does: the alpha is the factor
+/// times the vertex alphas (when present), times the base colour texture's alpha at the pixel
+/// centre's level of detail, against the cutoff — the shade stage's own computation, since the
+/// range is drawn through it (VisibilityBuffer::draw).
+struct CasterAlphaTest {
+    float cutoff = 0.5f;
+    float factor = 1.0f;                   // the base colour factor's alpha
+    std::span<const float> vertexAlphas;   // per vertex of the range; empty: none
+    std::span<const glm::vec2> texCoords;  // per vertex of the range; empty: no texture
+    /// The base colour texture with its colour set to white (alphaTestTexture): its alpha, the
+    /// same bits as the material's, and a colour that leaves the drawn id untouched.
+    raster::TextureBinding alphaOnly;
+};
+
 /// A run of caster triangles drawn as one draw call (one mesh of the scene), with its culling.
 struct CasterRange {
     uint32_t firstTriangle = 0, triangleCount = 0;
     uint32_t firstVertex = 0, vertexCount = 0;  // the vertices its triangles use
     raster::CullMode cull = raster::CullMode::None;
+    std::optional<CasterAlphaTest> alphaTest;  // an alpha-tested range: its holes are seen through
 };
+
+/// A texture's copy with every texel's colour white and its alpha kept, every level: what an
+/// alpha-tested range's id draw samples, so the alpha test sees the material's alpha while the
+/// id colour passes through unchanged (multiplied by exactly 1).
+std::shared_ptr<const raster::Texture> alphaTestTexture(const raster::Texture& texture);
 
 /// A surface point seen at a pixel, in world space.
 struct Surface {
@@ -127,8 +152,21 @@ public:
     const ScreenSurfaces& draw(const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu);
 
 private:
+    /// An alpha-tested range drawn through the Unlit shade stage, its triangles unindexed so each
+    /// vertex carries its triangle's id as a colour (interpolating three equal values, rounded
+    /// back when read).
+    struct MaskedRange {
+        size_t range = 0;
+        std::vector<glm::vec3> positions, ids;
+        std::vector<float> alphas;
+        std::vector<glm::vec2> texCoords;
+    };
+    void expandMaskedPositions();
+    raster::DrawCall maskedDraw(const MaskedRange& m, const glm::mat4& clipFromWorld) const;
+
     TriangleMeshView casters_;
     std::vector<CasterRange> ranges_;
+    std::vector<MaskedRange> masked_;
     std::vector<uint32_t> rangeIndices_;  // the casters' indices, rebased to each range's first vertex
     std::vector<glm::vec4> idColors_;     // per triangle, its id as ConstantColor draws it
     ScreenSurfaces surfaces_;             // planes set per pose, the rest per frame

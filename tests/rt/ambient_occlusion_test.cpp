@@ -41,7 +41,7 @@ Occlusion occlusionOf(const OwnedMesh& scene, const CasterRays& casters, const A
     const TriangleMeshView mesh = scene.view();
     const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), 160.0f / 120.0f, 0.1f, 50.0f) *
                                     glm::lookAtRH(glm::vec3(2.5f, 3.0f, 4.5f), glm::vec3(-0.3f, 0.3f, 0.0f), glm::vec3(0, 1, 0));
-    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
+    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None, {}};
     raster::Pipeline gpu;
     Occlusion o;
     o.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, 160, 120, gpu);

@@ -9,6 +9,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "raster/texture.h"
 #include "rt/primary_rays.h"
 #include "rt/screen_surfaces.h"
 #include "tests/rt/rt_test_support.h"
@@ -42,7 +43,7 @@ bool referenceSurface(const TriangleMeshView& mesh, uint32_t t, const glm::mat4&
 void expectSurfacesMatchTheReference(const glm::mat4& clipFromWorld, const char* camera) {
     OwnedMesh scene = testing::uvSphere(16, 32, glm::vec3(0.0f, 0.5f, 0.0f), 1.0f);
     const TriangleMeshView mesh = scene.view();
-    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
+    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None, {}};
     constexpr int kWidth = 160, kHeight = 120;
     raster::Pipeline gpu;
     const ScreenSurfaces s = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, kWidth, kHeight, gpu);
@@ -107,7 +108,7 @@ TEST(ScreenSurfaces, FromCameraRaysEachPixelGetsThePlaneOfTheTriangleItsRayHit) 
     ScreenSurfaces s;
     surfacesFromVisibility(seen, std::span(&draw, 1), clipFromWorld, s);
 
-    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::Back};
+    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::Back, {}};
     raster::Pipeline gpu;
     const ScreenSurfaces drawn = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, kWidth, kHeight, gpu);
     size_t covered = 0;
@@ -135,6 +136,66 @@ TEST(ScreenSurfaces, FromCameraRaysEachPixelGetsThePlaneOfTheTriangleItsRayHit) 
     ASSERT_EQ(s.seenHull.size(), 8u);
     const glm::vec4 far = clipFromWorld * glm::vec4(s.seenHull[4], 1.0f);
     EXPECT_NEAR(far.z / far.w, deepest, 1e-6f);  // the far corners come back through the inverse
+}
+
+// An alpha-tested caster's holes are seen through, as the frame's alpha test sees through them: a
+// quad in front of a back plane, its base colour texture opaque on the right half only (two
+// texels, magnified nearest: each pixel's alpha is known exactly), so every pixel whose centre
+// lies left of the middle names the back plane and every other names the quad; with a vertex
+// alpha ramp, a pixel is a hole where the factor times the ramp is under the cutoff too; with a
+// factor under the cutoff the quad is all hole. The id colours pass through the shade stage
+// unchanged (the texture is made white, the ids rounded back). Without the alpha test the quad
+// hides the back plane everywhere.
+TEST(ScreenSurfaces, AlphaTestedCastersAreSeenThroughTheirHoles) {
+    constexpr int kWidth = 64, kHeight = 32;
+    // Orthographic, looking down -z at [0, 1] x [0, 1]: pixel (x, y)'s centre is u = (x + 1/2) / 64.
+    const glm::mat4 clipFromWorld = glm::orthoRH_ZO(0.0f, 1.0f, 0.0f, 1.0f, 0.1f, 10.0f) *
+                                    glm::lookAtRH(glm::vec3(0, 0, 5), glm::vec3(0, 0, 0), glm::vec3(0, 1, 0));
+    // Ids past 16 bits, so both id channels go through interpolation: 70,000 triangles of no
+    // area first (drawn, never seen), then the quad, then the back plane.
+    constexpr uint32_t kFirstQuad = 70000, kFirstBack = kFirstQuad + 2;
+    OwnedMesh scene;
+    scene.positions.push_back(glm::vec3(0.5f, 0.5f, 2.0f));
+    scene.indices.assign(3 * size_t(kFirstQuad), 0u);
+    for (const float z : {1.0f, 0.0f}) {
+        const uint32_t base = uint32_t(scene.positions.size());
+        for (const glm::vec2 c : {glm::vec2(-1, -1), glm::vec2(2, -1), glm::vec2(2, 2), glm::vec2(-1, 2)})
+            scene.positions.push_back(z == 1.0f ? glm::vec3(glm::clamp(c, 0.0f, 1.0f), z) : glm::vec3(c, z));
+        for (const uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) scene.indices.push_back(base + i);
+    }
+    const std::vector<glm::vec2> uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};  // u along x; v down the image
+    const std::vector<float> ramp = {0.0f, 1.0f, 1.0f, 0.0f};            // alpha rising with x
+    const raster::Texture halfOpaque(2, 1, std::vector<uint8_t>{200, 10, 10, 0, 10, 200, 10, 255}, raster::TexelFormat::Srgb8,
+                                     raster::WrapMode::ClampToEdge, raster::WrapMode::ClampToEdge,
+                                     {.magnifyNearest = true, .minify = raster::MinFilter::Nearest});
+    const std::shared_ptr<const raster::Texture> white = alphaTestTexture(halfOpaque);
+    ASSERT_EQ(white->texel(0, 0, 0), glm::vec4(1, 1, 1, 0));
+    ASSERT_EQ(white->texel(0, 1, 0), glm::vec4(1, 1, 1, 1));
+    struct Case {
+        const char* name;
+        std::optional<CasterAlphaTest> test;
+        float holesLeftOf;  // u below which a pixel sees the back plane
+    };
+    CasterAlphaTest textured{.cutoff = 0.5f, .factor = 1.0f, .vertexAlphas = {}, .texCoords = uvs, .alphaOnly = {white.get(), {}}};
+    CasterAlphaTest ramped{.cutoff = 0.75f, .factor = 1.0f, .vertexAlphas = ramp, .texCoords = {}, .alphaOnly = {}};
+    CasterAlphaTest faint{.cutoff = 0.5f, .factor = 0.4f, .vertexAlphas = {}, .texCoords = {}, .alphaOnly = {}};
+    for (const Case& c : {Case{"opaque", std::nullopt, 0.0f}, Case{"texture", textured, 0.5f}, Case{"vertex alphas", ramped, 0.75f},
+                          Case{"factor", faint, 2.0f}}) {
+        const CasterRange ranges[3] = {{0, kFirstQuad, 0, 1, raster::CullMode::None, {}},
+                                       {kFirstQuad, 2, 1, 4, raster::CullMode::None, c.test},
+                                       {kFirstBack, 2, 5, 4, raster::CullMode::None, {}}};
+        raster::Pipeline gpu;
+        const ScreenSurfaces s = findScreenSurfaces(scene.view(), ranges, clipFromWorld, kWidth, kHeight, gpu);
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x) {
+                const size_t i = size_t(y) * kWidth + x;
+                ASSERT_TRUE(s.covered(i));
+                const bool hole = (x + 0.5f) / kWidth < c.holesLeftOf;
+                const uint32_t first = hole ? kFirstBack : kFirstQuad;
+                EXPECT_TRUE(s.triangle[i] == first || s.triangle[i] == first + 1)
+                    << c.name << ", pixel " << x << ", " << y << ": triangle " << s.triangle[i];
+            }
+    }
 }
 
 }  // namespace

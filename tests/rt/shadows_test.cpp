@@ -50,7 +50,7 @@ Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, con
     const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
     const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), float(width) / float(height), 0.1f, 50.0f) *
                                     glm::lookAtRH(glm::vec3(3.0f, 4.0f, 6.0f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
-    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
+    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None, {}};
     Rendered r;
     raster::Pipeline gpu;
     r.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, width, height, gpu);
@@ -332,7 +332,7 @@ TEST(Shadows, MasksDrawnOverAnEarlierFramesEqualFreshOnes) {
     const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);
     const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
     const ShadowCasters casters{.mesh = mesh, .rays = {.bvh = &bvh}, .bounds = meshBounds(mesh), .adjacency = &adjacency, .adjacencyOnDemand = {}};
-    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None};
+    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None, {}};
     raster::Pipeline gpu;
     auto surfacesFrom = [&](glm::vec3 eye) {
         const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), 320.0f / 240.0f, 0.1f, 50.0f) *
