@@ -16,7 +16,8 @@ namespace {
 // interpolated, off by a few ulps of 65535 at most (2e-2), so they are rounded back.
 glm::vec4 idColor(uint32_t id) { return {1.0f, float(id & 0xFFFFu), float(id >> 16), 1.0f}; }
 uint32_t idFrom(const glm::vec4& c) {
-    return c.r > 0.5f ? uint32_t(std::lround(c.g)) | (uint32_t(std::lround(c.b)) << 16) : ScreenSurfaces::kNone;
+    // Both halves are below 2^16, where adding one half is exact: the nearest integer, truncated.
+    return c.r > 0.5f ? uint32_t(c.g + 0.5f) | (uint32_t(c.b + 0.5f) << 16) : ScreenSurfaces::kNone;
 }
 
 /// Each pixel's id read straight from the one-sample colour tiles (no resolved image); returns
