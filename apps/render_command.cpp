@@ -114,15 +114,18 @@ void printSummary(const RenderOptions& o, const std::filesystem::path& file, con
     }
     if (r.shadows && r.shadows->mode != rt::ShadowMode::None) {
         const rt::ShadowStats& st = r.shadows->shadows;
+        char bvh[48];
+        if (r.shadows->bvhShared)
+            std::snprintf(bvh, sizeof bvh, "bvh: the camera rays'");
+        else
+            std::snprintf(bvh, sizeof bvh, "bvh %.1f", r.shadows->bvhBuildMs);
         std::printf("  shadows (%s%s): %d light%s, %llu receiver pixels, %llu marked (%.2f%%), %llu rays; %.1f ms "
-                    "(bvh %s%.1f, surfaces %.1f, maps %.1f, masks %.1f)\n",
+                    "(%s, surfaces %.1f, maps %.1f, masks %.1f)\n",
                     render::shadowModeName(r.shadows->mode), r.shadows->soft ? ", soft" : "", st.lightsShadowed,
                     st.lightsShadowed == 1 ? "" : "s", (unsigned long long)st.receiverPixels,
                     (unsigned long long)st.markedPixels,
                     st.receiverPixels ? 100.0 * double(st.markedPixels) / double(st.receiverPixels) : 0.0,
-                    (unsigned long long)st.raysTraced, r.shadows->totalMs, r.shadows->bvhShared ? "the camera rays', " : "",
-                    r.shadows->bvhBuildMs, r.shadows->surfacesMs,
-                    st.mapMs, st.maskMs);
+                    (unsigned long long)st.raysTraced, r.shadows->totalMs, bvh, r.shadows->surfacesMs, st.mapMs, st.maskMs);
         if (r.shadows->mode == rt::ShadowMode::Auto)
             std::printf("  auto: %d light%s hybrid, %d raytraced; predicted hybrid %.1f ms, raytraced %.1f ms; took %.1f ms\n",
                         st.autoHybrid, st.autoHybrid == 1 ? "" : "s", st.autoRayTraced, st.predictedHybridMs,
