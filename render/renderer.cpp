@@ -256,26 +256,35 @@ void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene
     std::optional<raster::Lighting> shadowed;
     if (shadows) {
         // The shadow stage and occlusion start from the surfaces the camera rays met at pixel
-        // centres: the frame's own rays at one sample (the pattern's sample is the centre), a
-        // ray a pixel through the same structure at more.
+        // centres: the frame's own rays at one sample (the pattern's sample is the centre); at
+        // more, the triangle a pixel's samples all see, and a ray through the centre where they
+        // part (through the same structure; the grid traces every centre).
         result.shadows.emplace();
         const double t0 = raster::nowMs();
         if (shadows->active()) {
             raster::VisibilityBuffer centres;
             if (desc.samples > 1) {
-                centres.reset(desc.widthPixels, desc.heightPixels, 1);
-                if (o.accel == rt::CasterAccel::Grid)
-                    rt::tracePrimaryVisibility(draws, traced, rays, o.accel, centres);
-                else
-                    state.primaryRays->trace(draws, rays, centres);
+                std::vector<uint32_t> open;
+                rt::centresWhereSamplesAgree(seen, centres, open);
+                result.shadows->centreRays = open.size();
+                if (o.accel == rt::CasterAccel::Bvh) {
+                    state.primaryRays->traceCentres(draws, rays, open, centres);
+                } else {  // the grid is built for a whole frame's rays: every centre, the open ones kept
+                    raster::VisibilityBuffer all;
+                    all.reset(desc.widthPixels, desc.heightPixels, 1);
+                    rt::tracePrimaryVisibility(draws, traced, rays, o.accel, all);
+                    for (const uint32_t p : open) centres.draw[p] = all.draw[p], centres.triangle[p] = all.triangle[p];
+                }
             }
             scene::Camera standard = camera;
             standard.reversedDepth = false;
             rt::surfacesFromVisibility(desc.samples > 1 ? centres : seen, draws, standard.clipFromWorld(aspect), state.tracedSurfaces);
             const double surfacesMs = raster::nowMs() - t0;
+            const uint64_t centreRays = result.shadows->centreRays;
             shadowed = shadows->run(drawn, state.tracedSurfaces, *result.shadows,
                                     o.accel == rt::CasterAccel::Bvh ? &*state.primaryRays : nullptr);
             result.shadows->surfacesMs = surfacesMs;
+            result.shadows->centreRays = centreRays;
         }
         result.shadows->totalMs = raster::nowMs() - t0;
     }
@@ -685,6 +694,7 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                         {"bvhUpdateMs", sh.bvhUpdateMs},
                         {"castersMs", sh.castersMs},
                         {"surfacesMs", sh.surfacesMs},
+                        {"centreRays", sh.centreRays},
                         {"mapMs", st.mapMs},
                         {"maskMs", st.maskMs},
                         {"totalMs", sh.totalMs}};

@@ -46,6 +46,9 @@ struct ShadowFrameStats {
     /// planes, the first frame of a pose that draws it), or under --renderer raytrace the
     /// surfaces taken from the camera rays (render/renderer.cpp).
     double surfacesMs = 0.0;
+    /// --renderer raytrace at more than one sample: the rays traced through pixel centres for the
+    /// receivers, where a pixel's samples see different triangles (rt::centresWhereSamplesAgree).
+    uint64_t centreRays = 0;
     rt::AmbientOcclusionStats occlusion;  // --ao: its rays and time (in totalMs too); raysPerPixel 0: not run
     /// What answered the rays; the bvh* fields above then describe the grid (built at
     /// construction, and built again, never refitted, for every pose: bvhRebuilt).

@@ -161,6 +161,39 @@ PrimaryRayStats PrimaryRayHierarchy::trace(std::span<const raster::DrawCall> dra
     return stats;
 }
 
+PrimaryRayStats PrimaryRayHierarchy::traceCentres(std::span<const raster::DrawCall> draws, const PrimaryRayCamera& camera,
+                                                  std::span<const uint32_t> pixels, raster::VisibilityBuffer& out) {
+    PrimaryRayStats stats;
+    stats.accel = CasterAccel::Bvh;
+    stats.triangles = mesh_.draw.size();
+    const double t0 = raster::nowMs();
+    const AlphaTestContext alpha{&mesh_, draws, &camera, glm::inverse(camera.worldFromClip), out.width, out.height};
+    const HitFilter filter{filter_, passesAlphaTest, &alpha};
+    // Packets of consecutive listed pixels: the list runs along rows, so they lie together.
+    constexpr size_t kRaysPerTask = 64;
+    std::vector<uint64_t> hits((pixels.size() + kRaysPerTask - 1) / kRaysPerTask, 0);
+    raster::parallelFor(hits.size(), [&](size_t task) {
+        Ray rays[kRaysPerTask];
+        RayHit found[kRaysPerTask];
+        const size_t first = task * kRaysPerTask, n = std::min(kRaysPerTask, pixels.size() - first);
+        for (size_t k = 0; k < n; ++k) {
+            const uint32_t p = pixels[first + k];
+            rays[k] = primaryRay(camera, p % uint32_t(out.width) + 0.5, p / uint32_t(out.width) + 0.5, out.width, out.height);
+        }
+        bvh_->closestHits(std::span<const Ray>(rays, n), std::span<RayHit>(found, n), filter);
+        for (size_t k = 0; k < n; ++k) {
+            if (!found[k].hit()) continue;
+            out.draw[pixels[first + k]] = mesh_.draw[found[k].triangle];
+            out.triangle[pixels[first + k]] = mesh_.triangle[found[k].triangle];
+            ++hits[task];
+        }
+    });
+    for (const uint64_t h : hits) stats.hits += h;
+    stats.rays = pixels.size();
+    stats.traceMs = raster::nowMs() - t0;
+    return stats;
+}
+
 namespace {
 
 // Which side of a triangle every ray of the camera sees: the front (counter-clockwise on screen,

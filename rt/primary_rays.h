@@ -105,6 +105,12 @@ public:
     /// their materials' alpha); buildMs is the build or update since the last trace (0 when the
     /// tree was reused as it was).
     PrimaryRayStats trace(std::span<const raster::DrawCall> draws, const PrimaryRayCamera& camera, raster::VisibilityBuffer& out);
+    /// trace() through the centres of the listed pixels (y x width + x) only, into a one-sample
+    /// buffer whose other pixels are left as they are: the pixels the shadow stage's receivers
+    /// still need after the frame's own samples (rt::centresWhereSamplesAgree). Call after trace()
+    /// with the same camera: its view's culling is reused.
+    PrimaryRayStats traceCentres(std::span<const raster::DrawCall> draws, const PrimaryRayCamera& camera,
+                                 std::span<const uint32_t> pixels, raster::VisibilityBuffer& out);
     /// The tree, at the pose of the last update, and the world-space mesh it is over (the traced
     /// draws' triangles in draw order): for other queries about the same triangles to share
     /// instead of building a tree of their own (the ray-traced frame's shadow stage).

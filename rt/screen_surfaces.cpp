@@ -253,6 +253,30 @@ void surfacesFromVisibility(const raster::VisibilityBuffer& centres, std::span<c
     if (deepest >= 0.0f) s.seenHull = frustumCorners(s.worldFromClip, std::min(deepest, 1.0f));
 }
 
+void centresWhereSamplesAgree(const raster::VisibilityBuffer& samples, raster::VisibilityBuffer& centres,
+                              std::vector<uint32_t>& open) {
+    const int S = samples.samples;
+    centres.reset(samples.width, samples.height, 1);
+    // Rows in parallel, each listing its own open pixels; joined in row order.
+    std::vector<std::vector<uint32_t>> openInRow(size_t(samples.height));
+    raster::parallelFor(size_t(samples.height), [&](size_t y) {
+        for (size_t p = y * size_t(samples.width); p < (y + 1) * size_t(samples.width); ++p) {
+            const size_t first = p * size_t(S);
+            bool agree = true;
+            for (int s = 1; s < S && agree; ++s)
+                agree = samples.draw[first + s] == samples.draw[first] && samples.triangle[first + s] == samples.triangle[first];
+            if (!agree) {
+                openInRow[y].push_back(uint32_t(p));
+                continue;
+            }
+            centres.draw[p] = samples.draw[first];
+            centres.triangle[p] = samples.triangle[first];
+        }
+    });
+    open.clear();
+    for (const std::vector<uint32_t>& row : openInRow) open.insert(open.end(), row.begin(), row.end());
+}
+
 // An alpha-tested range as the frame's alpha test sees it: Unlit, white (the id is the vertex
 // colour, times a white factor and a white texture), with the material's alpha and cutoff.
 raster::DrawCall VisibilityBuffer::maskedDraw(const MaskedRange& m, const glm::mat4& clipFromWorld) const {

@@ -183,6 +183,15 @@ private:
 void surfacesFromVisibility(const raster::VisibilityBuffer& centres, std::span<const raster::DrawCall> draws,
                             const glm::mat4& clipFromWorld, ScreenSurfaces& out);
 
+/// The one-sample buffer surfacesFromVisibility takes, from a multisampled one where it can be:
+/// a pixel all of whose samples see one triangle (or nothing) gets it at its centre, and the
+/// pixels whose samples part are listed in `open` (in row order) for a ray through the centre.
+/// A triangle every sample sees contains the centre: the standard patterns' samples surround it
+/// and a triangle's image is convex. It is the centre's surface unless a nearer triangle lies
+/// wholly between the samples; then the receiver is still a surface the pixel shows.
+void centresWhereSamplesAgree(const raster::VisibilityBuffer& samples, raster::VisibilityBuffer& centres,
+                              std::vector<uint32_t>& open);
+
 /// One visibility buffer, drawn with `gpu` (a VisibilityBuffer used once).
 ScreenSurfaces findScreenSurfaces(const TriangleMeshView& casters, std::span<const CasterRange> ranges,
                                   const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu);
