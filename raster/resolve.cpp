@@ -1,5 +1,6 @@
 #include "raster/resolve.h"
 
+#include <cassert>
 #include <algorithm>
 
 #if defined(__SSE2__)
@@ -143,6 +144,22 @@ void resolveDepthPlane(const Framebuffer& fb, std::vector<float>& out) {
             }
         }
         out[size_t(y) * fb.width() + x] = d;
+    });
+}
+
+void resolveWindowDepth(const Framebuffer& fb, std::vector<float>& out) {
+    assert(fb.samples() == 1);
+    out.resize(size_t(fb.width()) * fb.height());
+    const float sign = depthKeySign(fb.desc().depthConvention);  // window depth = sign x key, exactly
+    const float cleared = sign * clearDepthKey(fb.desc());
+    forEachTileRow(fb, [&](const TileRow& r) {
+        float* row = out.data() + size_t(r.y) * fb.width() + r.x0;
+        if (!fb.tileTouched(r.tile)) {
+            std::fill_n(row, r.width, cleared);
+            return;
+        }
+        const float* keys = fb.tileDepth(r.tile) + size_t(r.yInTile) * kTileSizePixels;
+        for (int x = 0; x < r.width; ++x) row[x] = sign * keys[x];
     });
 }
 

@@ -32,6 +32,11 @@ void resolveDepth(const Framebuffer& fb, Image& out);
 /// The same depths, one float per pixel, row-major: what a depth-only pass (a shadow map)
 /// reads back, without a four-channel image.
 void resolveDepthPlane(const Framebuffer& fb, std::vector<float>& out);
+/// A one-sample target's window depth per pixel in its own convention (reversed: 1 at the near
+/// plane, 0 at the far), uncovered pixels at the far plane: what a shadow map reads. Unlike
+/// resolveDepthPlane it does not turn reversed depth into standard (1 - d), which would cancel
+/// the precision reversed depth keeps near 0.
+void resolveWindowDepth(const Framebuffer& fb, std::vector<float>& out);
 /// The depth view for people: each pixel's distance along the view axis, in the units of the
 /// projection's near and far planes (depth 0 at nearPlane and 1 at farPlane in the standard
 /// convention, as glm::perspectiveRH_ZO and orthoRH_ZO make it: falling like 1/distance for a

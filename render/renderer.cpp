@@ -263,10 +263,11 @@ void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene
         const double t0 = raster::nowMs();
         if (shadows->active()) {
             raster::VisibilityBuffer centres;
+            uint64_t centreRays = 0;
             if (desc.samples > 1) {
                 std::vector<uint32_t> open;
                 rt::centresWhereSamplesAgree(seen, centres, open);
-                result.shadows->centreRays = open.size();
+                centreRays = open.size();
                 if (o.accel == rt::CasterAccel::Bvh) {
                     state.primaryRays->traceCentres(draws, rays, open, centres);
                 } else {  // the grid is built for a whole frame's rays: every centre, the open ones kept
@@ -280,9 +281,9 @@ void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene
             standard.reversedDepth = false;
             rt::surfacesFromVisibility(desc.samples > 1 ? centres : seen, draws, standard.clipFromWorld(aspect), state.tracedSurfaces);
             const double surfacesMs = raster::nowMs() - t0;
-            const uint64_t centreRays = result.shadows->centreRays;
             shadowed = shadows->run(drawn, state.tracedSurfaces, *result.shadows,
                                     o.accel == rt::CasterAccel::Bvh ? &*state.primaryRays : nullptr);
+            // run() starts the frame's stats afresh: what came before it is filled in after.
             result.shadows->surfacesMs = surfacesMs;
             result.shadows->centreRays = centreRays;
         }

@@ -53,6 +53,7 @@ void SceneShadows::gatherCasters(const scene::Scene& s) {
                            uint32_t(m.positions.size()), m.doubleSided ? raster::CullMode::None : s.cull, alphaTestOf(m)});
         for (const uint32_t i : m.indices) indices_.push_back(base + i);
     }
+    alphaFilter_.reset(ranges_, indices_);
     bounds_ = {};
     for (const glm::vec3& p : positions_) bounds_.grow(p);
     castersVersion_ = rt::nextCastersVersion();  // a new pose: every light's map is drawn again
@@ -142,15 +143,14 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
 
 raster::Lighting SceneShadows::run(const scene::Scene& s, const rt::ScreenSurfaces& seen, ShadowFrameStats& stats,
                                    const rt::PrimaryRayHierarchy* cameraRays) {
-    const bool shared = active_ && raysNeeded_ && accel_ == rt::CasterAccel::Bvh && !bvh_ && cameraRays &&
-                        sameTriangles(cameraRays->mesh());
+    const bool shared = bvhPending() && cameraRays && sameTriangles(cameraRays->mesh());
     return maskFor(s, seen, stats, shared ? &cameraRays->bvh() : nullptr);
 }
 
 // The frame's masks from its surfaces: the stage's own visibility buffer or the caller's.
 raster::Lighting SceneShadows::maskFor(const scene::Scene& s, const rt::ScreenSurfaces& surfaces, ShadowFrameStats& stats,
                                        const rt::DeformingBvh* shared) {
-    if (active_ && raysNeeded_ && accel_ == rt::CasterAccel::Bvh && !bvh_ && !shared) buildBvh();  // not shareable after all
+    if (bvhPending() && !shared) buildBvh();  // not shareable after all
     stats = std::exchange(pending_, {});
     stats.bvhShared = shared != nullptr;
     stats.mode = options_.mode;
@@ -162,7 +162,10 @@ raster::Lighting SceneShadows::maskFor(const scene::Scene& s, const rt::ScreenSu
     if (!active_) return lighting;
     const rt::TriangleMeshView casters{positions_, indices_};
     const rt::ShadowCasters shadowCasters{.mesh = casters,
-                                          .rays = {.bvh = bvh_ ? &*bvh_ : shared, .grid = grid_ ? &*grid_ : nullptr, .mesh = casters},
+                                          .rays = {.bvh = bvh_ ? &*bvh_ : shared,
+                                                   .grid = grid_ ? &*grid_ : nullptr,
+                                                   .mesh = casters,
+                                                   .filter = alphaFilter_.filter()},
                                           .bounds = bounds_,
                                           .adjacency = adjacencyFound_ ? &adjacency_ : nullptr,
                                           .version = castersVersion_,
@@ -171,7 +174,8 @@ raster::Lighting SceneShadows::maskFor(const scene::Scene& s, const rt::ScreenSu
                                               findAdjacency();
                                               stats.adjacencyMs += raster::nowMs() - t;
                                               return &adjacency_;
-                                          }};
+                                          },
+                                          .ranges = ranges_};
     if (shadowed_) {
         rt::computeShadows(surfaces, s.lighting, shadowCasters, options_, gpu_, masks_);
         stats.shadows = masks_.stats;

@@ -2,7 +2,8 @@
 // The shadow stage for a 3D scene (rt/shadows.h) wired to the scene: which meshes cast and
 // receive, the BVH over them, and the per-frame screen-space masks handed to the shade stage.
 //
-// Casters are the opaque and alpha-tested meshes (alpha-tested ones as if opaque), concatenated
+// Casters are the opaque and alpha-tested meshes (alpha-tested ones block rays and fill the maps
+// only where their alpha passes: rt/caster_alpha_test.h), concatenated
 // in world space in draw order, each keeping its culling so the visibility buffer sees what the
 // frame shades. See-through meshes (blended or transmissive: scene::Mesh::seeThrough) neither
 // cast nor take masks (scene::Scene::draw). Nothing here runs unless a mode is asked for and a
@@ -16,6 +17,7 @@
 
 #include "rt/ambient_occlusion.h"
 #include "rt/bvh.h"
+#include "rt/caster_alpha_test.h"
 #include "rt/deforming_bvh.h"
 #include "rt/primary_rays.h"
 #include "rt/screen_surfaces.h"
@@ -102,6 +104,9 @@ private:
     raster::Lighting maskFor(const scene::Scene& scene, const rt::ScreenSurfaces& surfaces, ShadowFrameStats& stats,
                              const rt::DeformingBvh* shared);
     void buildBvh();
+    /// The rays need a BVH that is not there yet: the stage's own, built the first time a frame
+    /// needs it, unless a frame hands over the camera rays' over the same triangles.
+    bool bvhPending() const { return active_ && raysNeeded_ && accel_ == rt::CasterAccel::Bvh && !bvh_; }
     bool sameTriangles(const rt::TracedMesh& mesh) const;
     void findAdjacency();
 
@@ -119,6 +124,7 @@ private:
     std::list<std::vector<float>> maskAlphas_;
     std::list<std::vector<glm::vec2>> maskTexCoords_;
     std::unordered_map<const raster::Texture*, std::shared_ptr<const raster::Texture>> alphaTextures_;
+    rt::CasterAlphaFilter alphaFilter_;  // the rays' alpha test over ranges_ (none: every caster opaque)
     rt::Aabb bounds_;
     uint64_t castersVersion_ = 0;  // a fresh rt::nextCastersVersion() per pose: maps are kept while it stays
     rt::CasterAccel accel_;

@@ -28,15 +28,18 @@ enum class CasterAccel : uint8_t { Bvh, Grid };
 struct CasterRays {
     const DeformingBvh* bvh = nullptr;
     const UniformGrid* grid = nullptr;
-    TriangleMeshView mesh;  // the grid's triangles (the BVH keeps its own)
+    TriangleMeshView mesh = {};  // the grid's triangles (the BVH keeps its own)
+    /// Alpha-tested casters (rt/caster_alpha_test.h): a hit counts only where the material's
+    /// alpha passes its cutoff. Null: every caster is opaque.
+    const HitFilter* filter = nullptr;
 
-    bool anyHit(const Ray& ray) const { return grid ? rt::anyHit(*grid, mesh, ray) : bvh->anyHit(ray); }
+    bool anyHit(const Ray& ray) const { return grid ? rt::anyHit(*grid, mesh, ray, nullptr, filter) : bvh->anyHit(ray, filter); }
     /// Rays that travel together (a tile's receivers toward one light, one receiver's rays toward
     /// a light's disk) as packets: the grid's frustum packets or the wide BVH's. Each answer is
     /// its ray's anyHit.
     void anyHits(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
-        if (grid) rt::anyHits(*grid, mesh, rays, occluded);
-        else bvh->anyHits(rays, occluded);
+        if (grid) rt::anyHits(*grid, mesh, rays, occluded, nullptr, filter);
+        else bvh->anyHits(rays, occluded, filter);
     }
 };
 

@@ -81,14 +81,14 @@ void DeformingBvh::closestHits(std::span<const Ray> rays, std::span<RayHit> hits
     for (size_t i = 0; i < rays.size(); ++i) hits[i] = closestHit(rays[i], filter);
 }
 
-bool DeformingBvh::anyHit(const Ray& ray) const {
-    if (lazy_) return lazy_->anyHit(ray);
-    return usesWide() ? rt::anyHit(wide_, ray) : rt::anyHit(*bvh_, mesh_, ray);
+bool DeformingBvh::anyHit(const Ray& ray, const HitFilter* filter) const {
+    if (lazy_) return lazy_->anyHit(ray, filter);
+    return usesWide() ? rt::anyHit(wide_, ray, filter) : rt::anyHit(*bvh_, mesh_, ray, filter);
 }
 
-void DeformingBvh::anyHits(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
-    if (usesWide() && !lazy_) return rt::anyHits(wide_, rays, occluded);
-    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = anyHit(rays[i]);
+void DeformingBvh::anyHits(std::span<const Ray> rays, std::span<uint8_t> occluded, const HitFilter* filter) const {
+    if (usesWide() && !lazy_) return rt::anyHits(wide_, rays, occluded, filter);
+    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = anyHit(rays[i], filter);
 }
 
 const Bvh& DeformingBvh::bvh() const {

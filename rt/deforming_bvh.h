@@ -44,10 +44,10 @@ public:
     RayHit closestHit(const Ray& ray) const;
     /// The closest hit among the triangles not skipped (HitFilter, by the mesh's ids).
     RayHit closestHit(const Ray& ray, const HitFilter& filter) const;
-    bool anyHit(const Ray& ray) const;
+    bool anyHit(const Ray& ray, const HitFilter* filter = nullptr) const;
     /// anyHit for each of `rays`: through the wide tree as packets (rt/wide_bvh.h, anyHits), else
     /// one at a time. The same answers either way.
-    void anyHits(std::span<const Ray> rays, std::span<uint8_t> occluded) const;
+    void anyHits(std::span<const Ray> rays, std::span<uint8_t> occluded, const HitFilter* filter = nullptr) const;
     /// closestHit(ray, filter) for each of `rays`: through the wide tree as packets
     /// (rt/wide_bvh.h, closestHits), else one at a time. The same hits either way.
     void closestHits(std::span<const Ray> rays, std::span<RayHit> hits, const HitFilter& filter) const;

@@ -92,10 +92,11 @@ RayHit LazyRefit::closestHit(const Ray& ray, const HitFilter* filter) const {
         [this](uint32_t slot, int corner) { return mesh_.vertex(bvh_->primitiveIndices[slot], corner); }, nullptr, filter);
 }
 
-bool LazyRefit::anyHit(const Ray& ray) const {
+bool LazyRefit::anyHit(const Ray& ray, const HitFilter* filter) const {
     return detail::traverse<true>(
                *bvh_, ray, [this](uint32_t node) { return currentBox(node); },
-               [this](uint32_t slot, int corner) { return mesh_.vertex(bvh_->primitiveIndices[slot], corner); })
+               [this](uint32_t slot, int corner) { return mesh_.vertex(bvh_->primitiveIndices[slot], corner); }, nullptr,
+               filter)
         .hit();
 }
 

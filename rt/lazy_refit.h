@@ -40,7 +40,7 @@ public:
     void updateAfterFullRefit(const TriangleMeshView& mesh);
 
     RayHit closestHit(const Ray& ray, const HitFilter* filter = nullptr) const;
-    bool anyHit(const Ray& ray) const;
+    bool anyHit(const Ray& ray, const HitFilter* filter = nullptr) const;
 
     /// Brings every stale box up to date, as a full refit would: for use before anything that
     /// reads the tree's boxes directly.

@@ -27,8 +27,8 @@ RayHit closestHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray, const
     return detail::traverse<false>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}, nullptr, &filter);
 }
 
-bool anyHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray) {
-    return detail::traverse<true>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}).hit();
+bool anyHit(const Bvh& bvh, const TriangleMeshView&, const Ray& ray, const HitFilter* filter) {
+    return detail::traverse<true>(bvh, ray, NodeBoxes{bvh}, LeafVertices{bvh}, nullptr, filter).hit();
 }
 
 RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const HitFilter* filter) {
@@ -42,12 +42,12 @@ RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const 
     return best;
 }
 
-bool anyHitBruteForce(const TriangleMeshView& mesh, const Ray& ray) {
+bool anyHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const HitFilter* filter) {
     const WatertightRay test(ray);
     for (uint32_t t = 0; t < mesh.triangleCount(); ++t) {
-        RayHit candidate;
-        if (test.intersect(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), ray.tMin, ray.tMax, &candidate))
-            return true;
+        RayHit best;
+        best.t = ray.tMax;
+        if (offerHit(test, mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), t, ray.tMin, best, filter, &ray)) return true;
     }
     return false;
 }

@@ -15,13 +15,13 @@ namespace cuberille::rt {
 /// The tree answers from its own copy of the vertices (leafVertices, as of its last build or
 /// refit); the mesh is the one it was built or refitted over.
 RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray);
-bool anyHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray);
+bool anyHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray, const HitFilter* filter = nullptr);
 /// The closest hit among the triangles not skipped (rt/ray.h, HitFilter; ids are the mesh's).
 RayHit closestHit(const Bvh& bvh, const TriangleMeshView& mesh, const Ray& ray, const HitFilter& filter);
 
 /// The slow-but-sure references: every triangle, in id order.
 RayHit closestHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const HitFilter* filter = nullptr);
-bool anyHitBruteForce(const TriangleMeshView& mesh, const Ray& ray);
+bool anyHitBruteForce(const TriangleMeshView& mesh, const Ray& ray, const HitFilter* filter = nullptr);
 
 /// Counts of the work one query did, for benchmarks and tests of the traversal's efficiency.
 struct TraversalCounters {

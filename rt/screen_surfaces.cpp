@@ -289,11 +289,7 @@ raster::DrawCall VisibilityBuffer::maskedDraw(const MaskedRange& m, const glm::m
     d.vertexColors = m.ids;
     d.vertexAlphas = m.alphas;
     d.texCoords = m.texCoords;
-    d.state.shading = raster::ShadingModel::Unlit;
-    d.state.constantColor = glm::vec4(1.0f, 1.0f, 1.0f, a.factor);
-    d.state.alphaMode = raster::AlphaMode::Mask;
-    d.state.alphaCutoff = a.cutoff;
-    if (!m.texCoords.empty()) d.state.textures.baseColor = a.alphaOnly;
+    d.state = alphaTestedState(a);
     d.state.cull = r.cull;
     return d;
 }

@@ -23,32 +23,10 @@
 #include "raster/draw.h"
 #include "raster/pipeline.h"
 #include "raster/visibility_shade.h"
+#include "rt/caster_alpha_test.h"
 #include "rt/triangle_mesh.h"
 
 namespace cuberille::rt {
-
-/// What the rasterizer's alpha test reads of an alpha-tested range (raster::AlphaMode::Mask), so
-/// the visibility buffer sees through its holes where the frame does: the alpha is the factor
-/// times the vertex alphas (when present), times the base colour texture's alpha at the pixel
-/// centre's level of detail, against the cutoff — the shade stage's own computation, since the
-/// range is drawn through it (VisibilityBuffer::draw).
-struct CasterAlphaTest {
-    float cutoff = 0.5f;
-    float factor = 1.0f;                   // the base colour factor's alpha
-    std::span<const float> vertexAlphas;   // per vertex of the range; empty: none
-    std::span<const glm::vec2> texCoords;  // per vertex of the range; empty: no texture
-    /// The base colour texture with its colour set to white (alphaTestTexture): its alpha, the
-    /// same bits as the material's, and a colour that leaves the drawn id untouched.
-    raster::TextureBinding alphaOnly;
-};
-
-/// A run of caster triangles drawn as one draw call (one mesh of the scene), with its culling.
-struct CasterRange {
-    uint32_t firstTriangle = 0, triangleCount = 0;
-    uint32_t firstVertex = 0, vertexCount = 0;  // the vertices its triangles use
-    raster::CullMode cull = raster::CullMode::None;
-    std::optional<CasterAlphaTest> alphaTest;  // an alpha-tested range: its holes are seen through
-};
 
 /// A texture's copy with every texel's colour white and its alpha kept, every level: what an
 /// alpha-tested range's id draw samples, so the alpha test sees the material's alpha while the

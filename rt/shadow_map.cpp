@@ -64,7 +64,16 @@ ShadowMapFace perspectiveFace(const glm::vec3& position, const glm::vec3& forwar
     f.farPlane = std::max(farthest * 1.01f, 1e-3f);
     f.nearPlane = f.farPlane * 1e-4f;
     f.halfExtent = std::tan(halfAngle);
-    f.clipFromWorld = glm::perspectiveRH_ZO(2.0f * halfAngle, 1.0f, f.nearPlane, f.farPlane) * f.viewFromWorld;
+    // Reversed depth (raster/framebuffer.h): the near plane lies 1e4 times nearer than the far one,
+    // and standard depth's floats near 1 then resolve a receiver at the far end of a spot light
+    // only to about a hundredth of its distance — coarser than the receiver bias of a 2048-texel
+    // map, so hybrid shadowed lit receivers there. Reversed, a depth keeps float's relative
+    // precision at every distance. Built directly, as scene::Camera builds it.
+    glm::mat4 projection = glm::perspectiveRH_ZO(2.0f * halfAngle, 1.0f, f.nearPlane, f.farPlane);
+    const double n = f.nearPlane, far = f.farPlane;
+    projection[2][2] = float(n / (far - n));
+    projection[3][2] = float(far * n / (far - n));
+    f.clipFromWorld = projection * f.viewFromWorld;
     return f;
 }
 
@@ -82,18 +91,44 @@ glm::mat4 texelTransform(const ShadowMapFace& f, int size) {
     return t;
 }
 
-/// Linear depth from the rasterizer's [0, 1] depth (Direct3D convention: z_ndc = depth).
+/// Linear depth from the rasterizer's [0, 1] window depth: standard for orthographic faces,
+/// reversed (1 at the near plane) for perspective ones (perspectiveFace).
 float linearDepth(const ShadowMapFace& f, float d) {
-    if (d >= 1.0f) return ShadowMap::kEmpty;
-    if (!f.perspective) return f.nearPlane + d * (f.farPlane - f.nearPlane);
-    return f.nearPlane * f.farPlane / (f.farPlane - d * (f.farPlane - f.nearPlane));
+    if (!f.perspective) return d >= 1.0f ? ShadowMap::kEmpty : f.nearPlane + d * (f.farPlane - f.nearPlane);
+    if (!(d > 0.0f)) return ShadowMap::kEmpty;
+    const double n = f.nearPlane, far = f.farPlane;
+    return float(n * far / (n + double(d) * (far - n)));
 }
 
-void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size, raster::Pipeline& gpu) {
+/// An alpha-tested range drawn as the frame draws it, for depth alone: Unlit through the material's
+/// alpha (its base colour texture made white, CasterAlphaTest::alphaOnly), cut at its cutoff, at
+/// each texel's level of detail; both faces.
+raster::DrawCall alphaTestedDraw(const ShadowMapFace& f, const TriangleMeshView& casters, const CasterRange& range,
+                                 std::vector<uint32_t>& rebased) {
+    const CasterAlphaTest& a = *range.alphaTest;
+    const std::span<const uint32_t> indices = casters.indices.subspan(3 * size_t(range.firstTriangle), 3 * size_t(range.triangleCount));
+    rebased.resize(indices.size());
+    for (size_t i = 0; i < indices.size(); ++i) rebased[i] = indices[i] - range.firstVertex;
+    raster::DrawCall d;
+    d.space = raster::PositionSpace::Clip;
+    d.clipFromObject = f.clipFromWorld;
+    d.positions = casters.positions.subspan(range.firstVertex, range.vertexCount);
+    d.indices = rebased;
+    d.vertexAlphas = a.vertexAlphas;
+    d.texCoords = a.texCoords;
+    d.state = alphaTestedState(a);
+    d.state.cull = raster::CullMode::None;  // both faces cast
+    d.state.colorWriteMask = 0;
+    return d;
+}
+
+void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, std::span<const CasterRange> ranges, int size,
+               raster::Pipeline& gpu) {
     raster::FramebufferDesc desc;
     desc.widthPixels = desc.heightPixels = size;
     desc.samples = 1;
     desc.colorAttachment = false;  // depth only: nothing to allocate, clear or resolve for colour
+    desc.depthConvention = f.perspective ? raster::DepthConvention::Reversed : raster::DepthConvention::Standard;
     gpu.beginFrame(desc);
     raster::DrawCall d;
     d.space = raster::PositionSpace::Clip;
@@ -103,9 +138,31 @@ void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, int size, rast
     d.state.shading = raster::ShadingModel::ConstantColor;
     d.state.cull = raster::CullMode::None;  // both faces cast
     d.state.colorWriteMask = 0;
-    gpu.draw(d);
-    gpu.endFrame();
-    raster::resolveDepthPlane(gpu.framebuffer(), f.depth);
+    const bool alphaTested = std::any_of(ranges.begin(), ranges.end(), [](const CasterRange& r) { return r.alphaTest.has_value(); });
+    if (!alphaTested) {
+        gpu.draw(d);
+        gpu.endFrame();
+    } else {
+        // Runs of opaque ranges as one draw each; an alpha-tested range through its alpha test.
+        // Their indices rebased to the range's first vertex live until the frame ends.
+        std::vector<std::vector<uint32_t>> rebased;
+        for (size_t r = 0; r < ranges.size();) {
+            if (!ranges[r].alphaTest) {
+                size_t end = r;
+                while (end < ranges.size() && !ranges[end].alphaTest) ++end;
+                const size_t first = 3 * size_t(ranges[r].firstTriangle);
+                const size_t last = 3 * (size_t(ranges[end - 1].firstTriangle) + ranges[end - 1].triangleCount);
+                d.indices = casters.indices.subspan(first, last - first);
+                gpu.draw(d);
+                r = end;
+                continue;
+            }
+            gpu.draw(alphaTestedDraw(f, casters, ranges[r], rebased.emplace_back()));
+            ++r;
+        }
+        gpu.endFrame();
+    }
+    raster::resolveWindowDepth(gpu.framebuffer(), f.depth);
     raster::parallelFor(size_t(size), [&](size_t y) {
         float* row = f.depth.data() + y * size_t(size);
         for (int x = 0; x < size; ++x) row[x] = linearDepth(f, row[x]);
@@ -126,15 +183,16 @@ bool sameProjections(const std::vector<ShadowMapFace>& a, const std::vector<Shad
 }  // namespace
 
 ShadowMap ShadowMap::render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size,
-                            raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld) {
+                            raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld,
+                            std::span<const CasterRange> ranges) {
     ShadowMap map;
-    map.redraw(light, casters, bounds, size, gpu, focus, focusMarginWorld);
+    map.redraw(light, casters, bounds, size, gpu, focus, focusMarginWorld, 0, ranges);
     return map;
 }
 
 bool ShadowMap::redraw(const raster::Light& light, const TriangleMeshView& casters, const Aabb& bounds, int size,
                        raster::Pipeline& gpu, std::span<const glm::vec3> focus, float focusMarginWorld,
-                       uint64_t castersVersion) {
+                       uint64_t castersVersion, std::span<const CasterRange> ranges) {
     std::vector<ShadowMapFace> faces;
     switch (light.type) {
         case raster::LightType::Directional:
@@ -158,7 +216,7 @@ bool ShadowMap::redraw(const raster::Light& light, const TriangleMeshView& caste
     for (size_t i = 0; i < faces.size(); ++i) {
         ShadowMapFace& f = faces[i];
         if (i < faces_.size()) f.depth = std::move(faces_[i].depth);  // every texel is written below
-        drawDepth(f, casters, size, gpu);
+        drawDepth(f, casters, ranges, size, gpu);
     }
     size_ = size;
     lightPosition_ = light.position;

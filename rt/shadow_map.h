@@ -19,6 +19,7 @@
 #include "raster/draw.h"
 #include "raster/pipeline.h"
 #include "rt/aabb.h"
+#include "rt/caster_alpha_test.h"
 #include "rt/triangle_mesh.h"
 
 namespace cuberille::rt {
@@ -50,9 +51,11 @@ public:
     /// frame to frame). `sizeTexels` per side (per face for cube maps). A directional light's map
     /// covers only what `focus` spans across the light, widened by `focusMarginWorld` (the
     /// receivers in view, and how far sideways a soft shadow's rays reach); empty: every caster.
+    /// `ranges`: the casters' draws (CasterRange), an alpha-tested one drawn through its alpha
+    /// test so its holes let light through; empty: the casters are one opaque draw.
     static ShadowMap render(const raster::Light& light, const TriangleMeshView& casters, const Aabb& casterBounds,
                             int sizeTexels, raster::Pipeline& gpu, std::span<const glm::vec3> focus = {},
-                            float focusMarginWorld = 0.0f);
+                            float focusMarginWorld = 0.0f, std::span<const CasterRange> ranges = {});
     /// The same, drawn into this map: its faces' depth storage is reused (a renderer keeps one
     /// map per light from frame to frame, so a frame's map costs no fresh pages). `castersVersion`
     /// names the casters' current pose (ShadowCasters::version): when it, the size and every
@@ -61,7 +64,7 @@ public:
     /// Version 0 never matches: always drawn.
     bool redraw(const raster::Light& light, const TriangleMeshView& casters, const Aabb& casterBounds, int sizeTexels,
                 raster::Pipeline& gpu, std::span<const glm::vec3> focus = {}, float focusMarginWorld = 0.0f,
-                uint64_t castersVersion = 0);
+                uint64_t castersVersion = 0, std::span<const CasterRange> ranges = {});
 
     ShadowMapTexel locate(const glm::vec3& p) const;
     /// Linear depth at a texel; +inf outside the face or where no caster was drawn.

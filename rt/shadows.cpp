@@ -142,7 +142,7 @@ public:
     /// the map, the casters and the options).
     bool prepareMap(const ScreenSurfaces& surfaces) {
         const bool drawn = map_.redraw(light_, casters_.mesh, casters_.bounds, options_.mapSizeTexels, gpu_, focus(surfaces),
-                                       focusMargin(), casters_.version);
+                                       focusMargin(), casters_.version, casters_.ranges);
         if (drawn) marksOptions_.reset();
         if (options_.mode != ShadowMode::Hybrid && !options_.soft) return drawn;
         if (marksOptions_ && sameMarkingOptions(*marksOptions_, options_)) return drawn;
@@ -175,7 +175,7 @@ public:
             *marked = true;
             return trace(p, n, in, rays);
         }
-        const Receiver r = receiver(n, t);
+        const Receiver r = receiver(p, n, t);
         if (options_.mode == ShadowMode::Map) return options_.soft ? percentageCloser(r, t) : (litAt(r, t, 0, 0) ? 1.0f : 0.0f);
         int decision = 0;  // hybrid: what the 3x3 texels agree on, or -1
         if (potentiallyIncorrect(r, t, &decision)) {
@@ -236,12 +236,18 @@ private:
         float bias;
     };
 
-    Receiver receiver(const glm::vec3& n, const ShadowMapTexel& t) const {
+    Receiver receiver(const glm::vec3& p, const glm::vec3& n, const ShadowMapTexel& t) const {
         const ShadowMapFace& face = map_.face(t.face);
         const glm::vec3 q(t.position, t.receiverDepth);  // where locate found the point
         const glm::vec3 nv = glm::mat3(face.viewFromWorld) * n;
-        // The receiver's plane, carried one texel over: view x is texel x, view y is texel -y.
-        const float nz = std::max(nv.z, 0.05f);  // steeper than 20 texels of depth per texel: clamp
+        // The receiver's plane, carried one texel over: view x is texel x, view y is texel -y. Its
+        // depth changes by the normal's sideways component times the texel's width, over how
+        // squarely it faces the light's ray: for an orthographic face that ray is the view axis
+        // (nv.z); for a perspective one it is the ray through the receiver, n . (light - p) /
+        // depth, which is nv.z on the axis only (off it, near a spot light's cone edge, nv.z
+        // alone misjudges a grazing receiver's slope severalfold).
+        const float facing = face.perspective ? glm::dot(nv, -glm::vec3(face.viewFromWorld * glm::vec4(p, 1.0f))) / q.z : nv.z;
+        const float nz = std::max(facing, 0.05f);  // steeper than 20 texels of depth per texel: clamp
         const float depthPerTexel = t.texelWorld / nz;  // times the normal's x, or -y: the plane's slopes
         Receiver r;
         r.qx = q.x;
@@ -562,11 +568,32 @@ private:
                 if (nearSilhouette[(*positionId)[casters_.mesh.indices[3 * t + c]]]) return true;
             return false;
         };
+        // Alpha-tested casters (rt/caster_alpha_test.h) are marked whole, thin or not: their holes
+        // are not in the map at a shadow ray's level of detail, so every receiver behind one
+        // takes rays. One that reaches behind the face's near plane cannot be carried into the
+        // map; it marks the whole face.
+        const HitFilter* alpha = casters_.rays.filter;
+        const float nearPlane = map_.face(f).nearPlane;
+        std::atomic<bool> wholeFace{false};
         std::vector<std::vector<uint32_t>> thin((count + kChunk - 1) / kChunk);
         raster::parallelFor(thin.size(), [&](size_t chunk) {
-            for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t)
+            for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t) {
+                if (alpha && alpha->triangle[t] == HitFilter::kAlphaTested) {
+                    int inFront = 0;
+                    for (int c = 0; c < 3; ++c) inFront += projected[casters_.mesh.indices[3 * t + c]].z > nearPlane;
+                    if (inFront == 3) thin[chunk].push_back(uint32_t(t));
+                    else if (inFront > 0) wholeFace.store(true, std::memory_order_relaxed);
+                    continue;
+                }
                 if (atSilhouette(t) && isThin(f, t, projected)) thin[chunk].push_back(uint32_t(t));
+            }
         });
+        if (wholeFace.load()) {
+            std::fill(marks.thinDepth.begin(), marks.thinDepth.end(), nearPlane);
+            size_t marked = 0;
+            for (const auto& chunk : thin) marked += chunk.size();
+            return marked + 1;  // and the one that reached behind
+        }
         // Marking is a minimum, the same in any order: thin triangles mark in parallel, each
         // texel's nearest depth kept with a compare-and-swap.
         std::vector<uint32_t> all;

@@ -119,6 +119,9 @@ struct ShadowCasters {
     /// Auto: finds the adjacency the first time a light is given hybrid (null `adjacency` until
     /// then), so a frame that ray-traces every light never builds it.
     std::function<const MeshAdjacency*()> adjacencyOnDemand;
+    /// The casters' draws over `mesh` (rt/caster_alpha_test.h): the maps draw an alpha-tested one
+    /// through its alpha test. Empty: one opaque draw. (The rays' alpha test is rays.filter.)
+    std::span<const CasterRange> ranges = {};
 };
 
 /// A version no casters have had before in this process.

@@ -467,8 +467,9 @@ RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const R
     return walk<false>(grid, mesh, ray, counters, filter);
 }
 
-bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters) {
-    return walk<true>(grid, mesh, ray, counters).hit();
+bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters,
+            const HitFilter* filter) {
+    return walk<true>(grid, mesh, ray, counters, filter).hit();
 }
 
 void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<RayHit> hits,
@@ -477,11 +478,11 @@ void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
 }
 
 void anyHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<uint8_t> occluded,
-             GridCounters* counters) {
+             GridCounters* counters, const HitFilter* filter) {
     RayHit hits[kMaxGridPacketRays];
     for (size_t first = 0; first < rays.size(); first += kMaxGridPacketRays) {
         const size_t count = std::min(rays.size() - first, size_t(kMaxGridPacketRays));
-        tracePacket<true>(grid, mesh, rays.subspan(first, count), std::span(hits, count), counters);
+        tracePacket<true>(grid, mesh, rays.subspan(first, count), std::span(hits, count), counters, filter);
         for (size_t i = 0; i < count; ++i) occluded[first + i] = hits[i].hit();
     }
 }

@@ -90,10 +90,11 @@ struct GridCounters {
 
 /// Closest hit and any hit by the 3D-DDA, leaving an empty macrocell in one step; exactly
 /// closestHitBruteForce's and anyHitBruteForce's answers (rt/ray_query.h).
-/// `filter`: what the search leaves out (rt/ray.h, HitFilter), for closest hits.
+/// `filter`: what the search leaves out (rt/ray.h, HitFilter).
 RayHit closestHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr,
                   const HitFilter* filter = nullptr);
-bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr);
+bool anyHit(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ray, GridCounters* counters = nullptr,
+            const HitFilter* filter = nullptr);
 
 /// The most rays one packet holds: 8x8, the paper's best size below 250k triangles (§4.1).
 inline constexpr int kMaxGridPacketRays = 64;
@@ -116,6 +117,6 @@ void closestHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
 /// Any hit for a packet (shadow rays toward one light, the paper's shadow packets): occluded[i] is
 /// exactly anyHit(rays[i]); a ray retires at its first hit.
 void anyHits(const UniformGrid& grid, const TriangleMeshView& mesh, std::span<const Ray> rays, std::span<uint8_t> occluded,
-             GridCounters* counters = nullptr);
+             GridCounters* counters = nullptr, const HitFilter* filter = nullptr);
 
 }  // namespace cuberille::rt

@@ -91,7 +91,7 @@ RayHit closestHit(const WideBvh& bvh, const Ray& ray);
 RayHit closestHit(const WideBvh& bvh, const Ray& ray, TraversalCounters& counters);
 /// The closest hit among the triangles not skipped (rt/ray.h, HitFilter).
 RayHit closestHit(const WideBvh& bvh, const Ray& ray, const HitFilter& filter);
-bool anyHit(const WideBvh& bvh, const Ray& ray);
+bool anyHit(const WideBvh& bvh, const Ray& ray, const HitFilter* filter = nullptr);
 
 /// The most rays one packet of closestHits() holds: an 8x8 tile of camera rays.
 inline constexpr int kMaxWidePacketRays = 64;
@@ -109,6 +109,6 @@ void closestHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<RayHit
 
 /// Shadow and occlusion rays as packets the same way (a tile's surface points toward one light):
 /// occluded[i] is exactly anyHit(bvh, rays[i]); a ray leaves its packet at its first hit.
-void anyHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<uint8_t> occluded);
+void anyHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<uint8_t> occluded, const HitFilter* filter = nullptr);
 
 }  // namespace cuberille::rt

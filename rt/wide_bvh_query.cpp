@@ -428,7 +428,7 @@ void packetClosestHits(const WideBvh& bvh, const Ray* rays, RayHit* hits, int n,
 // Exact as any-hit is: a ray is occluded when some triangle it reaches is hit, and every leaf a
 // hit of the ray lies in is reached for it while it is in the packet (its ancestors pass the packet
 // test because they pass its own, with a far value no nearer than its tMax).
-void packetAnyHits(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n) {
+void packetAnyHits(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n, const HitFilter* filter) {
     const PacketRays packet(rays, n);
     uint64_t active = packet.all;
     const auto packetFar = [&] {
@@ -456,7 +456,7 @@ void packetAnyHits(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n
                     for (unsigned found = hitTriangles(*packet.tests[i], group, ray.tMin, ray.tMax, t, u, v); found != 0;
                          found &= found - 1) {
                         RayHit candidate;
-                        if (!laneHit(*packet.tests[i], group, __builtin_ctz(found), ray, ray.tMax, t, u, v, nullptr, candidate)) continue;
+                        if (!laneHit(*packet.tests[i], group, __builtin_ctz(found), ray, ray.tMax, t, u, v, filter, candidate)) continue;
                         occluded[i] = 1;
                         active &= ~(uint64_t(1) << i);
                         break;
@@ -495,9 +495,11 @@ RayHit closestHitOnTarget(const WideBvh& bvh, const Ray& ray, TraversalCounters*
     return traverse<false>(bvh, ray, counters, filter);
 }
 
-bool anyHitOnTarget(const WideBvh& bvh, const Ray& ray) { return traverse<true>(bvh, ray, nullptr).hit(); }
+bool anyHitOnTarget(const WideBvh& bvh, const Ray& ray, const HitFilter* filter) { return traverse<true>(bvh, ray, nullptr, filter).hit(); }
 
-void anyHitsOnTarget(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n) { packetAnyHits(bvh, rays, occluded, n); }
+void anyHitsOnTarget(const WideBvh& bvh, const Ray* rays, uint8_t* occluded, int n, const HitFilter* filter) {
+    packetAnyHits(bvh, rays, occluded, n, filter);
+}
 
 }  // namespace HWY_NAMESPACE
 }  // namespace cuberille::rt
@@ -521,7 +523,9 @@ RayHit closestHit(const WideBvh& bvh, const Ray& ray, const HitFilter& filter) {
     return HWY_DYNAMIC_DISPATCH(closestHitOnTarget)(bvh, ray, nullptr, &filter);
 }
 
-bool anyHit(const WideBvh& bvh, const Ray& ray) { return HWY_DYNAMIC_DISPATCH(anyHitOnTarget)(bvh, ray); }
+bool anyHit(const WideBvh& bvh, const Ray& ray, const HitFilter* filter) {
+    return HWY_DYNAMIC_DISPATCH(anyHitOnTarget)(bvh, ray, filter);
+}
 
 namespace {
 
@@ -554,15 +558,15 @@ void closestHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<RayHit
     }
 }
 
-void anyHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<uint8_t> occluded) {
+void anyHits(const WideBvh& bvh, std::span<const Ray> rays, std::span<uint8_t> occluded, const HitFilter* filter) {
     for (size_t first = 0; first < rays.size(); first += kMaxWidePacketRays) {
         const size_t count = std::min(rays.size() - first, size_t(kMaxWidePacketRays));
         const std::span<const Ray> packet = rays.subspan(first, count);
         if (travelsAsOnePacket(packet)) {
-            HWY_DYNAMIC_DISPATCH(anyHitsOnTarget)(bvh, packet.data(), occluded.data() + first, int(count));
+            HWY_DYNAMIC_DISPATCH(anyHitsOnTarget)(bvh, packet.data(), occluded.data() + first, int(count), filter);
             continue;
         }
-        for (size_t i = 0; i < count; ++i) occluded[first + i] = HWY_DYNAMIC_DISPATCH(anyHitOnTarget)(bvh, packet[i]);
+        for (size_t i = 0; i < count; ++i) occluded[first + i] = HWY_DYNAMIC_DISPATCH(anyHitOnTarget)(bvh, packet[i], filter);
     }
 }
 

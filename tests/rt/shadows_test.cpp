@@ -5,10 +5,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <memory>
+#include <string>
+
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "raster/parallel.h"
+#include "raster/texture.h"
 #include "rt/bvh_build.h"
+#include "rt/caster_alpha_test.h"
 #include "rt/ray.h"
 #include "rt/screen_surfaces.h"
 #include "rt/shadow_map.h"
@@ -41,22 +47,28 @@ struct Rendered {
 
 /// The stage as the renderer runs it (hybrid with the casters' edge adjacency), or with every
 /// thin triangle marked (`silhouettesOnly` false).
+/// `ranges`: the casters' draws, with their alpha tests (empty: one opaque range).
 Rendered shadowsOf(const OwnedMesh& scene, const raster::Lighting& lighting, const ShadowOptions& options, int width = 320,
-                   int height = 240, bool silhouettesOnly = true, CasterAccel accel = CasterAccel::Bvh) {
+                   int height = 240, bool silhouettesOnly = true, CasterAccel accel = CasterAccel::Bvh,
+                   std::span<const CasterRange> ranges = {}) {
     const TriangleMeshView mesh = scene.view();
     const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);  // a static scene's: never updated
     const UniformGrid grid = accel == CasterAccel::Grid ? buildUniformGrid(mesh) : UniformGrid{};
-    const CasterRays rays = accel == CasterAccel::Grid ? CasterRays{.grid = &grid, .mesh = mesh} : CasterRays{.bvh = &bvh};
+    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None, {}};
+    if (ranges.empty()) ranges = std::span(&all, 1);
+    CasterAlphaFilter alpha;
+    alpha.reset(ranges, mesh.indices);
+    const CasterRays rays = accel == CasterAccel::Grid ? CasterRays{.grid = &grid, .mesh = mesh, .filter = alpha.filter()}
+                                                       : CasterRays{.bvh = &bvh, .mesh = mesh, .filter = alpha.filter()};
     const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
     const glm::mat4 clipFromWorld = glm::perspectiveRH_ZO(glm::radians(50.0f), float(width) / float(height), 0.1f, 50.0f) *
                                     glm::lookAtRH(glm::vec3(3.0f, 4.0f, 6.0f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
-    const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None, {}};
     Rendered r;
     raster::Pipeline gpu;
-    r.surfaces = findScreenSurfaces(mesh, std::span(&all, 1), clipFromWorld, width, height, gpu);
+    r.surfaces = findScreenSurfaces(mesh, ranges, clipFromWorld, width, height, gpu);
     r.masks = computeShadows(r.surfaces, lighting,
                              {.mesh = mesh, .rays = rays, .bounds = meshBounds(mesh),
-                              .adjacency = silhouettesOnly ? &adjacency : nullptr, .adjacencyOnDemand = {}},
+                              .adjacency = silhouettesOnly ? &adjacency : nullptr, .adjacencyOnDemand = {}, .ranges = ranges},
                              options, gpu);
     return r;
 }
@@ -77,6 +89,18 @@ raster::Lighting pointAndSpotLights() {
     lights.lights[1].intensity = glm::vec3(5.0f);
     lights.lights[1].cosOuterCone = 0.8f;
     return lights;
+}
+
+/// The brute-force references' shadow ray from a receiver to a light, from the same offset origin
+/// the stage uses; false where the light cannot reach it (facing away, outside a spot's cone).
+bool referenceShadowRay(const Surface& s, const raster::Light& light, float rayOffset, Ray& ray) {
+    const bool directional = light.type == raster::LightType::Directional;
+    const glm::vec3 toLight = directional ? -glm::normalize(light.direction) : glm::normalize(light.position - s.position);
+    const bool inCone = light.type != raster::LightType::Spot || glm::dot(light.direction, -toLight) > light.cosOuterCone;
+    if (!(glm::dot(s.normal, toLight) > 0.0f) || !inCone) return false;
+    ray = Ray{s.position + s.normal * rayOffset, toLight, 0.0f,
+              directional ? std::numeric_limits<float>::infinity() : glm::distance(light.position, s.position) * (1.0f - 1e-4f)};
+    return true;
 }
 
 TEST(Shadows, HybridEqualsRayTracedOnEveryPixel) {
@@ -131,6 +155,169 @@ TEST(Shadows, AWireThinnerThanATexelShadowsInHybridWhereTheMapMissesIt) {
     EXPECT_EQ(countDifferent(reference.masks.visibility[0], hybrid.masks.visibility[0]), 0u);
 }
 
+// An alpha-tested caster (glTF's alphaMode MASK: a fence, a leaf) blocks light only where its
+// alpha passes the cutoff. A checkered quad (8 x 8 cells, alternately transparent and opaque,
+// magnified nearest so each shadow ray's alpha is its cell's exactly) hangs over the ground.
+// Ray-traced shadows, for every light type, agree with brute force that reads each cell from
+// the hit's world position (not the barycentrics the stage uses), but for rays grazing a cell's
+// border, where the two roundings part (bounded at 1e-3 of the receivers, as the opaque
+// reference); hybrid equals ray-traced on every pixel, hard and soft, at a coarse and a fine map,
+// because each alpha-tested triangle marks all the texels it covers; the grid gives the BVH's
+// masks; map mode, drawing the board through its alpha test, casts its holes too. Without the
+// alpha test the quad would cast one square shadow.
+TEST(Shadows, AlphaTestedCastersLetLightThroughTheirHolesInEveryRayMode) {
+    constexpr int kCells = 8;
+    constexpr float kHalf = 1.5f, kHeight = 1.2f;
+    OwnedMesh scene;
+    addBox(scene, {-4.0f, -0.1f, -4.0f}, {4.0f, 0.0f, 4.0f});
+    const uint32_t groundTriangles = uint32_t(scene.indices.size() / 3), groundVertices = uint32_t(scene.positions.size());
+    for (const glm::vec2 c : {glm::vec2(-1, -1), glm::vec2(1, -1), glm::vec2(1, 1), glm::vec2(-1, 1)})
+        scene.positions.push_back({kHalf * c.x, kHeight, kHalf * c.y});
+    for (const uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) scene.indices.push_back(groundVertices + i);
+    std::vector<glm::vec2> uvs;
+    for (uint32_t v = groundVertices; v < scene.positions.size(); ++v)
+        uvs.push_back({(scene.positions[v].x + kHalf) / (2 * kHalf), (scene.positions[v].z + kHalf) / (2 * kHalf)});
+    std::vector<uint8_t> texels;
+    for (int y = 0; y < kCells; ++y)
+        for (int x = 0; x < kCells; ++x) texels.insert(texels.end(), {200, 200, 200, uint8_t((x + y) % 2 ? 255 : 0)});
+    const raster::Texture checker(kCells, kCells, texels, raster::TexelFormat::Srgb8, raster::WrapMode::ClampToEdge,
+                                  raster::WrapMode::ClampToEdge, {.magnifyNearest = true, .minify = raster::MinFilter::Nearest});
+    const std::shared_ptr<const raster::Texture> white = alphaTestTexture(checker);
+    const CasterRange ranges[2] = {
+        {0, groundTriangles, 0, groundVertices, raster::CullMode::None, {}},
+        {groundTriangles, 2, groundVertices, 4, raster::CullMode::None,
+         CasterAlphaTest{.cutoff = 0.5f, .factor = 1.0f, .vertexAlphas = {}, .texCoords = uvs, .alphaOnly = {white.get(), {}}}}};
+    const auto opaqueCellAt = [&](const glm::vec3& p) {
+        const int x = std::clamp(int((p.x + kHalf) / (2 * kHalf) * kCells), 0, kCells - 1);
+        const int y = std::clamp(int((p.z + kHalf) / (2 * kHalf) * kCells), 0, kCells - 1);
+        return (x + y) % 2 == 1;
+    };
+    raster::Lighting lights = pointAndSpotLights();
+    lights.lights[2] = sun().lights[0];
+    lights.lightCount = 3;
+    const TriangleMeshView mesh = scene.view();
+    ShadowOptions options;
+    options.mode = ShadowMode::RayTraced;
+    const Rendered reference = shadowsOf(scene, lights, options, 320, 240, true, CasterAccel::Bvh, ranges);
+    const Rendered opaque = shadowsOf(scene, lights, options, 320, 240);
+    const float rayOffset = 1e-4f * std::max(0.5f * glm::length(meshBounds(mesh).extent()), 1e-3f);  // as the stage offsets
+    for (int l = 0; l < 3; ++l) {
+        const raster::Light& light = lights.lights[l];
+        size_t tested = 0, throughHoles = 0, differ = 0;
+        for (size_t i = 0; i < reference.surfaces.triangle.size(); ++i) {
+            Surface s;
+            const int x = int(i % size_t(reference.surfaces.width)), y = int(i / size_t(reference.surfaces.width));
+            if (!reference.surfaces.covered(i) || !reference.surfaces.surfaceAt(x, y, s)) continue;
+            Ray ray;
+            if (!referenceShadowRay(s, light, rayOffset, ray)) continue;
+            const WatertightRay test(ray);
+            bool blocked = false, blockedIfOpaque = false;
+            for (uint32_t t = 0; t < mesh.triangleCount() && !blocked; ++t) {
+                RayHit hit;
+                if (!test.intersect(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), ray.tMin, ray.tMax, &hit)) continue;
+                blockedIfOpaque = true;
+                blocked = t < groundTriangles || opaqueCellAt(ray.origin + hit.t * ray.direction);
+            }
+            ++tested;
+            throughHoles += blockedIfOpaque && !blocked;
+            differ += (reference.masks.visibility[size_t(l)][i] == 0.0f) != blocked;
+        }
+        EXPECT_GT(throughHoles, 500u) << "light " << l << ": light reaches the ground through the holes";
+        EXPECT_LE(double(differ), 1e-3 * double(tested)) << "light " << l << ": " << differ << " of " << tested << " differ";
+        EXPECT_GT(countDifferent(reference.masks.visibility[size_t(l)], opaque.masks.visibility[size_t(l)]), 500u) << "light " << l;
+    }
+    for (const bool soft : {false, true})
+        for (const int mapSize : {256, 2048}) {
+            ShadowOptions o;
+            o.soft = soft;
+            o.lightRadius = 0.05f;
+            o.softSamplesPerSide = 3;
+            o.mapSizeTexels = mapSize;
+            o.mode = ShadowMode::RayTraced;
+            const Rendered traced = shadowsOf(scene, lights, o, 160, 120, true, CasterAccel::Bvh, ranges);
+            const Rendered grid = shadowsOf(scene, lights, o, 160, 120, true, CasterAccel::Grid, ranges);
+            o.mode = ShadowMode::Hybrid;
+            const Rendered hybrid = shadowsOf(scene, lights, o, 160, 120, true, CasterAccel::Bvh, ranges);
+            for (int l = 0; l < 3; ++l) {
+                const std::string what = std::string(soft ? "soft" : "hard") + ", map " + std::to_string(mapSize) + ", light " + std::to_string(l);
+                EXPECT_EQ(countDifferent(traced.masks.visibility[size_t(l)], hybrid.masks.visibility[size_t(l)]), 0u) << what;
+                EXPECT_EQ(traced.masks.visibility[size_t(l)], grid.masks.visibility[size_t(l)]) << what;
+            }
+            EXPECT_LT(hybrid.masks.stats.markedPixels, hybrid.masks.stats.receiverPixels) << "the map still decides somewhere";
+            if (soft) continue;
+            // Map mode draws the board through its alpha test too: its holes are in the map, so
+            // it parts from the rays only where a map parts anyway (edges), far less than a map
+            // of the board drawn opaque.
+            o.mode = ShadowMode::Map;
+            const Rendered map = shadowsOf(scene, lights, o, 160, 120, true, CasterAccel::Bvh, ranges);
+            const CasterRange opaqueRanges[2] = {ranges[0], {groundTriangles, 2, groundVertices, 4, raster::CullMode::None, {}}};
+            const Rendered opaqueMap = shadowsOf(scene, lights, o, 160, 120, true, CasterAccel::Bvh, opaqueRanges);
+            for (int l = 0; l < 3; ++l) {
+                const size_t throughHoles = countDifferent(traced.masks.visibility[size_t(l)], map.masks.visibility[size_t(l)]);
+                const size_t asIfOpaque = countDifferent(traced.masks.visibility[size_t(l)], opaqueMap.masks.visibility[size_t(l)]);
+                EXPECT_LT(throughHoles * 4, asIfOpaque) << "map " << mapSize << ", light " << l;
+            }
+        }
+}
+
+// A spot or point light's map is a perspective projection whose near plane lies 1e4 times nearer
+// than its far one. Stored as standard depth, a receiver near the far end was resolved to about a
+// hundredth of its distance, coarser than a 2048-texel map's receiver bias: on a ground with a
+// board over it, hybrid shadowed 12 receivers at a spot light's cone edge that the rays found
+// lit. Stored reversed (rt/shadow_map.cpp), the depths keep float's relative precision, and
+// hybrid is the ray-traced image at every size, with the map's depth within two millionths of
+// the distance at which each texel centre's ray from the light meets the ground.
+TEST(Shadows, PerspectiveMapsKeepTheirDepthPrecisionAtTheFarEnd) {
+    OwnedMesh scene;
+    addBox(scene, {-4.0f, -0.1f, -4.0f}, {4.0f, 0.0f, 4.0f});
+    addBox(scene, {-1.5f, 1.2f, -1.5f}, {1.5f, 1.21f, 1.5f});
+    const raster::Lighting lights = pointAndSpotLights();
+    for (const int mapSize : {256, 2048, 4096}) {
+        ShadowOptions options;
+        options.mapSizeTexels = mapSize;
+        options.mode = ShadowMode::RayTraced;
+        const Rendered reference = shadowsOf(scene, lights, options);
+        options.mode = ShadowMode::Hybrid;
+        const Rendered hybrid = shadowsOf(scene, lights, options);
+        for (int l = 0; l < 2; ++l)
+            EXPECT_EQ(countDifferent(reference.masks.visibility[size_t(l)], hybrid.masks.visibility[size_t(l)]), 0u)
+                << "map " << mapSize << ", light " << l;
+    }
+    // The ground's top face under the spot light, texel by texel: the ray through each texel
+    // centre met with the plane y = 0, against the depth the map stored there.
+    raster::Pipeline gpu;
+    const ShadowMap map = ShadowMap::render(lights.lights[1], scene.view(), meshBounds(scene.view()), 2048, gpu);
+    const ShadowMapFace& face = map.face(0);
+    const glm::dmat4 worldFromView = glm::inverse(glm::dmat4(face.viewFromWorld));
+    double worst = 0.0;
+    size_t compared = 0;
+    for (int y = 0; y < map.size(); y += 7)
+        for (int x = 0; x < map.size(); x += 7) {
+            // The points at depths 1 and 2 on the texel centre's ray from the light (view x is
+            // texel x, view y texel -y; halfExtent is the tangent of half the field of view).
+            const double a = (2.0 * (x + 0.5) / map.size() - 1.0) * face.halfExtent;
+            const double b = (1.0 - 2.0 * (y + 0.5) / map.size()) * face.halfExtent;
+            const glm::dvec3 p(worldFromView * glm::dvec4(a, b, -1.0, 1.0)), q(worldFromView * glm::dvec4(2.0 * a, 2.0 * b, -2.0, 1.0));
+            if (!(q.y < p.y)) continue;
+            // The depth where the ray reaches height h: along it, depth grows as the parameter does.
+            const auto depthAtHeight = [&](double h) { return 1.0 + (p.y - h) / (p.y - q.y); };
+            const auto pointAt = [&](double depth) { return p + (q - p) * (depth - 1.0); };
+            const glm::dvec3 onBoard = pointAt(depthAtHeight(1.21));
+            if (std::abs(onBoard.x) <= 1.6 && std::abs(onBoard.z) <= 1.6) continue;  // the board (or its rim) hides the ground
+            const double depth = depthAtHeight(0.0);
+            const glm::dvec3 onGround = pointAt(depth);
+            if (std::abs(onGround.x) > 3.9 || std::abs(onGround.z) > 3.9) continue;  // off the ground (or its rim)
+            const float stored = map.depthAt(0, x, y);
+            if (stored == ShadowMap::kEmpty) continue;
+            worst = std::max(worst, std::abs(double(stored) - depth) / depth);
+            ++compared;
+        }
+    EXPECT_GT(compared, 1000u);
+    // Measured 8.4e-7: the plane's interpolation rounds a few times terms as large as the depth
+    // itself (6e-8 each), and linear depth comes back through one more division.
+    EXPECT_LT(worst, 2e-6) << "relative error of the stored depth";
+}
+
 TEST(Shadows, TheReferenceHasShadowsAndLight) {
     ShadowOptions options;
     options.mode = ShadowMode::RayTraced;
@@ -167,15 +354,11 @@ TEST(Shadows, TheReferenceEqualsBruteForceRaysForEveryLightType) {
             const int x = int(i % size_t(r.surfaces.width)), y = int(i / size_t(r.surfaces.width));
             if (!r.surfaces.covered(i) || !r.surfaces.surfaceAt(x, y, s)) continue;
             const float v = r.masks.visibility[size_t(l)][i];
-            const bool directional = light.type == raster::LightType::Directional;
-            const glm::vec3 toLight = directional ? -glm::normalize(light.direction) : glm::normalize(light.position - s.position);
-            const bool inCone = light.type != raster::LightType::Spot || glm::dot(light.direction, -toLight) > light.cosOuterCone;
-            if (!(glm::dot(s.normal, toLight) > 0.0f) || !inCone) {
+            Ray ray;
+            if (!referenceShadowRay(s, light, rayOffset, ray)) {
                 EXPECT_EQ(v, 0.0f) << "light " << l << " pixel " << i << ": facing away or outside the cone";
                 continue;
             }
-            const Ray ray{s.position + s.normal * rayOffset, toLight, 0.0f,
-                          directional ? std::numeric_limits<float>::infinity() : glm::distance(light.position, s.position) * (1.0f - 1e-4f)};
             const WatertightRay test(ray);
             bool blocked = false;
             for (size_t t = 0; t < mesh.triangleCount() && !blocked; ++t) {
@@ -331,7 +514,7 @@ TEST(Shadows, MasksDrawnOverAnEarlierFramesEqualFreshOnes) {
     const TriangleMeshView mesh = scene.view();
     const DeformingBvh bvh(mesh, BvhUpdateMethod::Refit);
     const MeshAdjacency adjacency = buildMeshAdjacency(mesh);
-    const ShadowCasters casters{.mesh = mesh, .rays = {.bvh = &bvh}, .bounds = meshBounds(mesh), .adjacency = &adjacency, .adjacencyOnDemand = {}};
+    const ShadowCasters casters{.mesh = mesh, .rays = {.bvh = &bvh, .mesh = mesh}, .bounds = meshBounds(mesh), .adjacency = &adjacency, .adjacencyOnDemand = {}};
     const CasterRange all{0, uint32_t(mesh.triangleCount()), 0, uint32_t(mesh.positions.size()), raster::CullMode::None, {}};
     raster::Pipeline gpu;
     auto surfacesFrom = [&](glm::vec3 eye) {
