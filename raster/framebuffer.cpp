@@ -4,7 +4,19 @@
 #include <limits>
 #include <stdexcept>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 namespace cuberille::raster {
+
+glm::mat4 perspectiveProjection(float fovyRadians, float aspect, float nearPlane, float farPlane, DepthConvention convention) {
+    glm::mat4 m = glm::perspectiveRH_ZO(fovyRadians, aspect, nearPlane, farPlane);
+    if (convention == DepthConvention::Reversed) {
+        const double n = nearPlane, f = farPlane;
+        m[2][2] = float(n / (f - n));
+        m[3][2] = float(f * n / (f - n));
+    }
+    return m;
+}
 
 void Framebuffer::reset(const FramebufferDesc& desc) {
     if (desc.widthPixels <= 0 || desc.heightPixels <= 0 ||

@@ -27,6 +27,12 @@ namespace cuberille::raster {
 /// hierarchical Z and every bound keep one direction (raster/depth.h).
 enum class DepthConvention : uint8_t { Standard, Reversed };
 
+/// glm::perspectiveRH_ZO in a depth convention. Reversed: z_clip = n/(f-n) z_view + f n/(f-n)
+/// and w = -z_view, so at view distance d the depth is n (f - d) / ((f - n) d), 1 at the near
+/// plane and 0 at the far one, falling like 1/d; built directly rather than as 1 - z, whose
+/// cancellation near 1 would throw away the precision reversed depth exists for.
+glm::mat4 perspectiveProjection(float fovyRadians, float aspect, float nearPlane, float farPlane, DepthConvention convention);
+
 struct FramebufferDesc {
     int widthPixels = 0;
     int heightPixels = 0;

@@ -9,7 +9,7 @@ namespace cuberille::rt {
 void CasterAlphaFilter::reset(std::span<const CasterRange> ranges, std::span<const uint32_t> indices) {
     ranges_ = ranges;
     indices_ = indices;
-    alphaTested_ = std::any_of(ranges.begin(), ranges.end(), [](const CasterRange& r) { return r.alphaTest.has_value(); });
+    alphaTested_ = anyAlphaTested(ranges);
     entries_.clear();
     if (!alphaTested_) return;
     entries_.assign(indices.size() / 3, HitFilter::kKept);
@@ -17,6 +17,10 @@ void CasterAlphaFilter::reset(std::span<const CasterRange> ranges, std::span<con
         if (r.alphaTest)
             std::fill_n(entries_.begin() + r.firstTriangle, r.triangleCount, HitFilter::kAlphaTested);
     filter_ = {entries_, &passesFilter, this};
+}
+
+bool anyAlphaTested(std::span<const CasterRange> ranges) {
+    return std::any_of(ranges.begin(), ranges.end(), [](const CasterRange& r) { return r.alphaTest.has_value(); });
 }
 
 raster::DrawState alphaTestedState(const CasterAlphaTest& a) {

@@ -51,6 +51,9 @@ struct CasterRange {
     std::optional<CasterAlphaTest> alphaTest;  // an alpha-tested range: its holes are seen and lit through
 };
 
+/// Whether any of the ranges is alpha-tested (else the casters are drawn and traced as opaque).
+bool anyAlphaTested(std::span<const CasterRange> ranges);
+
 /// The draw state that runs an alpha-tested range through the shade stage's alpha test and no
 /// more: Unlit and white (the factor's alpha kept), its white-coloured texture where the range has
 /// coordinates, cut at the cutoff. The caller sets the culling and colour writes.
@@ -73,7 +76,7 @@ public:
     /// The rays' filter; null when no caster is alpha tested (the rays then test nothing more).
     const HitFilter* filter() const { return alphaTested_ ? &filter_ : nullptr; }
     /// Whether caster triangle t is alpha tested (false for every t when filter() is null).
-    bool alphaTested(uint32_t t) const { return alphaTested_ && entries_[t] == HitFilter::kAlphaTested; }
+    bool alphaTested(uint32_t t) const { return alphaTested_ && filter_.alphaTests(t); }
 
     /// Whether the material's alpha at weights (u, v) of triangle t's second and third vertices
     /// passes its range's cutoff.

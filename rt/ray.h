@@ -158,8 +158,9 @@ struct HitFilter {
     const void* context = nullptr;
 
     bool skips(uint32_t t) const { return triangle[t] == kSkipped; }
+    bool alphaTests(uint32_t t) const { return triangle[t] == kAlphaTested; }
     bool keepsHit(uint32_t t, const Ray& ray, float u, float v) const {
-        return triangle[t] != kAlphaTested || passes(context, t, ray, u, v);
+        return !alphaTests(t) || passes(context, t, ray, u, v);
     }
 };
 

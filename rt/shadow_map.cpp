@@ -5,6 +5,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "raster/framebuffer.h"
 #include "raster/parallel.h"
 #include "raster/resolve.h"
 
@@ -66,14 +67,11 @@ ShadowMapFace perspectiveFace(const glm::vec3& position, const glm::vec3& forwar
     f.halfExtent = std::tan(halfAngle);
     // Reversed depth (raster/framebuffer.h): the near plane lies 1e4 times nearer than the far one,
     // and standard depth's floats near 1 then resolve a receiver at the far end of a spot light
-    // only to about a hundredth of its distance — coarser than the receiver bias of a 2048-texel
+    // only to about a thousandth of its distance — coarser than the receiver bias of a 2048-texel
     // map, so hybrid shadowed lit receivers there. Reversed, a depth keeps float's relative
-    // precision at every distance. Built directly, as scene::Camera builds it.
-    glm::mat4 projection = glm::perspectiveRH_ZO(2.0f * halfAngle, 1.0f, f.nearPlane, f.farPlane);
-    const double n = f.nearPlane, far = f.farPlane;
-    projection[2][2] = float(n / (far - n));
-    projection[3][2] = float(far * n / (far - n));
-    f.clipFromWorld = projection * f.viewFromWorld;
+    // precision at every distance.
+    f.clipFromWorld = raster::perspectiveProjection(2.0f * halfAngle, 1.0f, f.nearPlane, f.farPlane, raster::DepthConvention::Reversed) *
+                      f.viewFromWorld;
     return f;
 }
 
@@ -138,14 +136,12 @@ void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, std::span<cons
     d.state.shading = raster::ShadingModel::ConstantColor;
     d.state.cull = raster::CullMode::None;  // both faces cast
     d.state.colorWriteMask = 0;
-    const bool alphaTested = std::any_of(ranges.begin(), ranges.end(), [](const CasterRange& r) { return r.alphaTest.has_value(); });
-    if (!alphaTested) {
+    std::vector<std::vector<uint32_t>> rebased;  // alpha-tested ranges' indices, alive until the frame ends
+    if (!anyAlphaTested(ranges)) {
         gpu.draw(d);
-        gpu.endFrame();
     } else {
-        // Runs of opaque ranges as one draw each; an alpha-tested range through its alpha test.
-        // Their indices rebased to the range's first vertex live until the frame ends.
-        std::vector<std::vector<uint32_t>> rebased;
+        // Runs of opaque ranges as one draw each; an alpha-tested range through its alpha test,
+        // its indices rebased to its first vertex.
         for (size_t r = 0; r < ranges.size();) {
             if (!ranges[r].alphaTest) {
                 size_t end = r;
@@ -160,8 +156,8 @@ void drawDepth(ShadowMapFace& f, const TriangleMeshView& casters, std::span<cons
             gpu.draw(alphaTestedDraw(f, casters, ranges[r], rebased.emplace_back()));
             ++r;
         }
-        gpu.endFrame();
     }
+    gpu.endFrame();
     raster::resolveWindowDepth(gpu.framebuffer(), f.depth);
     raster::parallelFor(size_t(size), [&](size_t y) {
         float* row = f.depth.data() + y * size_t(size);

@@ -578,7 +578,7 @@ private:
         std::vector<std::vector<uint32_t>> thin((count + kChunk - 1) / kChunk);
         raster::parallelFor(thin.size(), [&](size_t chunk) {
             for (size_t t = chunk * kChunk; t < std::min(count, (chunk + 1) * kChunk); ++t) {
-                if (alpha && alpha->triangle[t] == HitFilter::kAlphaTested) {
+                if (alpha && alpha->alphaTests(uint32_t(t))) {
                     int inFront = 0;
                     for (int c = 0; c < 3; ++c) inFront += projected[casters_.mesh.indices[3 * t + c]].z > nearPlane;
                     if (inFront == 3) thin[chunk].push_back(uint32_t(t));

@@ -5,6 +5,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "raster/framebuffer.h"
+
 namespace cuberille::scene {
 
 glm::mat4 Camera::viewFromWorld() const { return glm::lookAtRH(position, target, up); }
@@ -20,17 +22,8 @@ glm::mat4 Camera::clipFromView(float aspect) const {
         }
         return m;
     }
-    glm::mat4 m = glm::perspectiveRH_ZO(glm::radians(verticalFovDegrees), aspect, nearPlane, farPlane);
-    if (reversedDepth) {
-        // z_clip = n/(f-n) z_view + f n/(f-n) and w = -z_view: at view distance d the depth is
-        // n (f - d) / ((f - n) d), 1 at the near plane and 0 at the far one, falling like 1/d.
-        // Built directly rather than as 1 - z, whose cancellation near 1 would throw away the
-        // precision reversed depth exists for.
-        const double n = nearPlane, f = farPlane;
-        m[2][2] = float(n / (f - n));
-        m[3][2] = float(f * n / (f - n));
-    }
-    return m;
+    return raster::perspectiveProjection(glm::radians(verticalFovDegrees), aspect, nearPlane, farPlane,
+                                         reversedDepth ? raster::DepthConvention::Reversed : raster::DepthConvention::Standard);
 }
 
 Camera placeCamera(const CameraPlacement& p, const Camera& framing, const glm::vec3& boundsMin,

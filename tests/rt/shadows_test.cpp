@@ -91,16 +91,27 @@ raster::Lighting pointAndSpotLights() {
     return lights;
 }
 
-/// The brute-force references' shadow ray from a receiver to a light, from the same offset origin
-/// the stage uses; false where the light cannot reach it (facing away, outside a spot's cone).
-bool referenceShadowRay(const Surface& s, const raster::Light& light, float rayOffset, Ray& ray) {
-    const bool directional = light.type == raster::LightType::Directional;
-    const glm::vec3 toLight = directional ? -glm::normalize(light.direction) : glm::normalize(light.position - s.position);
-    const bool inCone = light.type != raster::LightType::Spot || glm::dot(light.direction, -toLight) > light.cosOuterCone;
-    if (!(glm::dot(s.normal, toLight) > 0.0f) || !inCone) return false;
-    ray = Ray{s.position + s.normal * rayOffset, toLight, 0.0f,
-              directional ? std::numeric_limits<float>::infinity() : glm::distance(light.position, s.position) * (1.0f - 1e-4f)};
-    return true;
+/// The brute-force references' shadow rays: for each receiver pixel of `r`, f(pixel, ray) with the
+/// ray from its surface to the light, from the offset origin the stage uses, or a null ray where
+/// the light cannot reach it (facing away, outside a spot's cone).
+template <class F>
+void forEachReferenceShadowRay(const Rendered& r, const TriangleMeshView& mesh, const raster::Light& light, F&& f) {
+    const float rayOffset = 1e-4f * std::max(0.5f * glm::length(meshBounds(mesh).extent()), 1e-3f);  // as the stage offsets
+    for (size_t i = 0; i < r.surfaces.triangle.size(); ++i) {
+        Surface s;
+        const int x = int(i % size_t(r.surfaces.width)), y = int(i / size_t(r.surfaces.width));
+        if (!r.surfaces.covered(i) || !r.surfaces.surfaceAt(x, y, s)) continue;
+        const bool directional = light.type == raster::LightType::Directional;
+        const glm::vec3 toLight = directional ? -glm::normalize(light.direction) : glm::normalize(light.position - s.position);
+        const bool inCone = light.type != raster::LightType::Spot || glm::dot(light.direction, -toLight) > light.cosOuterCone;
+        if (!(glm::dot(s.normal, toLight) > 0.0f) || !inCone) {
+            f(i, static_cast<const Ray*>(nullptr));
+            continue;
+        }
+        const Ray ray{s.position + s.normal * rayOffset, toLight, 0.0f,
+                      directional ? std::numeric_limits<float>::infinity() : glm::distance(light.position, s.position) * (1.0f - 1e-4f)};
+        f(i, &ray);
+    }
 }
 
 TEST(Shadows, HybridEqualsRayTracedOnEveryPixel) {
@@ -200,16 +211,11 @@ TEST(Shadows, AlphaTestedCastersLetLightThroughTheirHolesInEveryRayMode) {
     options.mode = ShadowMode::RayTraced;
     const Rendered reference = shadowsOf(scene, lights, options, 320, 240, true, CasterAccel::Bvh, ranges);
     const Rendered opaque = shadowsOf(scene, lights, options, 320, 240);
-    const float rayOffset = 1e-4f * std::max(0.5f * glm::length(meshBounds(mesh).extent()), 1e-3f);  // as the stage offsets
     for (int l = 0; l < 3; ++l) {
-        const raster::Light& light = lights.lights[l];
         size_t tested = 0, throughHoles = 0, differ = 0;
-        for (size_t i = 0; i < reference.surfaces.triangle.size(); ++i) {
-            Surface s;
-            const int x = int(i % size_t(reference.surfaces.width)), y = int(i / size_t(reference.surfaces.width));
-            if (!reference.surfaces.covered(i) || !reference.surfaces.surfaceAt(x, y, s)) continue;
-            Ray ray;
-            if (!referenceShadowRay(s, light, rayOffset, ray)) continue;
+        forEachReferenceShadowRay(reference, mesh, lights.lights[l], [&](size_t i, const Ray* reaching) {
+            if (!reaching) return;
+            const Ray& ray = *reaching;
             const WatertightRay test(ray);
             bool blocked = false, blockedIfOpaque = false;
             for (uint32_t t = 0; t < mesh.triangleCount() && !blocked; ++t) {
@@ -221,7 +227,7 @@ TEST(Shadows, AlphaTestedCastersLetLightThroughTheirHolesInEveryRayMode) {
             ++tested;
             throughHoles += blockedIfOpaque && !blocked;
             differ += (reference.masks.visibility[size_t(l)][i] == 0.0f) != blocked;
-        }
+        });
         EXPECT_GT(throughHoles, 500u) << "light " << l << ": light reaches the ground through the holes";
         EXPECT_LE(double(differ), 1e-3 * double(tested)) << "light " << l << ": " << differ << " of " << tested << " differ";
         EXPECT_GT(countDifferent(reference.masks.visibility[size_t(l)], opaque.masks.visibility[size_t(l)]), 500u) << "light " << l;
@@ -345,20 +351,15 @@ TEST(Shadows, TheReferenceEqualsBruteForceRaysForEveryLightType) {
     ShadowOptions options;
     options.mode = ShadowMode::RayTraced;
     const Rendered r = shadowsOf(scene, lights, options, 160, 120);
-    const float rayOffset = 1e-4f * std::max(0.5f * glm::length(meshBounds(mesh).extent()), 1e-3f);  // as the stage offsets
     for (int l = 0; l < 3; ++l) {
-        const raster::Light& light = lights.lights[l];
         size_t tested = 0, shadowed = 0, differ = 0;
-        for (size_t i = 0; i < r.surfaces.triangle.size(); ++i) {
-            Surface s;
-            const int x = int(i % size_t(r.surfaces.width)), y = int(i / size_t(r.surfaces.width));
-            if (!r.surfaces.covered(i) || !r.surfaces.surfaceAt(x, y, s)) continue;
+        forEachReferenceShadowRay(r, mesh, lights.lights[l], [&](size_t i, const Ray* reaching) {
             const float v = r.masks.visibility[size_t(l)][i];
-            Ray ray;
-            if (!referenceShadowRay(s, light, rayOffset, ray)) {
+            if (!reaching) {
                 EXPECT_EQ(v, 0.0f) << "light " << l << " pixel " << i << ": facing away or outside the cone";
-                continue;
+                return;
             }
+            const Ray& ray = *reaching;
             const WatertightRay test(ray);
             bool blocked = false;
             for (size_t t = 0; t < mesh.triangleCount() && !blocked; ++t) {
@@ -368,7 +369,7 @@ TEST(Shadows, TheReferenceEqualsBruteForceRaysForEveryLightType) {
             ++tested;
             shadowed += blocked;
             differ += (v == 0.0f) != blocked;
-        }
+        });
         EXPECT_GT(tested, 5000u) << "light " << l;
         EXPECT_GT(shadowed, 100u) << "light " << l << ": the scene should cast shadows";
         EXPECT_LE(double(differ), 1e-3 * double(tested)) << "light " << l << ": " << differ << " of " << tested << " differ";
