@@ -4,7 +4,7 @@
 // same process, and the share of pixels whose final colour differs from the reference's frame.
 //
 //   shadow_bench [--scenes vc,dragon,brainstem,helmet] [--frames 36,1] [--width 1280 --height 720]
-//                [--shadows hard,soft] [--modes hybrid,auto]
+//                [--shadows hard,soft] [--modes hybrid,auto] [--forward-frames]
 //
 // `--frames 1` is a single frame as `cuberille render` draws it (the sun's map focused on the
 // view); more frames are a turntable as `--turntable N` draws it (the map over the whole scene,
@@ -16,6 +16,12 @@
 // its own, so none inherits another's maps, and the modes take turns frame by frame, so the
 // machine's drift (a third within a session on the shared CI VM) falls on all of them alike;
 // single frames are run five times and the median taken.
+//
+// A raster frame of one sample shades the stage's own visibility buffer instead of drawing the
+// scene a second time (render::FrameSettings::shadeShadowStageVisibility), so that pass is the
+// frame's one look at the scene as much as the stage's: `beyond` is the stage less it, what
+// shadows add to such a frame, and `whole` the stage and the frames' own drawing together.
+// `--forward-frames` draws the frames forward instead, for comparison.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -48,6 +54,10 @@ struct ModeRun {
     render::FrameSettings settings;
     std::unique_ptr<render::LoadedScene> scene;
     double shadowMs = 0.0;        // the stage over every frame, with its one-off set-up
+    /// The same less the visibility pass, where the frame shaded from it (render::FrameSettings::
+    /// shadeShadowStageVisibility): what shadows add to a frame that looks at the scene once anyway.
+    double beyondVisibilityMs = 0.0;
+    double wholeMs = 0.0;         // the stage and the frame's own drawing: what a user waits for
     double firstFrameMs = 0.0;    // of which the first frame (hierarchies built, maps first drawn)
     uint64_t differingPixels = 0, pixels = 0;  // against the reference's frames
     uint64_t markedPixels = 0, receiverPixels = 0;
@@ -82,6 +92,8 @@ std::vector<ModeRun> turntables(const fs::path& path, const render::FrameSetting
             const render::ShadowFrameStats& s = *result.shadows;
             const double ms = stageMs(s, i == 0, f.shadows.mode);
             r.shadowMs += ms;
+            r.beyondVisibilityMs += ms - (result.shadedShadowStageVisibility ? s.surfacesMs : 0.0);
+            r.wholeMs += ms + result.stats.times.frameMs;
             if (i == 0) r.firstFrameMs = ms;
             r.markedPixels += s.shadows.markedPixels;
             r.receiverPixels += s.shadows.receiverPixels;
@@ -105,7 +117,8 @@ std::vector<ModeRun> turntables(const fs::path& path, const render::FrameSetting
 }
 
 void benchScene(const std::string& name, const std::vector<int>& frameCounts, int width, int height,
-                const std::vector<std::string>& penumbrae, const std::vector<std::string>& modes, int singleFrameRuns) {
+                const std::vector<std::string>& penumbrae, const std::vector<std::string>& modes, int singleFrameRuns,
+                bool forwardFrames) {
     const fs::path path = dataPath(name);
     if (!fs::exists(path)) {
         std::printf("%s skipped: %s not found\n", name.c_str(), path.string().c_str());
@@ -118,6 +131,7 @@ void benchScene(const std::string& name, const std::vector<int>& frameCounts, in
             render::FrameSettings base;
             base.width = width, base.height = height;
             base.ground = true;
+            base.shadeShadowStageVisibility = !forwardFrames;
             base.shadows.soft = penumbra == "soft";
             // What the command line chooses: a turntable's sun map over the scene, shared by its frames.
             base.shadows.focus = frames > 1 ? rt::MapFocus::Scene : rt::MapFocus::View;
@@ -125,20 +139,23 @@ void benchScene(const std::string& name, const std::vector<int>& frameCounts, in
             // A single frame is short enough to time again: the run whose reference time is the median.
             std::vector<std::vector<ModeRun>> repeats;
             for (int k = 0; k < (frames == 1 ? singleFrameRuns : 1); ++k) repeats.push_back(turntables(path, base, frames, all));
-            std::vector<double> totals(all.size(), 0.0);
+            std::vector<double> totals(all.size(), 0.0), beyond(all.size(), 0.0), whole(all.size(), 0.0);
             std::vector<ModeRun>& runs = repeats.front();
             for (size_t m = 0; m < all.size(); ++m) {  // each mode's median over the repeats
-                std::vector<double> t;
-                for (const auto& r : repeats) t.push_back(r[m].shadowMs);
+                std::vector<double> t, b, w;
+                for (const auto& r : repeats) t.push_back(r[m].shadowMs), b.push_back(r[m].beyondVisibilityMs), w.push_back(r[m].wholeMs);
                 totals[m] = bench::median(t);
+                beyond[m] = bench::median(b);
+                whole[m] = bench::median(w);
             }
             for (size_t m = 0; m < all.size(); ++m) {
                 const ModeRun& q = runs[m];
                 std::string chose;
                 if (q.settings.shadows.mode == rt::ShadowMode::Auto)
                     chose = "hybrid " + std::to_string(q.autoHybrid) + ", raytraced " + std::to_string(q.autoRayTraced);
-                std::printf("%-10s %6d %-5s %-10s %10.0f %9.1f %7.2f %9.4f%% %8.2f%% %5d %5d %s\n", name.c_str(), frames,
-                            penumbra.c_str(), q.mode.c_str(), totals[m], q.firstFrameMs, totals[m] / totals[0],
+                std::printf("%-10s %6d %-5s %-10s %10.0f %9.1f %7.2f %9.0f %7.2f %9.0f %9.4f%% %8.2f%% %5d %5d %s\n", name.c_str(),
+                            frames, penumbra.c_str(), q.mode.c_str(), totals[m], q.firstFrameMs, totals[m] / totals[0],
+                            beyond[m], beyond[m] / beyond[0], whole[m],
                             100.0 * double(q.differingPixels) / double(std::max<uint64_t>(1, q.pixels)),
                             100.0 * double(q.markedPixels) / double(std::max<uint64_t>(1, q.receiverPixels)), q.mapsDrawn,
                             q.mapsKept, chose.c_str());
@@ -153,6 +170,7 @@ int main(int argc, char** argv) {
     CLI::App app{"Shadow modes over turntables, against ray-traced shadows in the same run"};
     std::string scenes = "vc,dragon,brainstem,helmet", penumbrae = "hard,soft", modes = "hybrid,auto", frames = "36,1";
     int width = 1280, height = 720, singleFrameRuns = 5;
+    bool forwardFrames = false;
     app.add_option("--scenes", scenes, "vc, dragon, brainstem, helmet, cesiumman, bunny, horse or a model's path")->capture_default_str();
     app.add_option("--frames", frames, "Turntable lengths (1: a single frame)")->capture_default_str();
     app.add_option("--single-frame-runs", singleFrameRuns, "Single frames: runs, the median reported")->capture_default_str();
@@ -160,16 +178,20 @@ int main(int argc, char** argv) {
     app.add_option("--height", height)->capture_default_str();
     app.add_option("--shadows", penumbrae, "hard, soft or both")->capture_default_str();
     app.add_option("--modes", modes, "Shadow modes besides the ray-traced reference: hybrid, auto, map")->capture_default_str();
+    app.add_flag("--forward-frames", forwardFrames,
+                 "Raster frames draw the scene again instead of shading the stage's visibility buffer");
     CLI11_PARSE(app, argc, argv);
     std::printf("# %d threads; turntables at %dx%d with --ground; shadow stage ms summed over the frames (and the first "
-                "frame's), ratio to ray traced, share of pixels differing from the ray-traced frames, share of receivers "
+                "frame's), ratio to ray traced, the same less the visibility pass the frame shades from (and its ratio), the stage "
+                "and frames together, share of pixels differing from the ray-traced frames, share of receivers "
                 "traced, maps drawn and kept, auto's choices\n",
                 raster::hardwareThreads(), width, height);
-    std::printf("%-10s %6s %-5s %-10s %10s %9s %7s %10s %9s %5s %5s\n", "scene", "frames", "soft", "mode", "ms", "first", "x ref",
-                "differ", "traced", "drawn", "kept");
+    std::printf("%-10s %6s %-5s %-10s %10s %9s %7s %9s %7s %9s %10s %9s %5s %5s\n", "scene", "frames", "soft", "mode", "ms",
+                "first", "x ref", "beyond", "x ref", "whole", "differ", "traced", "drawn", "kept");
     std::vector<int> frameCounts;
     for (const std::string& f : bench::splitList(frames)) frameCounts.push_back(std::stoi(f));
     for (const std::string& s : bench::splitList(scenes))
-        benchScene(s, frameCounts, width, height, bench::splitList(penumbrae), bench::splitList(modes), singleFrameRuns);
+        benchScene(s, frameCounts, width, height, bench::splitList(penumbrae), bench::splitList(modes), singleFrameRuns,
+                   forwardFrames);
     return 0;
 }

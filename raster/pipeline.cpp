@@ -182,7 +182,8 @@ VisibilityShadeStats Pipeline::shadeVisible(const VisibilityBuffer& seen, const 
     if (!deferred_) throw std::logic_error("shadeVisible: not a deferred frame (beginDeferredFrame)");
     if (lighting)
         for (DrawCall& d : draws_) d.state.lighting = *lighting;
-    const VisibilityShadeStats s = shadeVisibility(draws_, seen, framebuffer_, stats_.counters);
+    if (!visibilityShade_) visibilityShade_ = makeVisibilityShadeStorage();
+    const VisibilityShadeStats s = shadeVisibility(draws_, seen, framebuffer_, stats_.counters, *visibilityShade_);
     stats_.times.vertexMs += s.vertexMs;
     stats_.times.frontEndMs += s.setupMs;
     stats_.times.backEndMs += s.shadeMs;

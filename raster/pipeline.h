@@ -91,6 +91,8 @@ private:
     std::vector<TileCounters> tileCounters_;
     std::vector<uint8_t> tilesDrawnSinceTightened_;  // per tile: a batch reached it since flushAndTighten...()
     double frameStartMs_ = 0;
+    // shadeVisible's tables and vertex outputs, made by the first deferred frame, reused by the next.
+    std::unique_ptr<VisibilityShadeStorage, void (*)(VisibilityShadeStorage*)> visibilityShade_{nullptr, nullptr};
 };
 
 }  // namespace cuberille::raster

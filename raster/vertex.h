@@ -41,7 +41,7 @@ struct VertexStageOutput {
     // Written for every vertex by the stage's threads; sized without a zero-fill before them.
     UninitializedVector<glm::vec4> clipPositions;
     UninitializedVector<uint8_t> outcodes;   // planes the vertex is outside of, or kInvalidVertex
-    std::vector<WindowVertex> window;        // valid where the outcode is 0
+    UninitializedVector<WindowVertex> window;  // valid (and written) only where the outcode is 0
     UninitializedVector<float> varyings;     // vertex-major, layout.count floats per vertex
     VaryingLayout layout;                // the draw's, derived once per flush
 

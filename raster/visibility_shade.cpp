@@ -1,5 +1,7 @@
 #include "raster/visibility_shade.h"
 
+#include "raster/visibility_shade_tables.h"
+
 #include <algorithm>
 #include <atomic>
 #include <bit>
@@ -19,31 +21,7 @@
 namespace cuberille::raster {
 namespace {
 
-constexpr uint32_t kNone = VisibilityBuffer::kNone;
-/// The seen triangles of a draw are set up in chunks of this many, one task each.
-constexpr size_t kSeenTrianglesPerChunk = 4096;
-
-/// The set-ups one seen triangle became: one, or a fan where a clip plane cut it, or none where
-/// it has zero area once snapped. Indices into its chunk's set-ups.
-struct SeenPieces {
-    uint32_t first = 0;
-    uint32_t count = 0;
-};
-
-struct SetupChunk {
-    std::vector<TriangleSetup> setups;
-    std::vector<float> varyings;  // three vertices' a set-up, in set-up order (TriangleSetup::varyingOffset)
-};
-
-/// What the frame knows of one draw: which of its triangles the buffer names, their set-ups,
-/// and its vertex stage's outputs.
-struct SeenDraw {
-    std::vector<uint32_t> slotOf;    // per triangle of the draw: its slot among the seen ones, or kNone
-    std::vector<uint32_t> seen;      // per slot: the triangle, ascending
-    std::vector<SeenPieces> pieces;  // per slot
-    std::vector<SetupChunk> chunks;  // slot / kSeenTrianglesPerChunk
-    VertexStageOutput vertices;
-};
+using namespace seen;  // the stage's tables (raster/visibility_shade_tables.h)
 
 SetupContext deferredSetupContext(const DrawCall& call, const Framebuffer& fb, int varyingCount) {
     SetupContext c = SetupContext::forDraw(call.space, fb.width(), fb.height(), standardSamplePattern(fb.samples()),
@@ -56,23 +34,29 @@ SetupContext deferredSetupContext(const DrawCall& call, const Framebuffer& fb, i
 void markSeenTriangles(std::span<const DrawCall> draws, const VisibilityBuffer& seen, std::vector<SeenDraw>& out);
 void shadeSeenVertices(std::span<const DrawCall> draws, const Framebuffer& fb, std::vector<SeenDraw>& out);
 void setUpSeenTriangles(std::span<const DrawCall> draws, const Framebuffer& fb, std::vector<SeenDraw>& out);
-template <int S>
-void shadeTile(std::span<const DrawCall> draws, const std::vector<SeenDraw>& seenDraws, const VisibilityBuffer& seen,
-               int tile, Framebuffer& fb, StageCounters& counters, uint64_t& withoutSetUp);
 
 }  // namespace
+
+struct VisibilityShadeStorage {
+    std::vector<SeenDraw> draws;  // per draw of the frame; each one's vectors keep their capacity
+};
+
+std::unique_ptr<VisibilityShadeStorage, void (*)(VisibilityShadeStorage*)> makeVisibilityShadeStorage() {
+    return {new VisibilityShadeStorage, [](VisibilityShadeStorage* s) { delete s; }};
+}
 
 // The stages in the order a frame runs them: which triangles are seen, the vertex stage of their
 // draws, the set-up of the seen triangles only, then per tile the shade stage and output merge.
 VisibilityShadeStats shadeVisibility(std::span<const DrawCall> draws, const VisibilityBuffer& seen, Framebuffer& fb,
-                                     StageCounters& counters) {
+                                     StageCounters& counters, VisibilityShadeStorage& storage) {
     if (seen.width != fb.width() || seen.height != fb.height() || seen.samples != fb.samples())
         throw std::invalid_argument("shadeVisibility: the visibility buffer's size or sample count is not the framebuffer's");
     if (!fb.hasColor()) throw std::invalid_argument("shadeVisibility: a depth-only framebuffer");
     for (const DrawCall& call : draws)
         if (call.space != PositionSpace::Clip) throw std::invalid_argument("shadeVisibility: a window-space draw");
     VisibilityShadeStats stats;
-    std::vector<SeenDraw> seenDraws(draws.size());
+    std::vector<SeenDraw>& seenDraws = storage.draws;
+    seenDraws.resize(draws.size());
     double t0 = nowMs();
     markSeenTriangles(draws, seen, seenDraws);
     shadeSeenVertices(draws, fb, seenDraws);
@@ -88,15 +72,7 @@ VisibilityShadeStats shadeVisibility(std::span<const DrawCall> draws, const Visi
     std::vector<StageCounters> tileCounters(size_t(fb.tileCount()));
     std::vector<uint64_t> tileWithoutSetUp(size_t(fb.tileCount()), 0);
     parallelFor(size_t(fb.tileCount()), [&](size_t tile) {
-        StageCounters& c = tileCounters[tile];
-        uint64_t& w = tileWithoutSetUp[tile];
-        switch (fb.samples()) {
-            case 1: shadeTile<1>(draws, seenDraws, seen, int(tile), fb, c, w); break;
-            case 2: shadeTile<2>(draws, seenDraws, seen, int(tile), fb, c, w); break;
-            case 4: shadeTile<4>(draws, seenDraws, seen, int(tile), fb, c, w); break;
-            case 8: shadeTile<8>(draws, seenDraws, seen, int(tile), fb, c, w); break;
-            case 16: shadeTile<16>(draws, seenDraws, seen, int(tile), fb, c, w); break;
-        }
+        seen::shadeTile(draws, seenDraws, seen, int(tile), fb, tileCounters[tile], tileWithoutSetUp[tile]);
     });
     for (size_t tile = 0; tile < tileCounters.size(); ++tile) {
         counters += tileCounters[tile];
@@ -107,6 +83,31 @@ VisibilityShadeStats shadeVisibility(std::span<const DrawCall> draws, const Visi
 }
 
 namespace {
+
+// The marked triangles of a draw numbered in triangle order: ranges of triangles counted in
+// parallel, their first slots by a prefix sum, then numbered in parallel (a dense scan's draw has
+// a million triangles, a tenth of them seen).
+void numberSeen(SeenDraw& d) {
+    constexpr size_t kTrianglesPerRange = 1 << 16;
+    const size_t triangles = d.slotOf.size(), ranges = (triangles + kTrianglesPerRange - 1) / kTrianglesPerRange;
+    std::vector<uint32_t> firstSlot(ranges + 1, 0);
+    parallelFor(ranges, [&](size_t r) {
+        uint32_t n = 0;
+        for (size_t t = r * kTrianglesPerRange; t < std::min(triangles, (r + 1) * kTrianglesPerRange); ++t)
+            n += d.slotOf[t] != kNone;
+        firstSlot[r + 1] = n;
+    });
+    for (size_t r = 0; r < ranges; ++r) firstSlot[r + 1] += firstSlot[r];
+    d.seen.resize(firstSlot[ranges]);
+    parallelFor(ranges, [&](size_t r) {
+        uint32_t slot = firstSlot[r];
+        for (size_t t = r * kTrianglesPerRange; t < std::min(triangles, (r + 1) * kTrianglesPerRange); ++t)
+            if (d.slotOf[t] != kNone) {
+                d.slotOf[t] = slot;
+                d.seen[slot++] = uint32_t(t);
+            }
+    });
+}
 
 // Which triangles the buffer names, marked in parallel (every writer stores the same 0, so the
 // result does not depend on the order), then numbered in triangle order per draw.
@@ -128,11 +129,7 @@ void markSeenTriangles(std::span<const DrawCall> draws, const VisibilityBuffer& 
     });
     if (invalid) throw std::invalid_argument("shadeVisibility: a sample names a draw or triangle the frame does not have");
     for (SeenDraw& d : out) {
-        for (uint32_t t = 0; t < d.slotOf.size(); ++t)
-            if (d.slotOf[t] != kNone) {
-                d.slotOf[t] = uint32_t(d.seen.size());
-                d.seen.push_back(t);
-            }
+        numberSeen(d);
         d.pieces.resize(d.seen.size());
         d.chunks.resize((d.seen.size() + kSeenTrianglesPerChunk - 1) / kSeenTrianglesPerChunk);
     }
@@ -205,6 +202,12 @@ void setUpSeenTriangles(std::span<const DrawCall> draws, const Framebuffer& fb, 
         const ClipVolume volume = ClipVolume::forViewport(fb.width(), fb.height());
         SetupChunk& chunk = seenDraw.chunks[c];
         const size_t end = std::min(seenDraw.seen.size(), (c + 1) * kSeenTrianglesPerChunk);
+        chunk.setups.clear();  // a frame before's
+        chunk.varyings.clear();
+        // Room for one set-up a triangle, as almost every seen triangle is (a clipped one's fan
+        // grows it), so the chunk is not copied as it fills.
+        chunk.setups.reserve(end - c * kSeenTrianglesPerChunk + kMaxClippedVertices);
+        chunk.varyings.reserve(chunk.setups.capacity() * 3 * size_t(context.varyingCount));
         for (size_t slot = c * kSeenTrianglesPerChunk; slot < end; ++slot) {
             SeenPieces& p = seenDraw.pieces[slot];
             p.first = uint32_t(chunk.setups.size());
@@ -212,178 +215,6 @@ void setUpSeenTriangles(std::span<const DrawCall> draws, const Framebuffer& fb, 
             p.count = uint32_t(chunk.setups.size()) - p.first;
         }
     });
-}
-
-/// A pixel's samples that see one triangle.
-struct SeenPixel {
-    uint32_t draw, slot;
-    int32_t x, y;
-    uint32_t pass;
-};
-
-/// Of a clipped triangle's fan, the piece whose edges lie nearest the pixel centre: the one
-/// holding it, else the one it lies least outside of (the shade stage clamps onto the piece, as
-/// it does for a forward pixel whose centre is uncovered).
-uint32_t pieceNearestCentre(const SetupChunk& chunk, const SeenPieces& pieces, int32_t x, int32_t y) {
-    uint32_t best = pieces.first;
-    double bestOutside = -std::numeric_limits<double>::infinity();
-    for (uint32_t p = pieces.first; p < pieces.first + pieces.count; ++p) {
-        const TriangleSetup& t = chunk.setups[p];
-        int64_t e[3];
-        edgesAtPixelCentre(t, x, y, e);
-        const double least = double(std::min({e[0], e[1], e[2]})) * t.invDoubleArea;
-        if (least > bestOutside) bestOutside = least, best = p;
-    }
-    return best;
-}
-
-/// A clipped triangle's samples at one pixel, split among its fan's pieces as the forward path
-/// splits them: each sample to the piece that covers it (the fill rule gives a shared edge's
-/// samples to one), and any no piece covers (an exact ray met the triangle where the snapped
-/// pieces do not reach) to the piece nearest the centre. masks[i] goes to piece first + i.
-template <int S>
-void splitAmongPieces(const SetupChunk& chunk, const SeenPieces& pieces, int32_t x, int32_t y, uint32_t pass,
-                      uint32_t (&masks)[kMaxClippedVertices]) {
-    const SamplePattern& sp = standardSamplePattern(S);
-    uint32_t left = pass;
-    for (uint32_t i = 0; i < pieces.count; ++i) {
-        const TriangleSetup& t = chunk.setups[pieces.first + i];
-        SampleEdgeOffsets<S> offsets;
-        computeSampleEdgeOffsets<S>(t, sp, offsets);
-        int64_t e[3];
-        edgesAtPixelCentre(t, x, y, e);
-        masks[i] = coverageMask<S>(e, offsets) & left;
-        left &= ~masks[i];
-    }
-    if (left) masks[pieceNearestCentre(chunk, pieces, x, y) - pieces.first] |= left;
-}
-
-/// One draw's seen pixels of a block, sorted by slot: each slot's pixels shaded as one queue
-/// per piece, then merged. Every draw merges as opaque (the header says why).
-template <int S, class Shader>
-void shadeDrawPixels(const Shader& shader, const DrawCall& call, const SeenDraw& seenDraw, std::span<const SeenPixel> pixels,
-                     int originX, int originY, int imageWidth, glm::vec4* color, float* depth, StageCounters& counters,
-                     uint64_t& withoutSetUp) {
-    constexpr bool kSurface = !std::is_same_v<Shader, ConstantColorShader>;
-    SampleSubpixelOffsets<S> offsets;
-    computeSampleSubpixelOffsets<S>(standardSamplePattern(S), offsets);
-    const DrawState& state = call.state;
-    ShadeQueue q;
-    uint32_t masks[ShadeQueue::kCapacity][kMaxClippedVertices];
-    for (size_t begin = 0; begin < pixels.size();) {
-        size_t end = begin;
-        while (end < pixels.size() && pixels[end].slot == pixels[begin].slot) ++end;
-        const uint32_t slot = pixels[begin].slot;
-        const SeenPieces pieces = seenDraw.pieces[slot];
-        const SetupChunk& chunk = seenDraw.chunks[slot / kSeenTrianglesPerChunk];
-        if (pieces.count == 0) {
-            for (size_t i = begin; i < end; ++i) withoutSetUp += uint64_t(std::popcount(pixels[i].pass));
-            begin = end;
-            continue;
-        }
-        // Most seen triangles are one piece; a clipped one's pixels are split among its fan.
-        for (size_t i = begin; i < end; ++i) {
-            if (pieces.count == 1) {
-                masks[i - begin][0] = pixels[i].pass;
-                continue;
-            }
-            splitAmongPieces<S>(chunk, pieces, pixels[i].x, pixels[i].y, pixels[i].pass, masks[i - begin]);
-        }
-        for (uint32_t p = 0; p < pieces.count; ++p) {
-            const TriangleSetup& t = chunk.setups[pieces.first + p];
-            q.count = 0;
-            for (size_t i = begin; i < end; ++i) {
-                const uint32_t pass = masks[i - begin][p];
-                if (!pass) continue;
-                const SeenPixel& px = pixels[i];
-                int64_t e[3];
-                edgesAtPixelCentre(t, px.x, px.y, e);
-                const int n = q.count++;
-                q.edge0[n] = e[0], q.edge1[n] = e[1], q.edge2[n] = e[2];
-                q.firstSample[n] = uint32_t(((px.y - originY) * kTileSizePixels + (px.x - originX)) * S);
-                q.passMask[n] = pass;
-                q.pixelIndex[n] = uint32_t(px.y) * uint32_t(imageWidth) + uint32_t(px.x);
-            }
-            if (q.count == 0) continue;
-            shader.shade(t, chunk.varyings.data() + t.varyingOffset, q, counters);
-            counters.pixelsShaded += q.count;
-            for (int n = 0; n < q.count; ++n) {
-                glm::vec4 c(q.red[n], q.green[n], q.blue[n], q.alpha[n]);
-                if (kSurface) c.a = 1.0f;
-                const uint32_t first = q.firstSample[n], pass = q.passMask[n];
-                mergeColor<S>(color + first, pass, c, state.colorWriteMask);
-                counters.samplesPassed += uint64_t(std::popcount(pass));
-                if (!state.depthWrite) continue;
-                const int pixel = int(first) / S;
-                float d[S];
-                sampleDepths<S>(t, originX + pixel % kTileSizePixels, originY + pixel / kTileSizePixels, offsets, d);
-                mergeDepth<S>(depth + first, pass, d);
-            }
-        }
-        begin = end;
-    }
-}
-
-template <int S>
-void shadeDraw(const DrawCall& call, const SeenDraw& seenDraw, std::span<const SeenPixel> pixels, int originX, int originY,
-               int imageWidth, glm::vec4* color, float* depth, StageCounters& counters, uint64_t& withoutSetUp) {
-    const DrawState& state = call.state;
-    const VaryingLayout& layout = seenDraw.vertices.layout;
-    const auto run = [&](const auto& shader) {
-        shadeDrawPixels<S>(shader, call, seenDraw, pixels, originX, originY, imageWidth, color, depth, counters, withoutSetUp);
-    };
-    switch (state.shading) {
-        case ShadingModel::ConstantColor: run(ConstantColorShader{}); break;
-        case ShadingModel::Unlit: run(SurfaceShader<ShadingModel::Unlit>(state, layout)); break;
-        case ShadingModel::Lambert: run(SurfaceShader<ShadingModel::Lambert>(state, layout)); break;
-        case ShadingModel::MetallicRoughness: run(SurfaceShader<ShadingModel::MetallicRoughness>(state, layout)); break;
-    }
-}
-
-// A tile, an 8x8 block at a time: each pixel's samples grouped by the triangle they see, the
-// block's groups sorted by draw and triangle, each draw's shaded with one shader.
-template <int S>
-void shadeTile(std::span<const DrawCall> draws, const std::vector<SeenDraw>& seenDraws, const VisibilityBuffer& seen,
-               int tile, Framebuffer& fb, StageCounters& counters, uint64_t& withoutSetUp) {
-    const int originX = (tile % fb.tilesX()) * kTileSizePixels, originY = (tile / fb.tilesX()) * kTileSizePixels;
-    const int width = fb.width(), height = fb.height();
-    fb.touchTile(tile);
-    glm::vec4* color = fb.tileColor(tile);
-    float* depth = fb.tileDepth(tile);
-    std::vector<SeenPixel> pixels;
-    pixels.reserve(size_t(kBlockSizePixels * kBlockSizePixels * S));
-    for (int by = originY; by < std::min(originY + kTileSizePixels, height); by += kBlockSizePixels)
-        for (int bx = originX; bx < std::min(originX + kTileSizePixels, width); bx += kBlockSizePixels) {
-            pixels.clear();
-            for (int y = by; y < std::min(by + kBlockSizePixels, height); ++y)
-                for (int x = bx; x < std::min(bx + kBlockSizePixels, width); ++x) {
-                    const size_t base = (size_t(y) * size_t(width) + size_t(x)) * S;
-                    uint32_t grouped = 0;
-                    for (int s = 0; s < S; ++s) {
-                        const uint32_t d = seen.draw[base + s];
-                        if ((grouped >> s & 1u) || d == kNone) continue;
-                        const uint32_t t = seen.triangle[base + s];
-                        uint32_t pass = 1u << s;
-                        for (int r = s + 1; r < S; ++r)
-                            if (seen.draw[base + r] == d && seen.triangle[base + r] == t) pass |= 1u << r;
-                        grouped |= pass;
-                        pixels.push_back({d, seenDraws[d].slotOf[t], x, y, pass});
-                    }
-                }
-            // A block's pixels are in row order; a stable sort by (draw, slot) keeps them so.
-            std::stable_sort(pixels.begin(), pixels.end(), [](const SeenPixel& a, const SeenPixel& b) {
-                return a.draw != b.draw ? a.draw < b.draw : a.slot < b.slot;
-            });
-            for (size_t begin = 0; begin < pixels.size();) {
-                size_t end = begin;
-                while (end < pixels.size() && pixels[end].draw == pixels[begin].draw) ++end;
-                const uint32_t d = pixels[begin].draw;
-                shadeDraw<S>(draws[d], seenDraws[d], std::span(pixels).subspan(begin, end - begin), originX, originY, width,
-                             color, depth, counters, withoutSetUp);
-                begin = end;
-            }
-        }
-    fb.tightenHierarchicalDepth(tile);
 }
 
 }  // namespace

@@ -89,6 +89,12 @@ struct FrameSettings {
     int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
     bool debugCamera = false; // voxel models: show the frame's selection from behind and above
     rt::ShadowOptions shadows; // --shadows, --soft, --light-radius, --shadow-map-size, --soft-samples
+    /// A raster frame of one sample (standard depth, the colour or shadow-pixels view, no
+    /// frustum cull) whose shadow stage drew its own visibility buffer (--shadows, --ao) shades
+    /// what that buffer saw (Pipeline::shadeVisible) instead of rasterizing the scene again: the
+    /// same image bit for bit, one pass over the geometry fewer (docs/architecture.md). False
+    /// draws it forward, for a program (or test) that compares the two.
+    bool shadeShadowStageVisibility = true;
     /// --ao N, --ao-distance D: ambient occlusion by N rays a pixel (rt/ambient_occlusion.h).
     rt::AmbientOcclusionOptions ambientOcclusion;
     /// --environment neutral|FILE: image-based lighting from the built-in studio or an

@@ -209,6 +209,37 @@ void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::C
     finishView(pipeline, o.view, camera, result.image, result.stats.times.resolveMs);
 }
 
+// The end of a deferred frame: the recorded opaque draws shaded where `seen` names them, then the
+// see-through draws (blended, transmissive) drawn forward over them, in their order, against the
+// depths the shade stage wrote, as a deferred GPU renderer draws its transparent pass.
+raster::VisibilityShadeStats shadeThenDrawSeeThrough(raster::Pipeline& pipeline, const raster::VisibilityBuffer& seen,
+                                                     const raster::Lighting* lighting) {
+    // Copied first: shadeVisible gives the recorded draws `lighting`, which see-through ones do not take.
+    const std::vector<raster::DrawCall> draws(pipeline.recordedDraws().begin(), pipeline.recordedDraws().end());
+    const raster::VisibilityShadeStats shade = pipeline.shadeVisible(seen, lighting);
+    for (const raster::DrawCall& d : draws)
+        if (!d.state.depthWrite) pipeline.draw(d);
+    return shade;
+}
+
+// A raster frame whose shadow stage has just drawn its own visibility buffer at the frame's one
+// sample (SceneShadows::seenDraws): the depth test would keep, at every pixel, the triangle that
+// buffer names, so the frame shades those (the opaque draws carrying the masked lighting) instead
+// of rasterizing them a second time — the forward frame's bits, one pass over the geometry fewer.
+void drawFrameOverShadowStageVisibility(State& state, const FrameSettings& o, const scene::Scene& drawn,
+                                        const raster::VisibilityBuffer& seen, const raster::Lighting& shadowed,
+                                        RenderResult& result) {
+    raster::Pipeline& pipeline = state.deferredFrames;
+    raster::FramebufferDesc desc = framebufferDesc(o);
+    desc.clearColor = o.background ? clearColorFor(*o.background) : drawn.background;
+    pipeline.beginDeferredFrame(desc);
+    drawn.draw(pipeline, float(o.width) / float(o.height), &shadowed);
+    result.shadedShadowStageVisibility = shadeThenDrawSeeThrough(pipeline, seen, nullptr);
+    pipeline.endFrame();
+    result.stats = pipeline.stats();
+    finishView(pipeline, o.view, &drawn.camera, result.image, result.stats.times.resolveMs);
+}
+
 // --renderer raytrace: the frame's draws recorded, camera rays through the opaque ones decide what
 // each sample sees (alpha-tested ones through their alpha test), and the deferred shade stage
 // shades it with the draws' own shading. See-through draws (blended, transmissive) are then drawn
@@ -216,7 +247,7 @@ void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::C
 // deferred GPU renderer draws its transparent pass forward (docs/ray_tracing.md).
 void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene& drawn, const scene::Camera& camera,
                         SceneShadows* shadows, RenderResult& result) {
-    raster::Pipeline pipeline;
+    raster::Pipeline& pipeline = state.deferredFrames;
     raster::FramebufferDesc desc = framebufferDesc(o);
     desc.clearColor = o.background ? clearColorFor(*o.background) : drawn.background;
     pipeline.beginDeferredFrame(desc);
@@ -290,9 +321,7 @@ void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene
         result.shadows->totalMs = raster::nowMs() - t0;
     }
     if (o.frustumCull) state.primaryRays.reset();
-    st.shade = pipeline.shadeVisible(seen, shadowed ? &*shadowed : nullptr);
-    for (size_t d = 0; d < draws.size(); ++d)
-        if (!traced[d]) pipeline.draw(draws[d]);
+    st.shade = shadeThenDrawSeeThrough(pipeline, seen, shadowed ? &*shadowed : nullptr);
     pipeline.endFrame();
     result.stats = pipeline.stats();
     result.rayTraced = st;
@@ -440,8 +469,16 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
     if (culling) result.culling = culling->cull(s, float(o.width) / float(o.height));
     const std::optional<scene::Scene> normals = o.view == View::Normals ? std::optional(normalsScene(s)) : std::nullopt;
     const scene::Scene& drawn = normals ? *normals : s;
+    // A frame the shadow stage has already looked at through its own visibility buffer, as the
+    // depth test would at one sample, shades what it saw (drawFrameOverShadowStageVisibility).
+    raster::VisibilityBuffer seen;
+    const bool overShadowStageVisibility = shadowed && !traced && o.shadeShadowStageVisibility && o.msaa == 1 && !culling &&
+                                           !normals && (o.view == View::Color || o.view == View::ShadowPixels) &&
+                                           o.depth == raster::DepthConvention::Standard && shadows->seenDraws(s, seen);
     if (traced) {
         drawRayTracedFrame(st, o, drawn, s.camera, shadows, result);
+    } else if (overShadowStageVisibility) {
+        drawFrameOverShadowStageVisibility(st, o, drawn, seen, *shadowed, result);
     } else {
         drawFrame(o, s.background, &s.camera, [&](raster::Pipeline& p) {
             drawn.draw(p, float(o.width) / float(o.height), shadowed ? &*shadowed : nullptr);
@@ -634,6 +671,13 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                             {"bvhRebuilt", rt.update.rebuilt},
                             {"traceMs", rt.rays.traceMs},
                             {"shadeMs", rt.shade.vertexMs + rt.shade.setupMs + rt.shade.shadeMs}};
+    }
+    if (r.shadedShadowStageVisibility) {
+        const raster::VisibilityShadeStats& v = *r.shadedShadowStageVisibility;
+        j["frameVisibility"] = {{"from", "shadow stage"},
+                                {"trianglesSeen", v.trianglesSeen},
+                                {"samplesWithoutSetUp", v.samplesWithoutSetUp},
+                                {"shadeMs", v.vertexMs + v.setupMs + v.shadeMs}};
     }
     if (r.voxelRays) {
         const VoxelRayFrameStats& v = *r.voxelRays;

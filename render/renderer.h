@@ -56,6 +56,9 @@ struct RenderResult {
     std::optional<ShadowFrameStats> shadows;    // when a shadow mode was asked for
     std::optional<FrustumCullStats> culling;    // with frustumCull
     std::optional<RayTracedFrameStats> rayTraced;  // with Renderer::Raytrace, 3D scenes
+    /// A raster frame that shaded the shadow stage's visibility buffer instead of rasterizing its
+    /// opaque draws a second time (FrameSettings::shadeShadowStageVisibility): what that cost.
+    std::optional<raster::VisibilityShadeStats> shadedShadowStageVisibility;
     std::optional<VoxelRayFrameStats> voxelRays;   // with Renderer::Raytrace, voxel models
 };
 

@@ -126,6 +126,7 @@ void SceneShadows::update(const scene::Scene& s) {
 }
 
 raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height, ShadowFrameStats& stats) {
+    drewVisibility_ = active_;
     if (!active_) return maskFor(s, {}, stats, nullptr);
     const double t0 = raster::nowMs();
     if (visibilityPose_ == VisibilityPose::None) visibility_.setCasters({positions_, indices_}, ranges_);
@@ -143,8 +144,22 @@ raster::Lighting SceneShadows::run(const scene::Scene& s, int width, int height,
 
 raster::Lighting SceneShadows::run(const scene::Scene& s, const rt::ScreenSurfaces& seen, ShadowFrameStats& stats,
                                    const rt::PrimaryRayHierarchy* cameraRays) {
+    drewVisibility_ = false;
     const bool shared = bvhPending() && cameraRays && sameTriangles(cameraRays->mesh());
     return maskFor(s, seen, stats, shared ? &cameraRays->bvh() : nullptr);
+}
+
+bool SceneShadows::seenDraws(const scene::Scene& s, raster::VisibilityBuffer& out) const {
+    if (!drewVisibility_) return false;
+    size_t k = 0;
+    for (const scene::Mesh& m : s.meshes) {
+        if (m.seeThrough()) continue;
+        if (k == ranges_.size() || ranges_[k].triangleCount != m.triangleCount()) return false;
+        ++k;
+    }
+    if (k != ranges_.size()) return false;
+    visibility_.seenByRange(out);
+    return true;
 }
 
 // The frame's masks from its surfaces: the stage's own visibility buffer or the caller's.

@@ -95,6 +95,17 @@ public:
     raster::Lighting run(const scene::Scene& scene, const rt::ScreenSurfaces& seen, ShadowFrameStats& stats,
                          const rt::PrimaryRayHierarchy* cameraRays = nullptr);
 
+    /// What the last run(scene, width, height, …) saw through its own visibility buffer, as the
+    /// frame's draws name it: scene::Scene::draw records the opaque and alpha-tested meshes first
+    /// and in the scene's order — the casters' ranges, drawn with the same culling and alpha test —
+    /// so caster triangle t of range k is triangle t - first of recorded draw k. A raster frame of
+    /// one sample in the standard depth convention shades this (Pipeline::shadeVisible) instead of
+    /// rasterizing the same triangles again: the depth test would keep the same triangle at every
+    /// pixel, so the image is the forward frame's bit for bit (render/renderer.cpp). False, `out`
+    /// untouched, when the last run drew no buffer (the stage inactive, or handed its surfaces) or
+    /// `scene`'s opaque and alpha-tested meshes are not the casters' ranges triangle for triangle.
+    bool seenDraws(const scene::Scene& scene, raster::VisibilityBuffer& out) const;
+
     /// Per pixel of the last frame: rays were traced there for some light.
     const std::vector<uint8_t>& markedPixels() const { return masks_.marked; }
 
@@ -144,6 +155,7 @@ private:
     /// never does: its surfaces come from its camera rays), and moved to a new pose when one
     /// draws it after update().
     enum class VisibilityPose { None, Moved, Current } visibilityPose_ = VisibilityPose::None;
+    bool drewVisibility_ = false;      // the last run() drew visibility_ (seenDraws)
     rt::ShadowMasks masks_;            // reused from frame to frame
     // The software GPU the visibility buffer and the shadow maps are drawn with, one pass after
     // another: its render targets are allocated once and reused by every later frame.

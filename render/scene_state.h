@@ -67,6 +67,11 @@ struct LoadedScene::State {
     /// --renderer raytrace with shadows or --ao: the surfaces its camera rays met at pixel
     /// centres, handed to the shadow stage (storage reused from frame to frame).
     rt::ScreenSurfaces tracedSurfaces;
+    /// The software GPU of the deferred frames (the ray-traced renderer's, and raster frames that
+    /// shade the shadow stage's visibility buffer): kept, so each frame reuses the framebuffer and
+    /// the shade stage's tables and vertex outputs of the one before instead of faulting in fresh
+    /// memory (raster::VisibilityShadeStorage).
+    raster::Pipeline deferredFrames;
 
     /// A 3D scene at the frame's pose (glTF: its animation and time; posed again only when they
     /// differ from the pose held). Returns the milliseconds spent posing.

@@ -173,6 +173,10 @@ const ScreenSurfaces& VisibilityBuffer::draw(const glm::mat4& clipFromWorld, int
     auto masked = masked_.begin();
     for (size_t k = 0; k < ranges_.size(); ++k) {
         const CasterRange& r = ranges_[k];
+        if (r.triangleCount == 0) {  // a mesh without triangles: a draw of no indices would be an unindexed one
+            if (masked != masked_.end() && masked->range == k) ++masked;
+            continue;
+        }
         if (masked != masked_.end() && masked->range == k) {
             gpu.draw(maskedDraw(*masked++, clipFromWorld));
             continue;
@@ -197,6 +201,35 @@ const ScreenSurfaces& VisibilityBuffer::draw(const glm::mat4& clipFromWorld, int
     s.seenHull.clear();
     if (farthest >= 0.0f) s.seenHull = frustumCorners(s.worldFromClip, farthest);
     return s;
+}
+
+void VisibilityBuffer::seenByRange(raster::VisibilityBuffer& out) const {
+    const ScreenSurfaces& s = surfaces_;
+    out.width = s.width, out.height = s.height, out.samples = 1;
+    out.draw.resize(s.triangle.size());
+    out.triangle.resize(s.triangle.size());
+    // Neighbouring pixels mostly see one range, so each row starts its search from the range the
+    // pixel before it found; the ranges are in triangle order (an empty one shares its first
+    // triangle with the next, which the search passes over to the last that starts at or below t).
+    raster::parallelFor(size_t(s.height), [&](size_t y) {
+        uint32_t k = 0;
+        for (size_t i = y * size_t(s.width); i < (y + 1) * size_t(s.width); ++i) {
+            const uint32_t t = s.triangle[i];
+            if (t == ScreenSurfaces::kNone) {
+                out.draw[i] = out.triangle[i] = raster::VisibilityBuffer::kNone;
+                continue;
+            }
+            const CasterRange* r = &ranges_[k];
+            if (t < r->firstTriangle || t >= r->firstTriangle + r->triangleCount) {
+                const auto after = std::upper_bound(ranges_.begin(), ranges_.end(), t,
+                                                    [](uint32_t id, const CasterRange& c) { return id < c.firstTriangle; });
+                k = uint32_t(after - ranges_.begin()) - 1;
+                r = &ranges_[k];
+            }
+            out.draw[i] = k;
+            out.triangle[i] = t - r->firstTriangle;
+        }
+    });
 }
 
 void surfacesFromVisibility(const raster::VisibilityBuffer& centres, std::span<const raster::DrawCall> draws,

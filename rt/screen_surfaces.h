@@ -129,6 +129,12 @@ public:
     /// to frame. The surfaces are valid until the next draw() or setCasters().
     const ScreenSurfaces& draw(const glm::mat4& clipFromWorld, int width, int height, raster::Pipeline& gpu);
 
+    /// The last draw()'s pixels as the deferred shade stage reads them (raster/visibility_shade.h):
+    /// each pixel's caster triangle named by its range and its index within the range — the draw
+    /// and triangle of a frame that records one draw per range, in the ranges' order, over the
+    /// same triangles. One sample a pixel, at its centre.
+    void seenByRange(raster::VisibilityBuffer& out) const;
+
 private:
     /// An alpha-tested range drawn through the Unlit shade stage, its triangles unindexed so each
     /// vertex carries its triangle's id as a colour (interpolating three equal values, rounded

@@ -27,7 +27,10 @@ void Scene::draw(raster::Pipeline& pipeline, float aspect, const raster::Lightin
         raster::DrawCall d;
         d.space = raster::PositionSpace::Clip;
         d.clipFromObject = clipFromWorld;
-        d.positions = m.positions;
+        // A mesh's triangles are its indices (Mesh::triangleCount): one without any draws nothing,
+        // where a draw of no indices would take its vertices as an unindexed list. The draw is
+        // still recorded, so the draws stay one per mesh in order (render::SceneShadows::seenDraws).
+        if (!m.indices.empty()) d.positions = m.positions;
         d.normals = m.normals;
         d.vertexColors = m.colors;
         d.vertexAlphas = m.alphas;

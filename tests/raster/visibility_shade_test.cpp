@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
+#include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -20,6 +22,7 @@ using raster::DrawCall;
 
 float sampleDepthKey(const raster::Framebuffer& fb, int x, int y, int s) {
     const int tile = (y / raster::kTileSizePixels) * fb.tilesX() + x / raster::kTileSizePixels;
+    if (!fb.tileTouched(tile)) return raster::clearDepthKey(fb.desc());  // a tile nothing reached reads as cleared
     const size_t i = (size_t(y % raster::kTileSizePixels) * raster::kTileSizePixels + size_t(x % raster::kTileSizePixels)) *
                          fb.samples() + s;
     return fb.tileDepth(tile)[i];
@@ -72,6 +75,42 @@ TEST(VisibilityShade, GivesTheForwardFramesBitsWhereItSeesWhatTheDepthTestKept) 
                 EXPECT_GT(seenSamples, kWidth * kHeight * samples / 2) << where;
             }
         }
+    }
+}
+
+// One pipeline's frames one after another, as the renderer keeps it: each frame reuses the shade
+// stage's tables, set-ups and vertex outputs of the one before (raster::VisibilityShadeStorage),
+// over other draws, sizes and sample counts, and must give each frame's bits as a pipeline that
+// never drew anything does.
+TEST(VisibilityShade, AFramesBitsDoNotDependOnTheFramesThePipelineShadedBefore) {
+    raster::Pipeline kept;
+    struct Frame {
+        uint32_t seed;
+        int width, height, samples;
+    };
+    for (const Frame f : {Frame{5, 150, 100, 1}, Frame{6, 90, 140, 1}, Frame{5, 150, 100, 4}, Frame{7, 150, 100, 1},
+                          Frame{5, 150, 100, 1}}) {
+        const std::string where = "seed " + std::to_string(f.seed) + ", " + std::to_string(f.width) + "x" +
+                                  std::to_string(f.height) + ", " + std::to_string(f.samples) + " samples";
+        const RandomPerspectiveDraws scene(f.seed);
+        const std::vector<DrawCall> draws = scene.draws();
+        const raster::VisibilityBuffer seen = visibilityOfForwardFrame(draws, f.width, f.height, f.samples);
+        raster::Pipeline fresh;
+        for (raster::Pipeline* p : {&kept, &fresh}) {
+            p->beginDeferredFrame(frame(f.width, f.height, f.samples));
+            for (const DrawCall& d : draws) p->draw(d);
+            p->shadeVisible(seen);
+            p->endFrame();
+        }
+        int mismatches = 0;
+        for (int y = 0; y < f.height; ++y)
+            for (int x = 0; x < f.width; ++x)
+                for (int s = 0; s < f.samples; ++s) {
+                    const glm::vec4 a = sampleColor(kept.framebuffer(), x, y, s), b = sampleColor(fresh.framebuffer(), x, y, s);
+                    mismatches += std::memcmp(&a, &b, sizeof a) != 0 ||
+                                  sampleDepthKey(kept.framebuffer(), x, y, s) != sampleDepthKey(fresh.framebuffer(), x, y, s);
+                }
+        EXPECT_EQ(mismatches, 0) << where;
     }
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <filesystem>
 #include <fstream>
@@ -257,6 +258,64 @@ TEST_F(Renderer, RayTracedFramesAreTheRasterizersButWhereSnappingDecides) {
     render::FrameSettings tiles;
     tiles.width = 64, tiles.height = 48, tiles.renderer = render::Renderer::Raytrace, tiles.view = render::View::Tiles;
     EXPECT_THROW(render::render(scene, tiles), scene::InputError);
+}
+
+// A raster frame of one sample whose shadow stage drew its own visibility buffer shades what that
+// buffer saw (FrameSettings::shadeShadowStageVisibility) instead of rasterizing the scene again:
+// the forward frame's image bit for bit — in each shadow mode, hard and soft, with occlusion alone,
+// through the demo's alpha-tested screen and under its blended sphere, on a model's floor — frame
+// after frame, as the camera turns and the size changes (the kept pipeline's storage reused).
+// Frames it cannot serve are drawn forward: more samples, the stage views, reversed depth, the cull.
+TEST_F(Renderer, FramesShadedFromTheShadowStagesVisibilityAreTheForwardFramesBits) {
+    const render::LoadedScene demo("demo"), cube(gltf_.string());
+    struct Case {
+        const render::LoadedScene* scene;
+        rt::ShadowMode mode;
+        bool soft;
+        int occlusionRays;
+        bool ground;
+    };
+    const Case cases[] = {{&demo, rt::ShadowMode::Hybrid, false, 0, false}, {&demo, rt::ShadowMode::Map, true, 0, false},
+                          {&demo, rt::ShadowMode::RayTraced, false, 4, false}, {&demo, rt::ShadowMode::None, false, 4, false},
+                          {&cube, rt::ShadowMode::Hybrid, false, 0, true},     {&cube, rt::ShadowMode::Auto, true, 2, true}};
+    for (const Case& c : cases)
+        for (const int frame : {0, 1, 2}) {
+            render::FrameSettings f;
+            f.width = frame == 2 ? 200 : 160, f.height = frame == 2 ? 90 : 120;
+            f.orbitDegrees = 25.0f * float(frame);
+            f.shadows.mode = c.mode;
+            f.shadows.soft = c.soft;
+            f.ambientOcclusion.raysPerPixel = c.occlusionRays;
+            f.ground = c.ground;
+            const std::string where = "shadows " + std::to_string(int(c.mode)) + (c.soft ? " soft" : "") + ", ao " +
+                                      std::to_string(c.occlusionRays) + (c.ground ? ", floor" : "") + ", frame " +
+                                      std::to_string(frame);
+            const render::RenderResult deferred = render::render(*c.scene, f);
+            f.shadeShadowStageVisibility = false;
+            const render::RenderResult forward = render::render(*c.scene, f);
+            ASSERT_TRUE(deferred.shadedShadowStageVisibility) << where;
+            EXPECT_FALSE(forward.shadedShadowStageVisibility) << where;
+            EXPECT_GT(deferred.shadedShadowStageVisibility->trianglesSeen, 10u) << where;
+            EXPECT_EQ(deferred.shadedShadowStageVisibility->samplesWithoutSetUp, 0u) << where;
+            ASSERT_EQ(deferred.image.rgba.size(), forward.image.rgba.size()) << where;
+            EXPECT_EQ(std::memcmp(deferred.image.rgba.data(), forward.image.rgba.data(), deferred.image.rgba.size() * sizeof(float)), 0)
+                << where;
+        }
+    const auto servedFrom = [&](auto&& change) {
+        render::FrameSettings f;
+        f.width = 96, f.height = 72;
+        f.shadows.mode = rt::ShadowMode::Hybrid;
+        change(f);
+        return render::render(demo, f).shadedShadowStageVisibility.has_value();
+    };
+    EXPECT_TRUE(servedFrom([](render::FrameSettings&) {}));
+    EXPECT_TRUE(servedFrom([](render::FrameSettings& f) { f.view = render::View::ShadowPixels; }));
+    EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.msaa = 4; }));
+    EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.view = render::View::Depth; }));
+    EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.view = render::View::Normals; }));
+    EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.depth = raster::DepthConvention::Reversed; }));
+    EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.frustumCull = true; }));
+    EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.shadows.mode = rt::ShadowMode::None; }));
 }
 
 // The tiles and overdraw views carry a legend: each entry's swatch holds exactly its colour, and

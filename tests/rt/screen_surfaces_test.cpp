@@ -70,6 +70,49 @@ void expectSurfacesMatchTheReference(const glm::mat4& clipFromWorld, const char*
     EXPECT_LT(worst, 1e-3) << camera;
 }
 
+// seenByRange names each pixel's caster triangle as the frame that draws one draw per range would:
+// (its range, its index within the range), over ranges of every kind a scene gives — empty ones
+// (a mesh with no triangles) before, between and after the others, and many triangles each.
+TEST(ScreenSurfaces, SeenByRangeNamesEachPixelsTriangleByItsRangeAndPlaceInIt) {
+    OwnedMesh scene = testing::uvSphere(16, 32, glm::vec3(0.0f, 0.5f, 0.0f), 1.0f);
+    const TriangleMeshView mesh = scene.view();
+    const uint32_t triangles = uint32_t(mesh.triangleCount()), vertices = uint32_t(mesh.positions.size());
+    // Ranges over the one vertex array (the sphere's indices are not rebased, so every range
+    // starts at vertex 0 and uses them all): empty, a third, empty, the rest, empty.
+    const uint32_t third = triangles / 3;
+    const std::vector<CasterRange> ranges = {{0, 0, 0, vertices, raster::CullMode::None, {}},
+                                             {0, third, 0, vertices, raster::CullMode::None, {}},
+                                             {third, 0, 0, vertices, raster::CullMode::None, {}},
+                                             {third, triangles - third, 0, vertices, raster::CullMode::None, {}},
+                                             {triangles, 0, 0, vertices, raster::CullMode::None, {}}};
+    constexpr int kWidth = 96, kHeight = 72;
+    const glm::mat4 clipFromWorld = glm::perspective(glm::radians(45.0f), 4.0f / 3.0f, 0.1f, 50.0f) *
+                                    glm::lookAt(glm::vec3(0.0f, 1.0f, 4.0f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0.0f, 1.0f, 0.0f));
+    raster::Pipeline gpu;
+    VisibilityBuffer buffer;
+    buffer.setCasters(mesh, ranges);
+    const ScreenSurfaces& s = buffer.draw(clipFromWorld, kWidth, kHeight, gpu);
+    raster::VisibilityBuffer named;
+    buffer.seenByRange(named);
+    ASSERT_EQ(named.width, kWidth);
+    ASSERT_EQ(named.height, kHeight);
+    ASSERT_EQ(named.samples, 1);
+    size_t inFirst = 0, inSecond = 0;
+    for (size_t i = 0; i < s.triangle.size(); ++i) {
+        if (!s.covered(i)) {
+            EXPECT_EQ(named.draw[i], raster::VisibilityBuffer::kNone) << "pixel " << i;
+            continue;
+        }
+        ASSERT_TRUE(named.draw[i] == 1 || named.draw[i] == 3) << "pixel " << i << ": an empty range named, " << named.draw[i] << " for triangle " << s.triangle[i] << " of " << triangles;
+        const CasterRange& r = ranges[named.draw[i]];
+        EXPECT_LT(named.triangle[i], r.triangleCount) << "pixel " << i;
+        EXPECT_EQ(r.firstTriangle + named.triangle[i], s.triangle[i]) << "pixel " << i;
+        (named.draw[i] == 1 ? inFirst : inSecond) += 1;
+    }
+    EXPECT_GT(inFirst, 100u);
+    EXPECT_GT(inSecond, 50u);
+}
+
 TEST(ScreenSurfaces, EachSurfaceIsWherePixelsRayMeetsItsTriangleForAPerspectiveCamera) {
     const glm::mat4 view = glm::lookAtRH(glm::vec3(2.0f, 2.5f, 3.5f), glm::vec3(0.0f, 0.5f, 0.0f), glm::vec3(0, 1, 0));
     expectSurfacesMatchTheReference(glm::perspectiveRH_ZO(glm::radians(50.0f), 160.0f / 120.0f, 0.1f, 50.0f) * view, "perspective");
