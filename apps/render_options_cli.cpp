@@ -99,6 +99,11 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
                        "(3D scenes and voxel models: a camera ray per sample through --accel's structure; the same "
                        "shading, shadows and occlusion)")
         ->capture_default_str();
+    render->add_option("--frame-visibility", names.frameVisibility,
+                       "A shadowed raster frame of one sample: auto (shade the shadow stage's visibility buffer instead "
+                       "of drawing the scene again where the scene is dense enough to pay), shadow-stage (wherever it "
+                       "serves) or depth-test (always draw again); the same image every way")
+        ->capture_default_str();
     render->add_option("--accel", names.accel,
                        "What answers the rays (--renderer raytrace's camera rays, and the shadow stage's for --shadows "
                        "hybrid/raytraced/auto and --ao): bvh (built once, kept for every view and following each "
@@ -167,6 +172,7 @@ void applyRenderNames(const RenderNames& names, RenderOptions& o) {
     o.bvhUpdate = parseBvhUpdate(names.bvhUpdate);
     render::applyAccel(names.accel, o);
     o.renderer = render::parseRenderer(names.renderer);
+    o.frameVisibility = render::parseFrameVisibility(names.frameVisibility);
     if (names.upAxis != "y" && names.upAxis != "z")
         throw scene::InputError("--up-axis " + names.upAxis + ": expected y or z");
     o.zUp = names.upAxis == "z";

@@ -25,7 +25,7 @@ void addFrameOptions(CLI::App* command, int& width, int& height, int& msaa, int&
 
 /// The render options parsed from names after CLI11 has read them.
 struct RenderNames {
-    std::string view = "color", shadows = "none", shadowFocus = "auto", textureFilter = "file", depth = "standard", bvhUpdate = "refit", accel = "bvh", renderer = "raster";
+    std::string view = "color", shadows = "none", shadowFocus = "auto", textureFilter = "file", depth = "standard", bvhUpdate = "refit", accel = "bvh", renderer = "raster", frameVisibility = "auto";
     std::string eye, target, up, upAxis = "y", background;
     float fovDegrees = 0.0f;
 };

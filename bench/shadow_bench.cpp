@@ -4,7 +4,7 @@
 // same process, and the share of pixels whose final colour differs from the reference's frame.
 //
 //   shadow_bench [--scenes vc,dragon,brainstem,helmet] [--frames 36,1] [--width 1280 --height 720]
-//                [--shadows hard,soft] [--modes hybrid,auto] [--forward-frames]
+//                [--shadows hard,soft] [--modes hybrid,auto] [--frame-visibility auto|shadow-stage|depth-test]
 //
 // `--frames 1` is a single frame as `cuberille render` draws it (the sun's map focused on the
 // view); more frames are a turntable as `--turntable N` draws it (the map over the whole scene,
@@ -17,11 +17,11 @@
 // machine's drift (a third within a session on the shared CI VM) falls on all of them alike;
 // single frames are run five times and the median taken.
 //
-// A raster frame of one sample shades the stage's own visibility buffer instead of drawing the
-// scene a second time (render::FrameSettings::shadeShadowStageVisibility), so that pass is the
-// frame's one look at the scene as much as the stage's: `beyond` is the stage less it, what
-// shadows add to such a frame, and `whole` the stage and the frames' own drawing together.
-// `--forward-frames` draws the frames forward instead, for comparison.
+// A raster frame of one sample may shade the stage's own visibility buffer instead of drawing the
+// scene a second time (render::FrameVisibility), and then that pass is the frame's one look at the
+// scene as much as the stage's: `beyond` is the stage less it where the frame did, what shadows
+// add to such a frame, and `whole` the stage and the frames' own drawing together.
+// `--frame-visibility` chooses as the renderer does (auto) or forces either way, for comparison.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -55,7 +55,7 @@ struct ModeRun {
     std::unique_ptr<render::LoadedScene> scene;
     double shadowMs = 0.0;        // the stage over every frame, with its one-off set-up
     /// The same less the visibility pass, where the frame shaded from it (render::FrameSettings::
-    /// shadeShadowStageVisibility): what shadows add to a frame that looks at the scene once anyway.
+    /// frameVisibility): what shadows add to a frame that looks at the scene once anyway.
     double beyondVisibilityMs = 0.0;
     double wholeMs = 0.0;         // the stage and the frame's own drawing: what a user waits for
     double firstFrameMs = 0.0;    // of which the first frame (hierarchies built, maps first drawn)
@@ -118,7 +118,7 @@ std::vector<ModeRun> turntables(const fs::path& path, const render::FrameSetting
 
 void benchScene(const std::string& name, const std::vector<int>& frameCounts, int width, int height,
                 const std::vector<std::string>& penumbrae, const std::vector<std::string>& modes, int singleFrameRuns,
-                bool forwardFrames) {
+                render::FrameVisibility frameVisibility) {
     const fs::path path = dataPath(name);
     if (!fs::exists(path)) {
         std::printf("%s skipped: %s not found\n", name.c_str(), path.string().c_str());
@@ -131,7 +131,7 @@ void benchScene(const std::string& name, const std::vector<int>& frameCounts, in
             render::FrameSettings base;
             base.width = width, base.height = height;
             base.ground = true;
-            base.shadeShadowStageVisibility = !forwardFrames;
+            base.frameVisibility = frameVisibility;
             base.shadows.soft = penumbra == "soft";
             // What the command line chooses: a turntable's sun map over the scene, shared by its frames.
             base.shadows.focus = frames > 1 ? rt::MapFocus::Scene : rt::MapFocus::View;
@@ -170,7 +170,7 @@ int main(int argc, char** argv) {
     CLI::App app{"Shadow modes over turntables, against ray-traced shadows in the same run"};
     std::string scenes = "vc,dragon,brainstem,helmet", penumbrae = "hard,soft", modes = "hybrid,auto", frames = "36,1";
     int width = 1280, height = 720, singleFrameRuns = 5;
-    bool forwardFrames = false;
+    std::string visibility = "auto";
     app.add_option("--scenes", scenes, "vc, dragon, brainstem, helmet, cesiumman, bunny, horse or a model's path")->capture_default_str();
     app.add_option("--frames", frames, "Turntable lengths (1: a single frame)")->capture_default_str();
     app.add_option("--single-frame-runs", singleFrameRuns, "Single frames: runs, the median reported")->capture_default_str();
@@ -178,8 +178,11 @@ int main(int argc, char** argv) {
     app.add_option("--height", height)->capture_default_str();
     app.add_option("--shadows", penumbrae, "hard, soft or both")->capture_default_str();
     app.add_option("--modes", modes, "Shadow modes besides the ray-traced reference: hybrid, auto, map")->capture_default_str();
-    app.add_flag("--forward-frames", forwardFrames,
-                 "Raster frames draw the scene again instead of shading the stage's visibility buffer");
+    app.add_option("--frame-visibility", visibility,
+                   "auto (the renderer's choice), shadow-stage (frames shade the stage's visibility buffer) or depth-test "
+                   "(frames draw the scene again)")
+        ->check(CLI::IsMember({"auto", "shadow-stage", "depth-test"}))
+        ->capture_default_str();
     CLI11_PARSE(app, argc, argv);
     std::printf("# %d threads; turntables at %dx%d with --ground; shadow stage ms summed over the frames (and the first "
                 "frame's), ratio to ray traced, the same less the visibility pass the frame shades from (and its ratio), the stage "
@@ -192,6 +195,6 @@ int main(int argc, char** argv) {
     for (const std::string& f : bench::splitList(frames)) frameCounts.push_back(std::stoi(f));
     for (const std::string& s : bench::splitList(scenes))
         benchScene(s, frameCounts, width, height, bench::splitList(penumbrae), bench::splitList(modes), singleFrameRuns,
-                   forwardFrames);
+                   render::parseFrameVisibility(visibility));
     return 0;
 }

@@ -1,6 +1,8 @@
 #pragma once
 // Deferred shade: the shade stage run over a visibility buffer that something other than the
-// depth test filled — the camera rays of the ray-tracing renderer (render/ray_traced_frame.h).
+// frame's own depth test filled — the camera rays of the ray-tracing renderer, or the shadow
+// stage's visibility buffer, which a shadowed raster frame of one sample shades instead of drawing
+// the scene again (render/renderer.cpp).
 //
 // Each sample names the triangle of a recorded draw it sees (Burns and Hunt's visibility buffer,
 // 2013, per sample). For every pixel, each distinct triangle among its samples is shaded once, at

@@ -136,6 +136,17 @@ Renderer parseRenderer(const std::string& name) {
 
 const char* rendererName(Renderer renderer) { return renderer == Renderer::Raytrace ? "raytrace" : "raster"; }
 
+FrameVisibility parseFrameVisibility(const std::string& name) {
+    if (name == "auto") return FrameVisibility::Auto;
+    if (name == "shadow-stage") return FrameVisibility::ShadowStage;
+    if (name == "depth-test") return FrameVisibility::DepthTest;
+    throw scene::InputError("--frame-visibility: '" + name + "' is not auto, shadow-stage or depth-test");
+}
+
+const char* frameVisibilityName(FrameVisibility v) {
+    return v == FrameVisibility::Auto ? "auto" : v == FrameVisibility::ShadowStage ? "shadow-stage" : "depth-test";
+}
+
 const char* textureFilterName(TextureFilterOverride f) {
     switch (f) {
         case TextureFilterOverride::File: return "file";

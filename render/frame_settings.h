@@ -41,6 +41,18 @@ struct SceneOptions {
     bool zUp = false;     // --up-axis z: mesh files whose up is +z are turned to +y on load
 };
 
+/// Where a shadowed raster frame's visibility comes from. At one sample (standard depth, the
+/// colour or shadow-pixels view, no frustum cull) the shadow stage's visibility buffer names, at
+/// every pixel, the triangle the frame's depth test would keep, so the frame may shade that buffer
+/// (Pipeline::shadeVisible) instead of rasterizing the scene again: the same image bit for bit,
+/// one pass over the geometry fewer, but a per-pixel cost the forward path's block lanes do not
+/// pay (render/renderer.cpp, kTrianglesPerPixelToShadeShadowVisibility). --frame-visibility.
+enum class FrameVisibility {
+    Auto,         // the shadow stage's buffer where it serves and the scene is dense enough to pay
+    ShadowStage,  // the shadow stage's buffer wherever it serves
+    DepthTest,    // always drawn forward
+};
+
 struct FrameSettings {
     int width = 1280;
     int height = 720;
@@ -89,12 +101,9 @@ struct FrameSettings {
     int warmup = 2;           // voxel models: frames drawn first so occlusion culling converges
     bool debugCamera = false; // voxel models: show the frame's selection from behind and above
     rt::ShadowOptions shadows; // --shadows, --soft, --light-radius, --shadow-map-size, --soft-samples
-    /// A raster frame of one sample (standard depth, the colour or shadow-pixels view, no
-    /// frustum cull) whose shadow stage drew its own visibility buffer (--shadows, --ao) shades
-    /// what that buffer saw (Pipeline::shadeVisible) instead of rasterizing the scene again: the
-    /// same image bit for bit, one pass over the geometry fewer (docs/architecture.md). False
-    /// draws it forward, for a program (or test) that compares the two.
-    bool shadeShadowStageVisibility = true;
+    /// How a raster frame whose shadow stage drew its own visibility buffer (--shadows, --ao)
+    /// finds what each sample shows (docs/ray_tracing.md, "The frame shades what the buffer saw").
+    FrameVisibility frameVisibility = FrameVisibility::Auto;
     /// --ao N, --ao-distance D: ambient occlusion by N rays a pixel (rt/ambient_occlusion.h).
     rt::AmbientOcclusionOptions ambientOcclusion;
     /// --environment neutral|FILE: image-based lighting from the built-in studio or an
@@ -141,5 +150,7 @@ void applyAccel(const std::string& name, FrameSettings& f);
 const char* accelName(rt::CasterAccel accel);
 Renderer parseRenderer(const std::string& name);  // raster or raytrace; throws scene::InputError
 const char* rendererName(Renderer renderer);
+FrameVisibility parseFrameVisibility(const std::string& name);  // auto, shadow-stage or depth-test; throws scene::InputError
+const char* frameVisibilityName(FrameVisibility visibility);
 
 }  // namespace cuberille::render

@@ -222,6 +222,25 @@ raster::VisibilityShadeStats shadeThenDrawSeeThrough(raster::Pipeline& pipeline,
     return shade;
 }
 
+// Shading the shadow stage's visibility buffer saves the forward pass's work per triangle (its
+// front end, binning and coverage, for triangles never seen too, and the shading of overdrawn
+// pixels) and costs some per covered pixel that the forward path's 8x8 lanes do not pay (grouping
+// each pixel by triangle, its own edge and depth values). Measured on turntables at 1280x720 on
+// their floors, hybrid shadows, the two ways alternating (docs/performance.md, "Shadowed frames
+// shade the shadow stage's visibility buffer"): the dragon's frame (871k triangles, 0.95 a pixel)
+// 40-43% shorter; BrainStem (61.7k, 0.067) and DamagedHelmet (15.5k, 0.017) within this VM's noise
+// either way; Virtual City (8.4k, 0.009) 27-60% longer. A quarter of a triangle a pixel lies
+// between the dense scan and the rest (518k triangles at 1920x1080).
+constexpr double kTrianglesPerPixelToShadeShadowVisibility = 0.25;
+
+bool shadowStageVisibilityPays(const FrameSettings& o, const scene::Scene& s) {
+    if (o.frameVisibility != FrameVisibility::Auto) return o.frameVisibility == FrameVisibility::ShadowStage;
+    size_t opaqueTriangles = 0;
+    for (const scene::Mesh& m : s.meshes)
+        if (!m.seeThrough()) opaqueTriangles += m.triangleCount();
+    return double(opaqueTriangles) >= kTrianglesPerPixelToShadeShadowVisibility * double(o.width) * double(o.height);
+}
+
 // A raster frame whose shadow stage has just drawn its own visibility buffer at the frame's one
 // sample (SceneShadows::seenDraws): the depth test would keep, at every pixel, the triangle that
 // buffer names, so the frame shades those (the opaque draws carrying the masked lighting) instead
@@ -472,9 +491,10 @@ void render3d(State& st, const FrameSettings& o, RenderResult& result) {
     // A frame the shadow stage has already looked at through its own visibility buffer, as the
     // depth test would at one sample, shades what it saw (drawFrameOverShadowStageVisibility).
     raster::VisibilityBuffer seen;
-    const bool overShadowStageVisibility = shadowed && !traced && o.shadeShadowStageVisibility && o.msaa == 1 && !culling &&
-                                           !normals && (o.view == View::Color || o.view == View::ShadowPixels) &&
-                                           o.depth == raster::DepthConvention::Standard && shadows->seenDraws(s, seen);
+    const bool overShadowStageVisibility = shadowed && !traced && o.msaa == 1 && !culling && !normals &&
+                                           (o.view == View::Color || o.view == View::ShadowPixels) &&
+                                           o.depth == raster::DepthConvention::Standard && shadowStageVisibilityPays(o, s) &&
+                                           shadows->seenDraws(s, seen);
     if (traced) {
         drawRayTracedFrame(st, o, drawn, s.camera, shadows, result);
     } else if (overShadowStageVisibility) {
@@ -672,9 +692,12 @@ std::string statsJson(const std::string& sceneName, const FrameSettings& o, cons
                             {"traceMs", rt.rays.traceMs},
                             {"shadeMs", rt.shade.vertexMs + rt.shade.setupMs + rt.shade.shadeMs}};
     }
+    if (r.shadows && o.renderer == Renderer::Raster && !r.shadedShadowStageVisibility)
+        j["frameVisibility"] = {{"asked", frameVisibilityName(o.frameVisibility)}, {"from", "depth test"}};
     if (r.shadedShadowStageVisibility) {
         const raster::VisibilityShadeStats& v = *r.shadedShadowStageVisibility;
-        j["frameVisibility"] = {{"from", "shadow stage"},
+        j["frameVisibility"] = {{"asked", frameVisibilityName(o.frameVisibility)},
+                                {"from", "shadow stage"},
                                 {"trianglesSeen", v.trianglesSeen},
                                 {"samplesWithoutSetUp", v.samplesWithoutSetUp},
                                 {"shadeMs", v.vertexMs + v.setupMs + v.shadeMs}};

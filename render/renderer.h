@@ -57,7 +57,7 @@ struct RenderResult {
     std::optional<FrustumCullStats> culling;    // with frustumCull
     std::optional<RayTracedFrameStats> rayTraced;  // with Renderer::Raytrace, 3D scenes
     /// A raster frame that shaded the shadow stage's visibility buffer instead of rasterizing its
-    /// opaque draws a second time (FrameSettings::shadeShadowStageVisibility): what that cost.
+    /// opaque draws a second time (FrameSettings::frameVisibility): what that cost.
     std::optional<raster::VisibilityShadeStats> shadedShadowStageVisibility;
     std::optional<VoxelRayFrameStats> voxelRays;   // with Renderer::Raytrace, voxel models
 };

@@ -261,7 +261,7 @@ TEST_F(Renderer, RayTracedFramesAreTheRasterizersButWhereSnappingDecides) {
 }
 
 // A raster frame of one sample whose shadow stage drew its own visibility buffer shades what that
-// buffer saw (FrameSettings::shadeShadowStageVisibility) instead of rasterizing the scene again:
+// buffer saw (FrameVisibility::ShadowStage) instead of rasterizing the scene again:
 // the forward frame's image bit for bit — in each shadow mode, hard and soft, with occlusion alone,
 // through the demo's alpha-tested screen and under its blended sphere, on a model's floor — frame
 // after frame, as the camera turns and the size changes (the kept pipeline's storage reused).
@@ -290,8 +290,9 @@ TEST_F(Renderer, FramesShadedFromTheShadowStagesVisibilityAreTheForwardFramesBit
             const std::string where = "shadows " + std::to_string(int(c.mode)) + (c.soft ? " soft" : "") + ", ao " +
                                       std::to_string(c.occlusionRays) + (c.ground ? ", floor" : "") + ", frame " +
                                       std::to_string(frame);
+            f.frameVisibility = render::FrameVisibility::ShadowStage;
             const render::RenderResult deferred = render::render(*c.scene, f);
-            f.shadeShadowStageVisibility = false;
+            f.frameVisibility = render::FrameVisibility::DepthTest;
             const render::RenderResult forward = render::render(*c.scene, f);
             ASSERT_TRUE(deferred.shadedShadowStageVisibility) << where;
             EXPECT_FALSE(forward.shadedShadowStageVisibility) << where;
@@ -305,6 +306,7 @@ TEST_F(Renderer, FramesShadedFromTheShadowStagesVisibilityAreTheForwardFramesBit
         render::FrameSettings f;
         f.width = 96, f.height = 72;
         f.shadows.mode = rt::ShadowMode::Hybrid;
+        f.frameVisibility = render::FrameVisibility::ShadowStage;
         change(f);
         return render::render(demo, f).shadedShadowStageVisibility.has_value();
     };
@@ -316,6 +318,16 @@ TEST_F(Renderer, FramesShadedFromTheShadowStagesVisibilityAreTheForwardFramesBit
     EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.depth = raster::DepthConvention::Reversed; }));
     EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.frustumCull = true; }));
     EXPECT_FALSE(servedFrom([](render::FrameSettings& f) { f.shadows.mode = rt::ShadowMode::None; }));
+    // Auto takes the buffer where the opaque triangles are at least a quarter of the pixels: the
+    // demo's 56k at 96x72, not the sliding cubes' 256 with their floors at 320x240 (19,200 would be needed).
+    EXPECT_TRUE(servedFrom([](render::FrameSettings& f) { f.frameVisibility = render::FrameVisibility::Auto; }));
+    render::FrameSettings small;
+    small.width = 320, small.height = 240;
+    small.shadows.mode = rt::ShadowMode::Hybrid;
+    small.ground = true;
+    EXPECT_FALSE(render::render(cube, small).shadedShadowStageVisibility);
+    small.frameVisibility = render::FrameVisibility::ShadowStage;
+    EXPECT_TRUE(render::render(cube, small).shadedShadowStageVisibility);
 }
 
 // The tiles and overdraw views carry a legend: each entry's swatch holds exactly its colour, and
