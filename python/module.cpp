@@ -73,6 +73,7 @@ render::FrameSettings frameSettings(int width, int height, int msaa, const py::k
         else if (k == "bvh_update") f.bvhUpdate = render::parseBvhUpdate(value.cast<std::string>());
         else if (k == "accel") render::applyAccel(value.cast<std::string>(), f);
         else if (k == "renderer") f.renderer = render::parseRenderer(value.cast<std::string>());
+        else if (k == "frame_visibility") f.frameVisibility = render::parseFrameVisibility(value.cast<std::string>());
         else if (k == "supersample") f.supersample = value.cast<int>();
         else if (k == "texture_filter") f.textureFilter = render::parseTextureFilter(value.cast<std::string>());
         else if (k == "depth") f.depth = render::parseDepthConvention(value.cast<std::string>());

@@ -34,7 +34,8 @@ class Scene:
         time, animation, zoom, orthographic, shadows, soft, light_radius, shadow_map_size, soft_samples,
         shadow_focus (view, the default for one frame, or scene: a sun's map kept across views),
         ao (ambient occlusion: rays a pixel), ao_distance (their reach; 0: a tenth of the model),
-        environment ("neutral" or an equirectangular .hdr radiance map), environment_intensity, frustum_cull, ground, shadow_catcher, bvh_update, accel, renderer, supersample, texture_filter, depth, background, legend, pixel_error,
+        environment ("neutral" or an equirectangular .hdr radiance map), environment_intensity, frustum_cull, ground, shadow_catcher, bvh_update, accel, renderer,
+        frame_visibility (a shadowed raster frame: "auto", "shadow-stage" or "depth-test"; the same image), supersample, texture_filter, depth, background, legend, pixel_error,
         voxel_resolution, no_hybrid, no_occlusion, warmup. Afterwards `stats` holds the frame's
         statistics as `--stats` writes them."""
         image = self._scene.render(width, height, msaa, linear, **options)

@@ -131,6 +131,21 @@ def test_the_ray_tracer_sees_what_the_rasterizer_sees(examples):
         scene.render(renderer="path", **settings)
 
 
+def test_a_shadowed_frame_is_the_same_image_from_the_shadow_stages_visibility(examples):
+    """frame_visibility="shadow-stage" shades the shadow stage's visibility buffer instead of
+    drawing the scene again, "depth-test" draws it again: the same image, and the stats say which."""
+    scene = cuberille.Scene(str(examples / "knot.obj"))
+    settings = dict(width=160, height=120, ground=True, shadows="hybrid", ao=2)
+    shaded = scene.render(frame_visibility="shadow-stage", **settings)
+    assert scene.stats["frameVisibility"]["from"] == "shadow stage"
+    assert scene.stats["frameVisibility"]["trianglesSeen"] > 0
+    drawn = scene.render(frame_visibility="depth-test", **settings)
+    assert scene.stats["frameVisibility"]["from"] == "depth test"
+    assert np.array_equal(shaded, drawn)
+    with pytest.raises(cuberille.InputError, match="--frame-visibility: 'maybe' is not auto, shadow-stage or depth-test"):
+        scene.render(frame_visibility="maybe", **settings)
+
+
 def test_linear_returns_the_renderers_floats(examples):
     scene = cuberille.Scene(examples / "torus.ply")
     linear = scene.render(64, 48, linear=True)
