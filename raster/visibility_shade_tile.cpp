@@ -279,7 +279,7 @@ void prefetchSetups(const std::vector<SeenDraw>& seenDraws, std::span<const Seen
 // groups are found first, so its set-ups can be asked for together (prefetchSetups).
 template <int S>
 void shadeTileWith(std::span<const DrawCall> draws, const std::vector<SeenDraw>& seenDraws, const VisibilityBuffer& seen,
-               int tile, Framebuffer& fb, StageCounters& counters, uint64_t& withoutSetUp) {
+                   int tile, Framebuffer& fb, StageCounters& counters, uint64_t& withoutSetUp) {
     const int originX = (tile % fb.tilesX()) * kTileSizePixels, originY = (tile / fb.tilesX()) * kTileSizePixels;
     const int width = fb.width(), height = fb.height();
     thread_local std::vector<SeenPixel> pixels;

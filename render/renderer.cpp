@@ -193,14 +193,20 @@ void finishView(const raster::Pipeline& p, View view, const scene::Camera* camer
     resolveMs = raster::nowMs() - t0;
 }
 
+// The frame's framebuffer, cleared to --background where given, else to the scene's own.
+raster::FramebufferDesc clearedFramebufferDesc(const FrameSettings& o, glm::vec4 sceneBackground) {
+    raster::FramebufferDesc desc = framebufferDesc(o);
+    desc.clearColor = o.background ? clearColorFor(*o.background) : sceneBackground;
+    return desc;
+}
+
 // One frame: submit(pipeline) records the draws, whose arrays stay alive until endFrame
 // (Pipeline::draw's contract), then the view is resolved.
 template <class Submit>
 void drawFrame(const FrameSettings& o, glm::vec4 sceneBackground, const scene::Camera* camera, Submit&& submit,
                RenderResult& result) {
     raster::Pipeline pipeline;
-    raster::FramebufferDesc desc = framebufferDesc(o);
-    desc.clearColor = o.background ? clearColorFor(*o.background) : sceneBackground;
+    const raster::FramebufferDesc desc = clearedFramebufferDesc(o, sceneBackground);
     pipeline.beginFrame(desc);
     submit(pipeline);
     pipeline.endFrame();
@@ -249,8 +255,7 @@ void drawFrameOverShadowStageVisibility(State& state, const FrameSettings& o, co
                                         const raster::VisibilityBuffer& seen, const raster::Lighting& shadowed,
                                         RenderResult& result) {
     raster::Pipeline& pipeline = state.deferredFrames;
-    raster::FramebufferDesc desc = framebufferDesc(o);
-    desc.clearColor = o.background ? clearColorFor(*o.background) : drawn.background;
+    const raster::FramebufferDesc desc = clearedFramebufferDesc(o, drawn.background);
     pipeline.beginDeferredFrame(desc);
     drawn.draw(pipeline, float(o.width) / float(o.height), &shadowed);
     result.shadedShadowStageVisibility = shadeThenDrawSeeThrough(pipeline, seen, nullptr);
@@ -267,8 +272,7 @@ void drawFrameOverShadowStageVisibility(State& state, const FrameSettings& o, co
 void drawRayTracedFrame(State& state, const FrameSettings& o, const scene::Scene& drawn, const scene::Camera& camera,
                         SceneShadows* shadows, RenderResult& result) {
     raster::Pipeline& pipeline = state.deferredFrames;
-    raster::FramebufferDesc desc = framebufferDesc(o);
-    desc.clearColor = o.background ? clearColorFor(*o.background) : drawn.background;
+    const raster::FramebufferDesc desc = clearedFramebufferDesc(o, drawn.background);
     pipeline.beginDeferredFrame(desc);
     const float aspect = float(o.width) / float(o.height);
     drawn.draw(pipeline, aspect, nullptr);  // the shadow stage's lighting comes after the rays, at shadeVisible
@@ -529,8 +533,7 @@ void drawVoxelRayTracedFrame(State& st, const FrameSettings& o, RenderResult& re
     if (!st.voxelRays || st.voxelRays->level() != level || st.voxelRays->structure() != o.voxelAccel)
         st.voxelRays = std::make_unique<VoxelRayScene>(s.model(), level, o.voxelAccel);
     raster::Pipeline pipeline;
-    raster::FramebufferDesc desc = framebufferDesc(o);
-    desc.clearColor = o.background ? clearColorFor(*o.background) : s.background;
+    const raster::FramebufferDesc desc = clearedFramebufferDesc(o, s.background);
     pipeline.beginDeferredFrame(desc);
     VoxelRayEffects effects;
     effects.shadows = o.shadows.mode == rt::ShadowMode::RayTraced;

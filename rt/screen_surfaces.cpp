@@ -208,9 +208,10 @@ void VisibilityBuffer::seenByRange(raster::VisibilityBuffer& out) const {
     out.width = s.width, out.height = s.height, out.samples = 1;
     out.draw.resize(s.triangle.size());
     out.triangle.resize(s.triangle.size());
-    // Neighbouring pixels mostly see one range, so each row starts its search from the range the
-    // pixel before it found; the ranges are in triangle order (an empty one shares its first
-    // triangle with the next, which the search passes over to the last that starts at or below t).
+    // Neighbouring pixels mostly see one range, so a pixel first tries the range the pixel before
+    // it in its row found, and searches only when that misses; the ranges are in triangle order
+    // (an empty one shares its first triangle with the next, and the search takes the last range
+    // that starts at or below t).
     raster::parallelFor(size_t(s.height), [&](size_t y) {
         uint32_t k = 0;
         for (size_t i = y * size_t(s.width); i < (y + 1) * size_t(s.width); ++i) {
