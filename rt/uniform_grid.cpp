@@ -9,6 +9,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "rt/packet_triangle_lanes.h"
 #include "rt/ray_query.h"
 
 namespace cuberille::rt {
@@ -170,6 +171,8 @@ RayHit walk(const UniformGrid& grid, const TriangleMeshView& mesh, const Ray& ra
     return best;
 }
 
+static_assert(kMaxGridPacketRays <= kPacketTriangleLanesRays, "a packet's rays fit the triangle test's lanes");
+
 // The packet's rays as the slices go by, in structure-of-arrays form: the per-slice pass over
 // the rays (where each crosses the slice) is a loop the compiler vectorises across them, which
 // the profile showed was most of a packet's time when written a ray at a time.
@@ -307,6 +310,17 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
         const int slice = frame.cellOf(r.origin + r.direction * packet.entry[i])[k];
         first = step > 0 ? std::min(first, slice) : std::max(first, slice);
     }
+    for (int i = n; i < kMaxGridPacketRays; ++i) packet.bestT[i] = 0.0f;  // read with their lanes' group, never wanted
+    // The rays in the triangle test's lanes, when they share its axis permutation (a coherent
+    // packet's nearly always do; else each candidate ray is tested on its own).
+    PacketTriangleLanes lanes;
+    bool inLanes;
+    {
+        const WatertightRay* tests[kMaxGridPacketRays];
+        float tMins[kMaxGridPacketRays];
+        for (int i = 0; i < n; ++i) tests[i] = &*packet.test[i], tMins[i] = rays[i].tMin;
+        inLanes = lanes.set(tests, tMins, n);
+    }
     auto retire = [&](int i) { active &= ~(uint64_t(1) << i), packet.looking[i] = 0.0f; };
     SliceStretches stretch{};  // zeroed: the cull reads whole 8-ray words, past the packet's last ray too
     // The near and far faces of slices `from` to `to` in the direction of travel; the crossing
@@ -373,9 +387,14 @@ void tracePacket(const UniformGrid& grid, const TriangleMeshView& mesh, std::spa
                         // meets the triangle's box can hit it in this slice.
                         uint64_t candidates = raysMeetingBox(stretch, firstWord, lastWord, triLo, triHi) & crossing;
                         if (kAnyHit) candidates &= active;  // a ray with a hit is done
+                        if (counters) counters->trianglesTested += uint64_t(std::popcount(candidates));
+                        // The watertight test across the candidate rays in lanes, then the scalar
+                        // test for those it does not reject (the same arithmetic, so the same hits;
+                        // rt/packet_triangle_lanes.h). A lone candidate goes straight to the scalar.
+                        if (inLanes && (candidates & (candidates - 1)))
+                            candidates = raysTheTriangleMayHit(lanes, packet.bestT, candidates, p0, p1, p2);
                         for (; candidates; candidates &= candidates - 1) {
                             const int i = std::countr_zero(candidates);
-                            if (counters) ++counters->trianglesTested;
                             if (!offerHit(*packet.test[i], p0, p1, p2, triangle, rays[i].tMin, hits[i], filter, &rays[i])) continue;
                             packet.bestT[i] = hits[i].t;
                             if (kAnyHit) retire(i);
