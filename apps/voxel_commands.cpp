@@ -171,11 +171,12 @@ int reportVoxelize(const VoxelizeCommandOptions& o, const VoxelizeSettings& v, c
     if (!o.quiet)
         std::printf("voxelized %s at %u^3 (%s): %llu triangles -> %llu voxels in %llu blocks, %.0f ms "
                     "(open %.0f, rasterize %.0f, merge %.0f, emit %.0f, simplify %.0f, write %.0f); %u LOD levels, "
-                    "%zu blocks in all -> %s\n",
+                    "%zu blocks in all -> %s%s\n",
                     o.input.string().c_str(), o.resolution, voxel::separabilityName(v.voxelize.separability),
                     (unsigned long long)s.triangles, (unsigned long long)s.voxels, (unsigned long long)s.blocks, totalMs,
                     openMs, s.rasterizeMs, s.mergeMs, s.emitMs, ps.simplifyMs, writeMs, ps.levels, blocks,
-                    o.out.string().c_str());
+                    o.out.string().c_str(),
+                    s.woundInwards ? " (the mesh is wound inwards: its voxels' normals and faces were turned outwards)" : "");
     if (!o.statsPath.empty()) {
         const double seconds = totalMs / 1000.0;
         writeJsonAtomically(o.statsPath,
@@ -189,6 +190,7 @@ int reportVoxelize(const VoxelizeCommandOptions& o, const VoxelizeSettings& v, c
                    {"leafPieces", s.leafPieces},
                    {"exactTests", s.exactTests},
                    {"conservativeVoxels", s.conservativeVoxels},
+                   {"woundInwards", s.woundInwards},
                    {"voxels", s.voxels},
                    {"blocks", s.blocks},
                    {"sourceTriangles", s.sourceTriangles},
@@ -311,7 +313,8 @@ std::string voxelizeRange(const VoxelizeCommandOptions& o, const std::vector<std
     AtomicOutputFile out(rangeFile);
     lod::buildPyramidRange(std::move(model), v.pyramid, plan.splitLevel, out.stream());
     out.commit();
-    return nlohmann::json{{"conservativeVoxels", s.conservativeVoxels}, {"mergeMs", mergeMs}}.dump();
+    return nlohmann::json{{"conservativeVoxels", s.conservativeVoxels}, {"mergeMs", mergeMs}, {"woundInwards", s.woundInwards}}
+        .dump();
 }
 
 int finishVoxelizeFromRanges(const VoxelizeCommandOptions& o, const std::vector<std::filesystem::path>& parts,
@@ -335,6 +338,7 @@ int finishVoxelizeFromRanges(const VoxelizeCommandOptions& o, const std::vector<
         const nlohmann::json j = nlohmann::json::parse(r);
         s.conservativeVoxels += j.at("conservativeVoxels").get<uint64_t>();
         s.mergeMs += j.at("mergeMs").get<double>();
+        s.woundInwards = j.at("woundInwards").get<bool>();  // every range merged the same parts' sums
     }
     for (const voxel::VoxelBlock& b : join.layout().blocks)
         if (b.level == 0) ++s.blocks, s.voxels += b.totalVoxels(), s.sourceTriangles += b.totalTriangles();

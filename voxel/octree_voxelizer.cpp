@@ -51,6 +51,47 @@ uint8_t activeFaces(const glm::dvec3& n, double epsilon) {
     return m;
 }
 
+/// The faces of the other side of each axis: what a face mask becomes when the surface's normal
+/// is reversed (+x and -x swap, and so on).
+uint8_t mirroredFaces(uint8_t m) {
+    static_assert(kFacePosX == 1 && kFaceNegX == 2 && kFacePosY == 4 && kFaceNegY == 8 && kFacePosZ == 16 && kFaceNegZ == 32);
+    return uint8_t((m & 0x15u) << 1 | (m & 0x2Au) >> 1);
+}
+
+/// Which way a mesh is wound (the defect this undoes: docs/voxelization.md). Active faces and
+/// normals are taken from the triangles as wound, outward for a counter-clockwise mesh; a mesh
+/// wound the other way (a closed scan wound clockwise seen from outside, as
+/// ../shared/data/scans/cyberware-horse is) voxelized inside out, its front voxels' active faces
+/// on the inside, and its frames showed the inside of the far wall. The winding's sign is that of
+/// the mesh's signed volume seen from a point c: T(c) = sum over triangles of (p0 - c) . N, with
+/// N = (p1 - p0) x (p2 - p0) (six times the volume, by the divergence theorem). For a closed mesh
+/// the N sum to zero and T does not depend on c; for an open surface it does, T(c) = T(o) -
+/// (c - o) . sum N, and the surface is taken as wound inwards only when T is negative seen from
+/// every corner of the grid's cube (so from every point in it): a sphere with a hole is, a flat
+/// patch never is, whichever way either is wound.
+///
+/// Each triangle's terms (about the cube's centre o, in unit-cube coordinates) are scaled by
+/// 2^kWindingBits and rounded to integers, so the sums have the same bits whatever thread or
+/// process (partial voxelizations) added which triangles; a term under half a unit is lost, which
+/// needs a triangle under 2^-49 of the cube's area.
+constexpr int kWindingBits = 48;
+
+void addWindingTerms(const glm::dvec3 (&p)[3], const glm::dvec3& n, WindingSums& sums) {
+    const double scale = std::ldexp(1.0, kWindingBits);
+    sums.volume += uint64_t(std::llround(glm::dot(p[0] - glm::dvec3(0.5), n) * scale));
+    for (int a = 0; a < 3; ++a) sums.area[a] += uint64_t(std::llround(n[a] * scale));
+}
+
+/// A mesh wound inwards has its normals negated and its face masks mirrored when its blocks are
+/// finished.
+bool woundInwards(const WindingSums& sums) {
+    const double volume = double(int64_t(sums.volume));
+    const glm::dvec3 area(double(int64_t(sums.area[0])), double(int64_t(sums.area[1])), double(int64_t(sums.area[2])));
+    // T at the corner where (c - o) . sum N is least: T is largest there.
+    const double largest = volume + 0.5 * (std::abs(area.x) + std::abs(area.y) + std::abs(area.z));
+    return largest < 0.0;
+}
+
 template <class T>
 T interpolate(const T (&v)[3], const glm::dvec2& bary) {
     return v[0] * (1.0 - bary.x - bary.y) + v[1] * bary.x + v[2] * bary.y;
@@ -90,6 +131,7 @@ public:
             piece.v[1].bary = {1.0, 0.0};
             piece.v[2].bary = {0.0, 1.0};
             const glm::dvec3 g = glm::cross(p[1] - p[0], p[2] - p[0]);
+            addWindingTerms(p, g, winding_);
             const double len = glm::length(g);
             tri.geometricNormal = len > 0.0 ? g / len : glm::dvec3(0.0);
             tri.faceMask = activeFaces(tri.geometricNormal, options_.activeFaceEpsilon);
@@ -102,6 +144,8 @@ public:
     BlockTriangleBuckets& blockTriangles() { return blockTriangles_; }
     uint64_t leafPieces() const { return leafPieces_; }
     uint64_t exactTests() const { return exactTests_; }
+    /// The inserted triangles' winding terms, summed (wrapping: the same bits in any order).
+    const WindingSums& winding() const { return winding_; }
     double readMs = 0;
 
 private:
@@ -225,13 +269,14 @@ private:
     BlockTriangles* lastBucket_ = nullptr;  // the bucket of the block last recorded into
     uint64_t lastBlock_ = 0;
     uint64_t leafPieces_ = 0, exactTests_ = 0;
+    WindingSums winding_;
 };
 
 /// A block's voxels from its merged leaf sums: the voxels the separability keeps, with their
 /// normals and colours, and its source triangles in key order. The last step of voxelizeMesh and of
 /// mergePartialVoxelizations alike. `touched` counts the conservative voxels.
-void finishBlock(const BlockPartial& p, Separability separability, bool withColors, uint32_t blockSize, VoxelBlock& b,
-                 uint64_t& touched) {
+void finishBlock(const BlockPartial& p, Separability separability, bool withColors, uint32_t blockSize,
+                 bool woundInwards, VoxelBlock& b, uint64_t& touched) {
     b.coord = p.coord;
     b.tightMin = glm::uvec3(blockSize);
     for (size_t i = 0; i < p.leaves.size(); ++i) {
@@ -243,9 +288,10 @@ void finishBlock(const BlockPartial& p, Separability separability, bool withColo
                           (separability == Separability::TwentySix && s.targets != 0);
         if (!keep) continue;
         const glm::uvec3 local = positionOfMorton(p.leafMorton[i]);
-        const glm::dvec3 n(double(s.normal[0]), double(s.normal[1]), double(s.normal[2]));
+        const double sign = woundInwards ? -1.0 : 1.0;
+        const glm::dvec3 n(sign * double(s.normal[0]), sign * double(s.normal[1]), sign * double(s.normal[2]));
         const double len = glm::length(n);
-        b.voxels.push_back(packVoxel(local.x, local.y, local.z, s.faceMask));
+        b.voxels.push_back(packVoxel(local.x, local.y, local.z, woundInwards ? mirroredFaces(s.faceMask) : s.faceMask));
         b.normals.push_back(packNormal1010102(len > 0.0 ? glm::vec3(n / len) : glm::vec3(0.0f)));
         if (withColors) {
             const LeafColorSums& c = p.colors[i];
@@ -346,11 +392,11 @@ public:
 
     /// The whole model's blocks, in Morton order (each block's partial made and finished on one
     /// task, then dropped: the peak holds one partial per thread).
-    void emit(const VoxelizeOptions& options, VoxelModel& model, VoxelizeStats& stats) {
+    void emit(const VoxelizeOptions& options, bool woundInwards, VoxelModel& model, VoxelizeStats& stats) {
         std::vector<VoxelBlock> blocks(groups_.size());
         std::vector<uint64_t> touched(groups_.size(), 0);  // conservative voxels per block
         raster::parallelFor(groups_.size(), [&](size_t g) {
-            finishBlock(partialOf(g), options.separability, withColors_, model.blockSize, blocks[g], touched[g]);
+            finishBlock(partialOf(g), options.separability, withColors_, model.blockSize, woundInwards, blocks[g], touched[g]);
         });
         keepFinishedBlocks(blocks, touched, model, stats);
     }
@@ -476,6 +522,7 @@ namespace {
 struct BuiltTrees {
     tbb::enumerable_thread_specific<std::unique_ptr<TreeBuilder>> builders;
     std::vector<TreeBuilder*> trees;
+    WindingSums winding;  // the trees' sums, summed
 };
 
 VoxelModel modelHeader(const MeshView& mesh, const VoxelizeOptions& options) {
@@ -524,6 +571,7 @@ void buildTrees(const MeshView& mesh, const VoxelizeOptions& options, const Voxe
         if (b) built.trees.push_back(b.get());
     stats.threads = int(built.trees.size());
     for (TreeBuilder* b : built.trees) {
+        built.winding += b->winding();
         stats.octreeBytes += b->tree().reservedBytes();
         stats.leafPieces += b->leafPieces();
         stats.exactTests += b->exactTests();
@@ -548,7 +596,8 @@ VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, Vo
     BuiltTrees built;
     buildTrees(mesh, options, model, 0, mesh.chunkCount(), built, stats);
     const double t0 = raster::nowMs();
-    if (!built.trees.empty()) emitterOf(built).emit(options, model, stats);
+    stats.woundInwards = woundInwards(built.winding);
+    if (!built.trees.empty()) emitterOf(built).emit(options, stats.woundInwards, model, stats);
     stats.blocks = model.blocks.size();
     stats.emitMs = raster::nowMs() - t0;
     if (statsOut) *statsOut = stats;
@@ -567,6 +616,7 @@ PartialVoxelization voxelizeChunks(const MeshView& mesh, const VoxelizeOptions& 
     buildTrees(mesh, options, part.header, firstChunk, chunkCount, built, stats);
     const double t0 = raster::nowMs();
     if (!built.trees.empty()) part.blocks = emitterOf(built).partials();
+    part.winding = built.winding;
     stats.emitMs = raster::nowMs() - t0;
     if (statsOut) *statsOut = stats;
     return part;
@@ -600,18 +650,22 @@ VoxelModel mergePartialVoxelizations(std::vector<PartialVoxelization> parts, Vox
         groups.push_back({i, j});
         i = j;
     }
+    WindingSums winding;
+    for (const PartialVoxelization& p : parts) winding += p.winding;
+    const bool inwards = woundInwards(winding);
     std::vector<VoxelBlock> blocks(groups.size());
     std::vector<uint64_t> touched(groups.size(), 0);
     raster::parallelFor(groups.size(), [&](size_t g) {
         std::vector<const BlockPartial*> partials;
         for (size_t k = groups[g].first; k < groups[g].second; ++k) partials.push_back(&parts[refs[k].part].blocks[refs[k].block]);
         if (partials.size() == 1)
-            finishBlock(*partials[0], model.separability, withColors, model.blockSize, blocks[g], touched[g]);
+            finishBlock(*partials[0], model.separability, withColors, model.blockSize, inwards, blocks[g], touched[g]);
         else
-            finishBlock(sumBlockPartials(partials, withColors), model.separability, withColors, model.blockSize, blocks[g],
-                        touched[g]);
+            finishBlock(sumBlockPartials(partials, withColors), model.separability, withColors, model.blockSize, inwards,
+                        blocks[g], touched[g]);
     });
     VoxelizeStats stats;
+    stats.woundInwards = inwards;
     for (const PartialVoxelization& p : parts) stats.chunks += p.chunkCount;
     keepFinishedBlocks(blocks, touched, model, stats);
     stats.blocks = model.blocks.size();

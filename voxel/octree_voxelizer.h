@@ -52,11 +52,28 @@ struct VoxelizeStats {
     double readMs = 0;             // summed over threads: reading and decompressing chunks
     double rasterizeMs = 0;        // wall: reading and inserting every chunk
     double mergeMs = 0, emitMs = 0;  // merge: collecting the trees (they merge per block in emit)
+    /// The mesh is wound clockwise seen from outside (its signed volume is negative): its voxels'
+    /// normals and active faces were turned outwards (docs/voxelization.md).
+    bool woundInwards = false;
 };
 
 /// Throws std::invalid_argument for a resolution that is not a power of two in range, and
 /// scene::InputError for bad chunk data.
 VoxelModel voxelizeMesh(const MeshView& mesh, const VoxelizeOptions& options, VoxelizeStats* stats = nullptr);
+
+/// Which way a mesh is wound, as sums over its triangles (octree_voxelizer.cpp, woundInwards):
+/// six times its signed volume seen from the grid's centre, and its triangles' area vectors
+/// (the cross products of their edges), each term scaled and rounded to an integer and summed
+/// with wrapping, so any split of the triangles sums to the same bits.
+struct WindingSums {
+    uint64_t volume = 0;
+    uint64_t area[3] = {0, 0, 0};
+    WindingSums& operator+=(const WindingSums& o) {
+        volume += o.volume;
+        for (int a = 0; a < 3; ++a) area[a] += o.area[a];
+        return *this;
+    }
+};
 
 /// One block's share of a voxelization from some of the mesh's chunks: the leaf sums of the voxels
 /// those chunks' triangles touch (integer, before the separability's choice; ascending Morton code
@@ -79,6 +96,10 @@ struct PartialVoxelization {
     VoxelModel header;
     uint64_t firstChunk = 0, chunkCount = 0;
     std::vector<BlockPartial> blocks;
+    /// These chunks' share of the sums that say which way the mesh is wound: a mesh wound inwards
+    /// has its normals and active faces turned outwards when the parts are merged, as voxelizeMesh
+    /// does.
+    WindingSums winding;
 };
 PartialVoxelization voxelizeChunks(const MeshView& mesh, const VoxelizeOptions& options, size_t firstChunk,
                                    size_t chunkCount, VoxelizeStats* stats = nullptr);

@@ -15,7 +15,7 @@ namespace cuberille::voxel {
 namespace {
 
 constexpr char kMagic[4] = {'C', 'V', 'X', 'P'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: the part's winding sums after its chunk range
 static_assert(sizeof(SourceTriangle) == 60, "source triangles are written as their 60 bytes");
 
 void putBlock(ByteWriter& w, const BlockPartial& b, bool withColors) {
@@ -97,6 +97,8 @@ uint64_t getHeader(ByteReader& r, PartialVoxelization& part) {
     h.hasColors = r.get<uint8_t>("colours") != 0;
     part.firstChunk = r.get<uint64_t>("first chunk");
     part.chunkCount = r.get<uint64_t>("chunk count");
+    part.winding.volume = r.get<uint64_t>("winding volume");
+    for (uint64_t& a : part.winding.area) a = r.get<uint64_t>("winding area");
     const uint64_t blocks = r.get<uint64_t>("block count");
     if (blocks > r.remaining() / 28) r.fail("block count", std::to_string(blocks) + " blocks do not fit in the file");
     return blocks;
@@ -184,6 +186,8 @@ void writePartialVoxelization(const PartialVoxelization& part, std::ostream& out
     w.put(uint8_t(h.hasColors));
     w.put(part.firstChunk);
     w.put(part.chunkCount);
+    w.put(part.winding.volume);
+    for (const uint64_t a : part.winding.area) w.put(a);
     w.put(uint64_t(part.blocks.size()));
     // A block at a time to the stream: a part of a large model is hundreds of MiB, not to be
     // built whole in memory first.

@@ -7,7 +7,7 @@
 //
 //   "CVXP" u32 version
 //   header: u32 resolution, f64 origin[3], f64 extent, u32 blockSize, u32 separability, u8 hasColors
-//   u64 firstChunk, u64 chunkCount, u64 blocks
+//   u64 firstChunk, u64 chunkCount, u64 winding volume, u64 winding area[3] (WindingSums), u64 blocks
 //   per block: u32 coord[3], u64 leaves, u32 leafMorton[leaves],
 //              per leaf i64 normal[3], i64 weight, u8 faceMask, u8 targets,
 //              with colours per leaf i64 rgb[3],
