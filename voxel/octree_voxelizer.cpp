@@ -279,6 +279,7 @@ void finishBlock(const BlockPartial& p, Separability separability, bool withColo
                  bool woundInwards, VoxelBlock& b, uint64_t& touched) {
     b.coord = p.coord;
     b.tightMin = glm::uvec3(blockSize);
+    const double sign = woundInwards ? -1.0 : 1.0;  // the mesh's, so every voxel's normal turns alike
     for (size_t i = 0; i < p.leaves.size(); ++i) {
         const LeafSums& s = p.leaves[i];
         if (s.weight == 0) continue;  // reached only by pieces the exact test turned away
@@ -288,7 +289,6 @@ void finishBlock(const BlockPartial& p, Separability separability, bool withColo
                           (separability == Separability::TwentySix && s.targets != 0);
         if (!keep) continue;
         const glm::uvec3 local = positionOfMorton(p.leafMorton[i]);
-        const double sign = woundInwards ? -1.0 : 1.0;
         const glm::dvec3 n(sign * double(s.normal[0]), sign * double(s.normal[1]), sign * double(s.normal[2]));
         const double len = glm::length(n);
         b.voxels.push_back(packVoxel(local.x, local.y, local.z, woundInwards ? mirroredFaces(s.faceMask) : s.faceMask));
