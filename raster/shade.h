@@ -35,6 +35,13 @@ struct ShadeQueue {
     int count = 0;
     // Biased edge values at the pixel centre (each edge opposite its vertex).
     int64_t edge0[kCapacity], edge1[kCapacity], edge2[kCapacity];
+    // What shade() reads of them, converted by the back end's shadeQueue in vector lanes before
+    // it runs (raster/weight_numerators-inl.h): the screen-space weight numerators
+    // float(edge value - fill bias) at the centre, and for a shader that differences texture
+    // coordinates, at the centres one pixel right (edge + A·256) and one pixel down (+ B·256).
+    // One rounding from the exact integer each, as a scalar conversion rounds, so the same bits.
+    float numerator[3][kCapacity];
+    float numeratorRight[3][kCapacity], numeratorDown[3][kCapacity];
     uint32_t firstSample[kCapacity];  // index of the pixel's first sample in the tile
     uint32_t passMask[kCapacity];     // samples that passed the depth test
     uint32_t pixelIndex[kCapacity];   // y x image width + x: where screen-space inputs are read
@@ -92,6 +99,8 @@ inline void queueAcrossTriangles(CrossTriangleQueue& q, const CrossTriangleInput
 
 struct ConstantColorShader {
     static constexpr bool kShadesAcrossTriangles = false;
+    bool readsWeightNumerators() const { return false; }
+    bool differencesTexCoords() const { return false; }
     void shade(const TriangleSetup& t, const float*, ShadeQueue& q, StageCounters&) const {
         for (int i = 0; i < q.count; ++i) {
             q.red[i] = t.flatColor.r;
@@ -238,8 +247,8 @@ private:
         float w0, w1, w2;
     };
     [[gnu::always_inline]] static Weights weightsAt(const TriangleSetup& t, const ShadeQueue& q, int i) {
-        return weightsOf(float(q.edge0[i] - t.fillBias[0]), float(q.edge1[i] - t.fillBias[1]), float(q.edge2[i] - t.fillBias[2]),
-                         float(t.invDoubleArea), t.invW[0], t.invW[1], t.invW[2]);
+        return weightsOf(q.numerator[0][i], q.numerator[1][i], q.numerator[2][i], float(t.invDoubleArea), t.invW[0],
+                         t.invW[1], t.invW[2]);
     }
     /// The weights from the screen-space numerators e_k (edge value less fill bias, as float).
     [[gnu::always_inline]] static Weights weightsOf(float e0, float e1, float e2, float invArea, float invW0, float invW1,
@@ -278,22 +287,22 @@ private:
         interpolate<2>(v, layout_.texCoord, q.count, a.w, a.uv);
         const int n = layout_.count, o = layout_.texCoord;
         const float invArea = float(t.invDoubleArea);
-        auto uvAt = [&](int64_t e0, int64_t e1, int64_t e2) {
-            const float q0 = float(e0 - t.fillBias[0]) * invArea * t.invW[0];
-            const float q1 = float(e1 - t.fillBias[1]) * invArea * t.invW[1];
-            const float q2 = float(e2 - t.fillBias[2]) * invArea * t.invW[2];
+        // The division is made whatever the sum, and its result kept only where the sum is
+        // positive, so the loop has no branch and vectorises.
+        auto uvAt = [&](const float (&numerator)[3][N], int i) {
+            const float q0 = numerator[0][i] * invArea * t.invW[0];
+            const float q1 = numerator[1][i] * invArea * t.invW[1];
+            const float q2 = numerator[2][i] * invArea * t.invW[2];
             const float sum = q0 + q1 + q2;
-            const float norm = sum > 0.0f ? 1.0f / sum : NAN;
+            const float reciprocal = 1.0f / sum;
+            const float norm = sum > 0.0f ? reciprocal : NAN;
             return glm::vec2(q0 * v[o] + q1 * v[n + o] + q2 * v[2 * n + o],
                              q0 * v[o + 1] + q1 * v[n + o + 1] + q2 * v[2 * n + o + 1]) * norm;
         };
-        auto step = [](const int32_t* coefficient, int k) { return int64_t{coefficient[k]} * kSubpixelsPerPixel; };
         for (int i = 0; i < q.count; ++i) {
-            const glm::vec2 plane = uvAt(q.edge0[i], q.edge1[i], q.edge2[i]);
-            const glm::vec2 right = uvAt(q.edge0[i] + step(t.edgeA, 0), q.edge1[i] + step(t.edgeA, 1),
-                                         q.edge2[i] + step(t.edgeA, 2));
-            const glm::vec2 down = uvAt(q.edge0[i] + step(t.edgeB, 0), q.edge1[i] + step(t.edgeB, 1),
-                                        q.edge2[i] + step(t.edgeB, 2));
+            const glm::vec2 plane = uvAt(q.numerator, i);
+            const glm::vec2 right = uvAt(q.numeratorRight, i);
+            const glm::vec2 down = uvAt(q.numeratorDown, i);
             a.dUVdx[0][i] = right.x - plane.x, a.dUVdx[1][i] = right.y - plane.y;
             a.dUVdy[0][i] = down.x - plane.x, a.dUVdy[1][i] = down.y - plane.y;
         }
@@ -446,6 +455,11 @@ public:
     /// Whether this draw's small triangles may share a CrossTriangleQueue: the fused Lambert
     /// model, whose per-triangle inputs are CrossTriangleInputs.
     bool shadesAcrossTriangles() const { return fusedLambert_; }
+
+    /// What shade() reads of a ShadeQueue's converted edge values: the weight numerators always,
+    /// the stepped ones where a texture's level of detail needs the coordinates' derivatives.
+    bool readsWeightNumerators() const { return true; }
+    bool differencesTexCoords() const { return layout_.texCoord >= 0; }
 
     /// A triangle's inputs to the fused Lambert model (shadesAcrossTriangles draws).
     void triangleInputs(const TriangleSetup& t, const float* v, CrossTriangleInputs& in) const {

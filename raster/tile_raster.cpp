@@ -24,6 +24,8 @@
 #include <hwy/foreach_target.h>  // must come before highway.h
 #include <hwy/highway.h>
 
+#include "raster/weight_numerators-inl.h"
+
 HWY_BEFORE_NAMESPACE();
 namespace cuberille::raster {
 namespace HWY_NAMESPACE {
@@ -99,6 +101,7 @@ struct BlockRowLanes {
 template <class Shader>
 [[gnu::noinline, gnu::flatten]] void shadeQueue(const Shader& shader, const TriangleSetup& t, const float* varyings,
                                                 ShadeQueue& queue, StageCounters& counters) {
+    convertWeightNumerators(shader, t, queue);
     shader.shade(t, varyings, queue, counters);
 }
 

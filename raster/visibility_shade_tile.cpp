@@ -20,6 +20,8 @@
 #include <hwy/foreach_target.h>  // must come before highway.h
 #include <hwy/highway.h>
 
+#include "raster/weight_numerators-inl.h"
+
 HWY_BEFORE_NAMESPACE();
 namespace cuberille::raster {
 namespace HWY_NAMESPACE {
@@ -32,6 +34,7 @@ using namespace seen;  // the stage's tables (raster/visibility_shade_tables.h)
 template <class Shader>
 [[gnu::noinline, gnu::flatten]] void shadeQueue(const Shader& shader, const TriangleSetup& t, const float* varyings,
                                                 ShadeQueue& queue, StageCounters& counters) {
+    convertWeightNumerators(shader, t, queue);
     shader.shade(t, varyings, queue, counters);
 }
 

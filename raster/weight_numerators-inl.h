@@ -1,0 +1,70 @@
+// The shade stage's weight numerators in vector lanes: ShadeQueue's 64-bit edge values less the
+// fill bias, converted to float for shade() (raster/shade.h), per instruction set. Included by
+// each file that compiles a back end's shadeQueue per target (raster/tile_raster.cpp,
+// raster/visibility_shade_tile.cpp), once per target, as Highway's -inl.h headers are.
+//
+// Why it is its own step: shade() is written as plain loops the compiler vectorises, and a
+// conversion from int64 to float has no vector instruction before AVX-512, so a loop that made
+// it stayed scalar — the perspective weights and the texture coordinates' derivatives (three
+// points a pixel, nine conversions and three divisions) ran a pixel at a time, a third of a
+// textured model's shade stage. Converted here first, those loops read floats and vectorise.
+//
+// The same bits as the scalar conversion, on every target: an edge value is below 2^51 in
+// magnitude (raster/limits.h), and with a pixel's step (|A|·256, |B|·256 < 2^33) below 2^52, so
+// its conversion to double is exact, and the one rounding, double to float, is the rounding
+// float(int64) makes.
+
+#if defined(CUBERILLE_RASTER_WEIGHT_NUMERATORS_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef CUBERILLE_RASTER_WEIGHT_NUMERATORS_INL_H_
+#undef CUBERILLE_RASTER_WEIGHT_NUMERATORS_INL_H_
+#else
+#define CUBERILLE_RASTER_WEIGHT_NUMERATORS_INL_H_
+#endif
+
+#include <cstdint>
+
+#include <hwy/highway.h>
+
+#include "raster/limits.h"
+#include "raster/setup.h"
+#include "raster/shade.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace cuberille::raster {
+namespace HWY_NAMESPACE {
+
+/// out[i] = float(edge[i] + offset) for i < count. Whole vectors: the lanes past `count` (up to
+/// the queue's capacity, a multiple of every target's lanes) are converted too, and never read.
+HWY_INLINE void convertEdgesToFloat(const int64_t* HWY_RESTRICT edge, int count, int64_t offset,
+                                    float* HWY_RESTRICT out) {
+    namespace hn = hwy::HWY_NAMESPACE;
+    const hn::ScalableTag<int64_t> d64;
+    const hn::Rebind<double, decltype(d64)> dd;
+    const hn::Rebind<float, decltype(d64)> df;
+    static_assert(ShadeQueue::kCapacity % (HWY_MAX_BYTES / sizeof(int64_t)) == 0, "whole vectors fit the queue");
+    const auto add = hn::Set(d64, offset);
+    const int lanes = int(hn::Lanes(d64));
+    for (int i = 0; i < count; i += lanes)
+        hn::StoreU(hn::DemoteTo(df, hn::ConvertTo(dd, hn::Add(hn::LoadU(d64, edge + i), add))), df, out + i);
+}
+
+/// The numerators `shader` reads (ShadeQueue::numerator and, where it differences texture
+/// coordinates, numeratorRight and numeratorDown), for the queue's pixels of triangle `t`.
+template <class Shader>
+HWY_INLINE void convertWeightNumerators(const Shader& shader, const TriangleSetup& t, ShadeQueue& q) {
+    if (!shader.readsWeightNumerators()) return;
+    const int64_t* edges[3] = {q.edge0, q.edge1, q.edge2};
+    for (int k = 0; k < 3; ++k) convertEdgesToFloat(edges[k], q.count, -int64_t{t.fillBias[k]}, q.numerator[k]);
+    if (!shader.differencesTexCoords()) return;
+    for (int k = 0; k < 3; ++k) {
+        const int64_t right = int64_t{t.edgeA[k]} * kSubpixelsPerPixel, down = int64_t{t.edgeB[k]} * kSubpixelsPerPixel;
+        convertEdgesToFloat(edges[k], q.count, right - t.fillBias[k], q.numeratorRight[k]);
+        convertEdgesToFloat(edges[k], q.count, down - t.fillBias[k], q.numeratorDown[k]);
+    }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace cuberille::raster
+HWY_AFTER_NAMESPACE();
+
+#endif  // include guard per target
