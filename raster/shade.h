@@ -36,7 +36,7 @@ struct ShadeQueue {
     // Biased edge values at the pixel centre (each edge opposite its vertex).
     int64_t edge0[kCapacity], edge1[kCapacity], edge2[kCapacity];
     // What shade() reads of them, converted by the back end's shadeQueue in vector lanes before
-    // it runs (raster/weight_numerators-inl.h): the screen-space weight numerators
+    // it runs (raster/shade_queue-inl.h): the screen-space weight numerators
     // float(edge value - fill bias) at the centre, and for a shader that differences texture
     // coordinates, at the centres one pixel right (edge + A·256) and one pixel down (+ B·256).
     // One rounding from the exact integer each, as a scalar conversion rounds, so the same bits.

@@ -18,13 +18,13 @@
 // included once, outside any target: what the loops below inline from them is compiled for
 // the loop's target, and anything not inlined stays baseline code. So the per-pixel functions
 // of coarse.h, fine.h, depth.h and output_merge.h are always_inline, and each shading model's
-// shade() is compiled into this copy by shadeQueue() below.
+// shade() is compiled into this copy by shadeQueue() (raster/shade_queue-inl.h).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "raster/tile_raster.cpp"
 #include <hwy/foreach_target.h>  // must come before highway.h
 #include <hwy/highway.h>
 
-#include "raster/weight_numerators-inl.h"
+#include "raster/shade_queue-inl.h"  // shadeQueue()
 
 HWY_BEFORE_NAMESPACE();
 namespace cuberille::raster {
@@ -94,16 +94,6 @@ struct BlockRowLanes {
         }
     }
 };
-
-/// The shade stage of one queue, compiled for this copy's instruction set: flatten inlines
-/// the shading model's passes (shade.h) into it. One copy per model and target, shared by
-/// every sample count; a shading model is too large to inline into each of them.
-template <class Shader>
-[[gnu::noinline, gnu::flatten]] void shadeQueue(const Shader& shader, const TriangleSetup& t, const float* varyings,
-                                                ShadeQueue& queue, StageCounters& counters) {
-    convertWeightNumerators(shader, t, queue);
-    shader.shade(t, varyings, queue, counters);
-}
 
 /// The cross-triangle queue's shade stage, compiled for this copy's instruction set likewise.
 template <class Shader>

@@ -20,7 +20,7 @@
 #include <hwy/foreach_target.h>  // must come before highway.h
 #include <hwy/highway.h>
 
-#include "raster/weight_numerators-inl.h"
+#include "raster/shade_queue-inl.h"  // shadeQueue()
 
 HWY_BEFORE_NAMESPACE();
 namespace cuberille::raster {
@@ -28,15 +28,6 @@ namespace HWY_NAMESPACE {
 namespace {
 
 using namespace seen;  // the stage's tables (raster/visibility_shade_tables.h)
-
-/// The shade stage of one queue, compiled for this copy's instruction set: flatten inlines the
-/// shading model's passes (shade.h) into it, as the forward back end's shadeQueue does.
-template <class Shader>
-[[gnu::noinline, gnu::flatten]] void shadeQueue(const Shader& shader, const TriangleSetup& t, const float* varyings,
-                                                ShadeQueue& queue, StageCounters& counters) {
-    convertWeightNumerators(shader, t, queue);
-    shader.shade(t, varyings, queue, counters);
-}
 
 /// A pixel's samples that see one triangle.
 struct SeenPixel {

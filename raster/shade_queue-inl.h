@@ -1,11 +1,13 @@
-// The shade stage's weight numerators in vector lanes: ShadeQueue's 64-bit edge values less the
-// fill bias, converted to float for shade() (raster/shade.h), per instruction set. Included by
-// each file that compiles a back end's shadeQueue per target (raster/tile_raster.cpp,
-// raster/visibility_shade_tile.cpp), once per target, as Highway's -inl.h headers are.
+// The shade stage's entry for one queue, per instruction set: shadeQueue() converts the queue's
+// 64-bit edge values to the float weight numerators shade() reads (raster/shade.h), in vector
+// lanes, then runs the shading model. Included by each file that compiles a back end per target
+// (raster/tile_raster.cpp, raster/visibility_shade_tile.cpp), once per target, as Highway's
+// -inl.h headers are, so both back ends shade through the same code and no caller of shade() can
+// leave the numerators unconverted.
 //
-// Why it is its own step: shade() is written as plain loops the compiler vectorises, and a
-// conversion from int64 to float has no vector instruction before AVX-512, so a loop that made
-// it stayed scalar — the perspective weights and the texture coordinates' derivatives (three
+// Why the conversion is its own step: shade() is written as plain loops the compiler vectorises,
+// and a conversion from int64 to float has no vector instruction before AVX-512, so a loop that
+// made it stayed scalar — the perspective weights and the texture coordinates' derivatives (three
 // points a pixel, nine conversions and three divisions) ran a pixel at a time, a third of a
 // textured model's shade stage. Converted here first, those loops read floats and vectorise.
 //
@@ -14,11 +16,11 @@
 // its conversion to double is exact, and the one rounding, double to float, is the rounding
 // float(int64) makes.
 
-#if defined(CUBERILLE_RASTER_WEIGHT_NUMERATORS_INL_H_) == defined(HWY_TARGET_TOGGLE)
-#ifdef CUBERILLE_RASTER_WEIGHT_NUMERATORS_INL_H_
-#undef CUBERILLE_RASTER_WEIGHT_NUMERATORS_INL_H_
+#if defined(CUBERILLE_RASTER_SHADE_QUEUE_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef CUBERILLE_RASTER_SHADE_QUEUE_INL_H_
+#undef CUBERILLE_RASTER_SHADE_QUEUE_INL_H_
 #else
-#define CUBERILLE_RASTER_WEIGHT_NUMERATORS_INL_H_
+#define CUBERILLE_RASTER_SHADE_QUEUE_INL_H_
 #endif
 
 #include <cstdint>
@@ -28,10 +30,12 @@
 #include "raster/limits.h"
 #include "raster/setup.h"
 #include "raster/shade.h"
+#include "raster/stats.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace cuberille::raster {
 namespace HWY_NAMESPACE {
+namespace {
 
 /// out[i] = float(edge[i] + offset) for i < count. Whole vectors: the lanes past `count` (up to
 /// the queue's capacity, a multiple of every target's lanes) are converted too, and never read.
@@ -63,6 +67,17 @@ HWY_INLINE void convertWeightNumerators(const Shader& shader, const TriangleSetu
     }
 }
 
+/// The shade stage of one queue, compiled for this copy's instruction set: flatten inlines the
+/// shading model's passes (shade.h) into it. One copy per model and target, shared by every
+/// sample count; a shading model is too large to inline into each of them.
+template <class Shader>
+[[gnu::noinline, gnu::flatten]] void shadeQueue(const Shader& shader, const TriangleSetup& t, const float* varyings,
+                                                ShadeQueue& queue, StageCounters& counters) {
+    convertWeightNumerators(shader, t, queue);
+    shader.shade(t, varyings, queue, counters);
+}
+
+}  // namespace
 }  // namespace HWY_NAMESPACE
 }  // namespace cuberille::raster
 HWY_AFTER_NAMESPACE();
