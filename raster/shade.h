@@ -99,6 +99,7 @@ inline void queueAcrossTriangles(CrossTriangleQueue& q, const CrossTriangleInput
 
 struct ConstantColorShader {
     static constexpr bool kShadesAcrossTriangles = false;
+    static constexpr bool kInterpolatesAcrossTriangles = false;
     bool readsWeightNumerators() const { return false; }
     bool differencesTexCoords() const { return false; }
     void shade(const TriangleSetup& t, const float*, ShadeQueue& q, StageCounters&) const {
@@ -137,6 +138,9 @@ public:
     /// Whether the model has a CrossTriangleQueue path at all (shadesAcrossTriangles says
     /// whether this draw takes it).
     static constexpr bool kShadesAcrossTriangles = kModel == ShadingModel::Lambert;
+    /// Whether the model has an InterpolatedQueue path (interpolatesAcrossTriangles says whether
+    /// this draw takes it): every surface model.
+    static constexpr bool kInterpolatesAcrossTriangles = true;
 
     SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
@@ -167,40 +171,8 @@ public:
             if (fusedLambert_) return lambertOneDirectionalLight(t, v, q, counters);
         }
         PixelAttributes a;
-        perspectiveWeights(t, q, a);
-        if (layout_.color >= 0)
-            interpolate<3>(v, layout_.color, q.count, a.w, a.albedo);
-        else
-            for (int k = 0; k < 3; ++k) std::fill_n(a.albedo[k], q.count, s_.constantColor[k]);
-        if (layout_.alpha >= 0)
-            interpolate<1>(v, layout_.alpha, q.count, a.w, a.alpha);
-        else
-            std::fill_n(a.alpha[0], q.count, s_.constantColor.a);
-        counters.varyingsInterpolated += uint64_t(q.count) * layout_.count;
-        const bool textured = layout_.texCoord >= 0;
-        if (textured) {
-            texCoordsAndDerivatives(t, v, q, a);
-            if (s_.textures.baseColor) applyBaseColorTexture(q.count, a, counters);
-        }
-        if constexpr (!kLit) {
-            writeOut(q, a.albedo, a.alpha);
-        } else {
-            shadingNormals(t, v, q.count, a, counters);
-            if (layout_.position >= 0) interpolate<3>(v, layout_.position, q.count, a.w, a.position);
-            float occlusion[ShadeQueue::kCapacity];
-            std::fill_n(occlusion, q.count, 1.0f);
-            if (textured && s_.textures.occlusion) occlusionFromTexture(q.count, a, occlusion, counters);
-            if (const float* open = s_.lighting.ambientVisibility)
-                for (int i = 0; i < q.count; ++i) occlusion[i] *= open[q.pixelIndex[i]];
-            if constexpr (kModel == ShadingModel::Lambert)
-                lambert(q, a, occlusion, counters);
-            else
-                metallicRoughness(q, a, occlusion, counters);
-            if (hasEmissive_) addEmissive(q.count, a, counters);
-            if (coated_) underTheCoat(q.count, a, transmissive_);
-            writeOut(q, a.radiance, a.alpha);
-            if (transmissive_) writeTransmittance(q, a);
-        }
+        interpolateAttributes(t, v, q, 0, a, counters);
+        shadeInterpolated(q, a, counters);
     }
 
 private:
@@ -240,6 +212,77 @@ private:
         float r[N], g[N], b[N], a[N];
     };
 
+public:
+    /// The pixels of several small triangles of one tile and draw, shaded as one queue in two
+    /// halves: each triangle interpolates its attributes into its range of the queue when its
+    /// pixels have been queued (interpolateAttributes, the half that reads the triangle), and
+    /// the lights run across the whole queue when it is full or the tile ends (shadeInterpolated,
+    /// the half that reads only the pixels). Every model and material but the fused Lambert one
+    /// (which has CrossTriangleQueue) and textured draws (interpolatesAcrossTriangles). The same
+    /// arithmetic per pixel as a queue of one triangle's pixels, so the same bits.
+    struct InterpolatedQueue {
+        ShadeQueue pixels;            // numerator, firstSample, passMask, pixelIndex; then the colours
+        PixelAttributes attributes;  // written triangle by triangle, lit as one queue
+    };
+
+    /// Whether this draw's small triangles may share an InterpolatedQueue: not a fused Lambert
+    /// draw, and no texture coordinates (a texture's fetches plan a whole queue's footprints
+    /// at once, from the coordinates' derivatives, which the texture passes read from the
+    /// queue's start).
+    bool interpolatesAcrossTriangles() const { return !fusedLambert_ && layout_.texCoord < 0; }
+
+    /// The half of shade() that reads the triangle, for queue pixels [begin, q.count): the
+    /// perspective weights and the attributes they interpolate, the textures that change them
+    /// (a textured draw's queue holds one triangle: begin is 0), the unit normals facing the
+    /// viewer. What it writes to `a` is per pixel.
+    void interpolateAttributes(const TriangleSetup& t, const float* v, const ShadeQueue& q, int begin, PixelAttributes& a,
+                               StageCounters& counters) const {
+        const int end = q.count;
+        perspectiveWeights(t, q, begin, end, a);
+        if (layout_.color >= 0)
+            interpolate<3>(v, layout_.color, begin, end, a.w, a.albedo);
+        else
+            for (int k = 0; k < 3; ++k) std::fill(a.albedo[k] + begin, a.albedo[k] + end, s_.constantColor[k]);
+        if (layout_.alpha >= 0)
+            interpolate<1>(v, layout_.alpha, begin, end, a.w, a.alpha);
+        else
+            std::fill(a.alpha[0] + begin, a.alpha[0] + end, s_.constantColor.a);
+        counters.varyingsInterpolated += uint64_t(end - begin) * layout_.count;
+        if (layout_.texCoord >= 0) {
+            texCoordsAndDerivatives(t, v, q, a);
+            if (s_.textures.baseColor) applyBaseColorTexture(q.count, a, counters);
+        }
+        if constexpr (kLit) {
+            shadingNormals(t, v, begin, end, a, counters);
+            if (layout_.position >= 0) interpolate<3>(v, layout_.position, begin, end, a.w, a.position);
+        }
+    }
+
+    /// The half of shade() that reads only the pixels' attributes and the draw: occlusion, the
+    /// shading model's lights, emission, a coat, and the colours written to the queue.
+    void shadeInterpolated(ShadeQueue& q, PixelAttributes& a, StageCounters& counters) const {
+        if constexpr (!kLit) {
+            writeOut(q, a.albedo, a.alpha);
+        } else {
+            const bool textured = layout_.texCoord >= 0;
+            float occlusion[ShadeQueue::kCapacity];
+            std::fill_n(occlusion, q.count, 1.0f);
+            if (textured && s_.textures.occlusion) occlusionFromTexture(q.count, a, occlusion, counters);
+            if (const float* open = s_.lighting.ambientVisibility)
+                for (int i = 0; i < q.count; ++i) occlusion[i] *= open[q.pixelIndex[i]];
+            if constexpr (kModel == ShadingModel::Lambert)
+                lambert(q, a, occlusion, counters);
+            else
+                metallicRoughness(q, a, occlusion, counters);
+            if (hasEmissive_) addEmissive(q.count, a, counters);
+            if (coated_) underTheCoat(q.count, a, transmissive_);
+            writeOut(q, a.radiance, a.alpha);
+            if (transmissive_) writeTransmittance(q, a);
+        }
+    }
+
+private:
+
     // Perspective-correct weights of queued pixel i: screen weights clamped onto the triangle
     // (so the result is always a convex combination), times 1/w, renormalised. Shared by the
     // passes and the fused Lambert loop, so both compute the same weights.
@@ -260,19 +303,20 @@ private:
         return {q0 * norm, q1 * norm, q2 * norm};
     }
 
-    static void perspectiveWeights(const TriangleSetup& t, const ShadeQueue& q, PixelAttributes& a) {
-        for (int i = 0; i < q.count; ++i) {
+    static void perspectiveWeights(const TriangleSetup& t, const ShadeQueue& q, int begin, int end, PixelAttributes& a) {
+        for (int i = begin; i < end; ++i) {
             const Weights w = weightsAt(t, q, i);
             a.w[0][i] = w.w0, a.w[1][i] = w.w1, a.w[2][i] = w.w2;
         }
     }
 
     template <int kComponents>
-    [[gnu::always_inline]] void interpolate(const float* v, int offset, int count, const float (&w)[3][N], float (*out)[N]) const {
+    [[gnu::always_inline]] void interpolate(const float* v, int offset, int begin, int end, const float (&w)[3][N],
+                                            float (*out)[N]) const {
         const int n = layout_.count;
         for (int k = 0; k < kComponents; ++k) {
             const float v0 = v[offset + k], v1 = v[n + offset + k], v2 = v[2 * n + offset + k];
-            for (int i = 0; i < count; ++i) out[k][i] = w[0][i] * v0 + w[1][i] * v1 + w[2][i] * v2;
+            for (int i = begin; i < end; ++i) out[k][i] = w[0][i] * v0 + w[1][i] * v1 + w[2][i] * v2;
         }
     }
 
@@ -284,7 +328,7 @@ private:
     // extrapolation gives NaN, which the level of detail treats as level 0.
     void texCoordsAndDerivatives(const TriangleSetup& t, const float* v, const ShadeQueue& q,
                                  PixelAttributes& a) const {
-        interpolate<2>(v, layout_.texCoord, q.count, a.w, a.uv);
+        interpolate<2>(v, layout_.texCoord, 0, q.count, a.w, a.uv);
         const int n = layout_.count, o = layout_.texCoord;
         const float invArea = float(t.invDoubleArea);
         // The division is made whatever the sum, and its result kept only where the sum is
@@ -342,22 +386,24 @@ private:
 
     // Unit world-space normals: interpolated, perturbed by the normal map when there is one,
     // and reversed on back faces (glTF 2.0 §3.9.3, double-sided materials).
-    void shadingNormals(const TriangleSetup& t, const float* v, int count, PixelAttributes& a,
+    void shadingNormals(const TriangleSetup& t, const float* v, int begin, int end, PixelAttributes& a,
                         StageCounters& counters) const {
-        interpolate<3>(v, layout_.normal, count, a.w, a.normal);
+        interpolate<3>(v, layout_.normal, begin, end, a.w, a.normal);
         const bool coatNormal = coated_ && layout_.tangent >= 0;  // else the coat follows a.normal
         if (coatNormal)
-            for (int k = 0; k < 3; ++k) std::copy_n(a.normal[k], count, a.coatNormal[k]);
+            for (int k = 0; k < 3; ++k) std::copy(a.normal[k] + begin, a.normal[k] + end, a.coatNormal[k] + begin);
         if (layout_.tangent >= 0) {
             float tangent[4][N];
-            interpolate<4>(v, layout_.tangent, count, a.w, tangent);
-            if (s_.textures.normal) normalMapped(s_.textures.normal, s_.normalScale, tangent, count, a, a.normal, counters);
+            interpolate<4>(v, layout_.tangent, begin, end, a.w, tangent);
+            // Normal maps are textures: only a draw with texture coordinates has them, and its
+            // queue holds one triangle (begin is 0).
+            if (s_.textures.normal) normalMapped(s_.textures.normal, s_.normalScale, tangent, end, a, a.normal, counters);
             if (coatNormal && s_.textures.clearcoatNormal)
-                normalMapped(s_.textures.clearcoatNormal, s_.brdf.clearcoatNormalScale, tangent, count, a, a.coatNormal, counters);
+                normalMapped(s_.textures.clearcoatNormal, s_.brdf.clearcoatNormalScale, tangent, end, a, a.coatNormal, counters);
         }
         const float facing = t.backFacing ? -1.0f : 1.0f;
-        unitFacing(count, facing, a.normal);
-        if (coatNormal) unitFacing(count, facing, a.coatNormal);
+        unitFacing(begin, end, facing, a.normal);
+        if (coatNormal) unitFacing(begin, end, facing, a.coatNormal);
     }
 
     // `normal` perturbed by a tangent-space normal map, in the frame of the interpolated tangent
@@ -378,8 +424,8 @@ private:
         counters.textureSamples += uint64_t(count);
     }
 
-    static void unitFacing(int count, float facing, float (&normal)[3][N]) {
-        for (int i = 0; i < count; ++i) {
+    static void unitFacing(int begin, int end, float facing, float (&normal)[3][N]) {
+        for (int i = begin; i < end; ++i) {
             const float x = normal[0][i], y = normal[1][i], z = normal[2][i];
             const float len2 = x * x + y * y + z * z;
             const float inv = len2 > 0.0f ? facing / std::sqrt(len2) : 0.0f;

@@ -77,6 +77,22 @@ template <class Shader>
     shader.shade(t, varyings, queue, counters);
 }
 
+/// A triangle's half of an InterpolatedQueue (raster/shade.h): the attributes of its pixels,
+/// queued from `begin` on. Its numerators were converted as its pixels were queued.
+template <class Shader>
+[[gnu::noinline, gnu::flatten]] void interpolateQueueRange(const Shader& shader, const TriangleSetup& t, const float* varyings,
+                                                           typename Shader::InterpolatedQueue& queue, int begin,
+                                                           StageCounters& counters) {
+    shader.interpolateAttributes(t, varyings, queue.pixels, begin, queue.attributes, counters);
+}
+
+/// The lights' half of an InterpolatedQueue, over every pixel it holds.
+template <class Shader>
+[[gnu::noinline, gnu::flatten]] void shadeInterpolatedQueue(const Shader& shader, typename Shader::InterpolatedQueue& queue,
+                                                            StageCounters& counters) {
+    shader.shadeInterpolated(queue.pixels, queue.attributes, counters);
+}
+
 }  // namespace
 }  // namespace HWY_NAMESPACE
 }  // namespace cuberille::raster

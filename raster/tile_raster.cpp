@@ -95,6 +95,26 @@ struct BlockRowLanes {
     }
 };
 
+/// Output merge of a shared queue's shaded pixels, in the order they were queued, as
+/// shadeAndMerge() merges an opaque or blended draw's (alphaAt(i): pixel i's shaded alpha; an
+/// opaque surface writes 1). Empties the queue.
+template <int S, class Queue, class AlphaAt>
+void mergeInQueueOrder(Queue& q, AlphaAt alphaAt, const TileTarget& target) {
+    const DrawState& state = *target.state;
+    StageCounters& counters = *target.counters;
+    counters.pixelsShaded += q.count;
+    for (int i = 0; i < q.count; ++i) {
+        const glm::vec4 color(q.red[i], q.green[i], q.blue[i], state.alphaMode == AlphaMode::Opaque ? 1.0f : alphaAt(i));
+        if (state.alphaMode == AlphaMode::Blend) {
+            blendColor<S>(target.color + q.firstSample[i], q.passMask[i], color, state.colorWriteMask);
+            ++counters.pixelsBlended;
+        } else {
+            mergeColor<S>(target.color + q.firstSample[i], q.passMask[i], color, state.colorWriteMask);
+        }
+    }
+    q.count = 0;
+}
+
 /// The cross-triangle queue's shade stage, compiled for this copy's instruction set likewise.
 template <class Shader>
 [[gnu::noinline, gnu::flatten]] void shadeCrossTriangleQueue(const Shader& shader, CrossTriangleQueue& queue,
@@ -107,32 +127,45 @@ template <class Shader>
 /// the depth test, and their colours merge as shadeAndMerge() merges them).
 template <int S, class Shader>
 [[gnu::noinline]] void shadeAndMergeAcrossTriangles(const Shader& shader, CrossTriangleQueue& q, const TileTarget& target) {
-    const DrawState& state = *target.state;
-    StageCounters& counters = *target.counters;
-    shadeCrossTriangleQueue(shader, q, counters);
-    counters.pixelsShaded += q.count;
-    const float alpha = state.alphaMode == AlphaMode::Opaque ? 1.0f : shader.fusedLambertAlpha();
-    for (int i = 0; i < q.count; ++i) {
-        const glm::vec4 color(q.red[i], q.green[i], q.blue[i], alpha);
-        if (state.alphaMode == AlphaMode::Blend) {
-            blendColor<S>(target.color + q.firstSample[i], q.passMask[i], color, state.colorWriteMask);
-            ++counters.pixelsBlended;
-        } else {
-            mergeColor<S>(target.color + q.firstSample[i], q.passMask[i], color, state.colorWriteMask);
-        }
-    }
-    q.count = 0;
+    shadeCrossTriangleQueue(shader, q, *target.counters);
+    const float alpha = shader.fusedLambertAlpha();
+    mergeInQueueOrder<S>(q, [alpha](int) { return alpha; }, target);
+}
+
+/// The InterpolatedQueue of a shader that has one (raster/shade.h), else an empty stand-in.
+template <class Shader, bool = Shader::kInterpolatesAcrossTriangles>
+struct InterpolatedQueueOf {
+    struct type {};
+};
+template <class Shader>
+struct InterpolatedQueueOf<Shader, true> {
+    using type = typename Shader::InterpolatedQueue;
+};
+template <class Shader>
+using InterpolatedQueueFor = typename InterpolatedQueueOf<Shader>::type;
+
+/// Lights a tile's InterpolatedQueue and merges its pixels in the order they were queued: the
+/// merge of shadeAndMerge() for draws that are neither alpha-tested nor transmissive (their
+/// depths were written at the depth test).
+template <int S, class Shader>
+[[gnu::noinline]] void shadeAndMergeInterpolated(const Shader& shader, InterpolatedQueueFor<Shader>& queue,
+                                                 const TileTarget& target) {
+    shadeInterpolatedQueue(shader, queue, *target.counters);
+    const ShadeQueue& q = queue.pixels;
+    mergeInQueueOrder<S>(queue.pixels, [&q](int i) { return q.alpha[i]; }, target);
 }
 
 template <int S, class Shader>
 class TriangleRaster {
 public:
     /// shared: the tile's CrossTriangleQueue where the draw shades small triangles across
-    /// triangles (shadesAcrossTriangles), else null.
+    /// triangles (shadesAcrossTriangles), else null; interpolated: the tile's InterpolatedQueue
+    /// where the draw lights them across triangles (interpolatesAcrossTriangles), else null.
     TriangleRaster(const TriangleSetup& t, const float* varyings, const Shader& shader,
                    const SamplePattern& sp, const TileTarget& target, const BlockRowLanes<S>& lanes,
-                   CrossTriangleQueue* shared)
-        : t_(t), varyings_(varyings), shader_(shader), target_(target), lanes_(lanes), shared_(shared) {
+                   CrossTriangleQueue* shared, InterpolatedQueueFor<Shader>* interpolated)
+        : t_(t), varyings_(varyings), shader_(shader), target_(target), lanes_(lanes), shared_(shared),
+          interpolated_(interpolated) {
         computeSampleEdgeOffsets<S>(t, sp, edgeOffsets_);
         computeSampleSubpixelOffsets<S>(sp, sampleOffsets_);
     }
@@ -146,13 +179,23 @@ public:
         const int pixels = (bounds.maxX - bounds.minX + 1) * (bounds.maxY - bounds.minY + 1);
         const bool few = pixels < kMinPixelsToBatchShading;
         shareQueue_ = few && shared_;
-        shadeImmediately_ = few && !shared_;
+        // Every triangle of a draw that lights across triangles queues there, whatever its size:
+        // a large triangle fills the shared queue as it would fill its own, and a small one's
+        // few pixels join a full batch (see InterpolatedQueue).
+        shareInterpolated_ = interpolated_ != nullptr;
+        shadeImmediately_ = few && !shared_ && !interpolated_;
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            if (shareInterpolated_) rangeBegin_ = interpolated_->pixels.count;
+        }
         if (pixels <= kSmallTrianglePixels) {
             ++target_.counters->smallTriangleEntries;
             rasterizePartial(bounds);
-            return;
+        } else {
+            coarse(bounds, sp);
         }
-        coarse(bounds, sp);
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            if (shareInterpolated_) interpolateOwnRange();
+        }
     }
 
 private:
@@ -505,6 +548,9 @@ private:
         if constexpr (Shader::kShadesAcrossTriangles) {
             if (shareQueue_) return queueAcross(first, pass, centreEdges);
         }
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            if (shareInterpolated_) return queueInterpolated(x, y, first, pass, centreEdges);
+        }
         const int i = queue_.count++;
         queue_.pixelIndex[i] = uint32_t(y) * uint32_t(target_.imageWidth) + uint32_t(x);
         queue_.edge0[i] = centreEdges[0];
@@ -524,6 +570,31 @@ private:
         }
         if (shared_->count == CrossTriangleQueue::kCapacity) shadeAndMergeAcrossTriangles<S>(shader_, *shared_, target_);
         queueAcrossTriangles(*shared_, inputs_, centreEdges, uint32_t(first), pass);
+    }
+
+    /// Queues a pixel in the tile's InterpolatedQueue, with its weight numerators (the scalar
+    /// conversion of shadeQueue()'s, the same floats); when the queue is full, this triangle's
+    /// pixels so far are interpolated and the whole queue lit first.
+    void queueInterpolated(int32_t x, int32_t y, size_t first, uint32_t pass, const int64_t centreEdges[3]) {
+        ShadeQueue& q = interpolated_->pixels;
+        if (q.count == ShadeQueue::kCapacity) {
+            interpolateOwnRange();
+            shadeAndMergeInterpolated<S>(shader_, *interpolated_, target_);
+            rangeBegin_ = 0;
+        }
+        const int i = q.count++;
+        q.pixelIndex[i] = uint32_t(y) * uint32_t(target_.imageWidth) + uint32_t(x);
+        for (int k = 0; k < 3; ++k) q.numerator[k][i] = float(centreEdges[k] - int64_t{t_.fillBias[k]});
+        q.firstSample[i] = uint32_t(first);
+        q.passMask[i] = pass;
+    }
+
+    /// This triangle's half of the InterpolatedQueue: the attributes of the pixels it queued.
+    void interpolateOwnRange() {
+        const int end = interpolated_->pixels.count;
+        if (end > rangeBegin_)
+            interpolateQueueRange(shader_, t_, varyings_, *interpolated_, rangeBegin_, *target_.counters);
+        rangeBegin_ = end;
     }
 
     // Counters of depth-passing samples, then the depth writes (output merge's depth half).
@@ -558,6 +629,9 @@ private:
         // output merge keeps the order the depth stage queued pixels in.
         if constexpr (Shader::kShadesAcrossTriangles) {
             if (shared_ && shared_->count) shadeAndMergeAcrossTriangles<S>(shader_, *shared_, target_);
+        }
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            if (interpolated_ && interpolated_->pixels.count) shadeAndMergeInterpolated<S>(shader_, *interpolated_, target_);
         }
         const DrawState& state = *target_.state;
         StageCounters& counters = *target_.counters;
@@ -610,6 +684,9 @@ private:
     bool shareQueue_ = false;  // this triangle's pixels go to shared_
     bool haveInputs_ = false;
     CrossTriangleInputs inputs_;
+    InterpolatedQueueFor<Shader>* interpolated_;
+    bool shareInterpolated_ = false;  // this triangle's pixels go to interpolated_
+    int rangeBegin_ = 0;              // its first pixel there not yet interpolated
     ShadeQueue queue_;  // a member, so the compiler sees it alias nothing (the loop vectorises)
 };
 
@@ -630,23 +707,35 @@ void rasterizeBinned(const TriangleBatch& batch, int tile, const Shader& shader,
     SampleSubpixelOffsets<S> offsets;
     computeSampleSubpixelOffsets<S>(sp, offsets);
     const BlockRowLanes<S> lanes(offsets);
+    // The tile's queue shared by small triangles, of the kind the draw takes, if any: never for
+    // alpha-tested draws (whose depth writes wait for shading) or transmissive ones (whose merge
+    // reads the light passed through).
+    const DrawState& state = *target.state;
+    const bool mayShare = state.alphaMode != AlphaMode::Mask && !state.transmits() && state.colorWriteMask != 0;
     CrossTriangleQueue* shared = nullptr;
     struct NoQueue {};
     [[maybe_unused]] std::conditional_t<Shader::kShadesAcrossTriangles, CrossTriangleQueue, NoQueue> queue;
     if constexpr (Shader::kShadesAcrossTriangles) {
-        const DrawState& state = *target.state;
-        if (shader.shadesAcrossTriangles() && state.alphaMode != AlphaMode::Mask && !state.transmits() &&
-            state.colorWriteMask != 0)
-            shared = &queue;
+        if (mayShare && shader.shadesAcrossTriangles()) shared = &queue;
+    }
+    InterpolatedQueueFor<Shader>* interpolated = nullptr;
+    [[maybe_unused]] std::conditional_t<Shader::kInterpolatesAcrossTriangles, InterpolatedQueueFor<Shader>, NoQueue>
+        interpolatedQueue;
+    if constexpr (Shader::kInterpolatesAcrossTriangles) {
+        if (mayShare && shader.interpolatesAcrossTriangles()) interpolated = &interpolatedQueue;
     }
     for (uint32_t i = begin; i < end; ++i) {
         if (i + kPrefetchAhead < end) prefetchSetup(batch.triangles[batch.tileTriangles[i + kPrefetchAhead]]);
         const uint32_t index = batch.tileTriangles[i];
         const TriangleSetup& t = batch.triangles[index];
-        TriangleRaster<S, Shader>(t, batch.varyings.data() + t.varyingOffset, shader, sp, target, lanes, shared).run(sp);
+        TriangleRaster<S, Shader>(t, batch.varyings.data() + t.varyingOffset, shader, sp, target, lanes, shared, interpolated)
+            .run(sp);
     }
     if constexpr (Shader::kShadesAcrossTriangles) {
         if (shared && shared->count) shadeAndMergeAcrossTriangles<S>(shader, *shared, target);
+    }
+    if constexpr (Shader::kInterpolatesAcrossTriangles) {
+        if (interpolated && interpolated->pixels.count) shadeAndMergeInterpolated<S>(shader, *interpolated, target);
     }
 }
 

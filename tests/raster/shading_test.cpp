@@ -631,56 +631,65 @@ TEST(Effects, SceneSubmitsAFlatUnlitMeshAsTheBarePipeline) {
     EXPECT_EQ(p.stats().counters.lightEvaluations, 0u);
 }
 
-// Small triangles' pixels shade together in their tile's CrossTriangleQueue (raster/shade.h): each
-// pixel carries its own triangle's inputs, the queue shades when full, and output merge takes the
-// pixels in the order the depth stage queued them, before any later triangle's own queue. The
-// reference is the same triangles drawn a draw each in the same frame, where no queue ever holds
-// two triangles' pixels: the image must be the same bits. Overlapping triangles of every size
-// (most of a few pixels, some large enough for queues of their own between them), without a
-// depth test too (the last drawn must win) and blended (where the order shows in every
-// overlap), at 1 and 4 samples.
-TEST(CrossTriangleShading, OneDrawGivesTheImageOfADrawPerTriangle) {
-    constexpr int kWidth = 150, kHeight = 90, kTriangles = 4000;
-    std::mt19937 rng(23);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
+// Random overlapping triangles in window space for the cross-triangle tests below: of every size
+// (most of a few pixels, some large enough for queues of their own between them), with a zero
+// normal now and then (a model's len2 > 0 branch shades it black), vertex colours and alphas.
+struct RandomTriangles {
+    static constexpr int kWidth = 150, kHeight = 90, kTriangles = 4000;
     std::vector<glm::vec3> positions, normals, colors;
+    std::vector<float> alphas;
     int small = 0;
-    for (int i = 0; i < kTriangles; ++i) {
-        const float r = unit(rng);
-        const float size = r < 0.7f ? 0.3f + 3.7f * unit(rng) : (r < 0.95f ? 4.0f + 8.0f * unit(rng) : 12.0f + 28.0f * unit(rng));
-        small += size < 4.0f;
-        const glm::vec2 centre(kWidth * unit(rng), kHeight * unit(rng));
-        for (int k = 0; k < 3; ++k) {
-            positions.push_back({centre.x + size * signedUnit(rng), centre.y + size * signedUnit(rng), 0.05f + 0.9f * unit(rng)});
-            // A zero normal now and then: the model's len2 > 0 branch shades it black.
-            normals.push_back(unit(rng) < 0.02f ? glm::vec3(0.0f) : glm::vec3(signedUnit(rng), signedUnit(rng), signedUnit(rng)));
-            colors.push_back({unit(rng), unit(rng), unit(rng)});
+    RandomTriangles() {
+        std::mt19937 rng(23);
+        std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
+        for (int i = 0; i < kTriangles; ++i) {
+            const float r = unit(rng);
+            const float size = r < 0.7f ? 0.3f + 3.7f * unit(rng) : (r < 0.95f ? 4.0f + 8.0f * unit(rng) : 12.0f + 28.0f * unit(rng));
+            small += size < 4.0f;
+            const glm::vec2 centre(kWidth * unit(rng), kHeight * unit(rng));
+            for (int k = 0; k < 3; ++k) {
+                positions.push_back({centre.x + size * signedUnit(rng), centre.y + size * signedUnit(rng), 0.05f + 0.9f * unit(rng)});
+                normals.push_back(unit(rng) < 0.02f ? glm::vec3(0.0f) : glm::vec3(signedUnit(rng), signedUnit(rng), signedUnit(rng)));
+                colors.push_back({unit(rng), unit(rng), unit(rng)});
+                alphas.push_back(0.2f + 0.8f * unit(rng));
+            }
         }
     }
-    ASSERT_GT(small, kTriangles / 2);
+};
+
+// The property both cross-triangle queues must keep: the triangles drawn in one draw give the
+// image of the same triangles drawn a draw each in the same frame, where no queue ever holds two
+// triangles' pixels — the same bits, and the same counts of shaded pixels, light evaluations and
+// interpolated varyings. With and without a depth test (the last drawn must win) and blended
+// (where the order of output merge shows in every overlap), at 1 and 4 samples. `configure` sets
+// the draw's shading model, material and lights.
+template <class Configure>
+void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, Configure configure) {
+    static const RandomTriangles scene;
+    constexpr int kWidth = RandomTriangles::kWidth, kHeight = RandomTriangles::kHeight;
+    ASSERT_GT(scene.small, RandomTriangles::kTriangles / 2);
     for (const bool depthTest : {true, false}) {
         for (const raster::AlphaMode mode : {raster::AlphaMode::Opaque, raster::AlphaMode::Blend}) {
             for (const int samples : {1, 4}) {
                 DrawCall all;
                 all.space = raster::PositionSpace::Window;
-                all.positions = positions, all.normals = normals, all.vertexColors = colors;
-                all.state.shading = ShadingModel::Lambert;
+                all.positions = scene.positions, all.normals = scene.normals, all.vertexColors = scene.colors;
+                if (vertexAlphas) all.vertexAlphas = scene.alphas;
                 all.state.cull = raster::CullMode::None;  // both facings: back faces' normals reversed
                 all.state.depthTest = depthTest;
                 all.state.alphaMode = mode;
                 all.state.constantColor = glm::vec4(1.0f, 1.0f, 1.0f, 0.6f);
-                all.state.lighting.lightCount = 1;
-                all.state.lighting.lights[0] = directionalLight({0.3f, -0.5f, 0.8f}, glm::vec3(2.0f, 1.5f, 1.0f));
-                all.state.lighting.ambient = glm::vec3(0.05f, 0.1f, 0.15f);
+                configure(all.state);
                 const auto frameOf = [&](bool drawPerTriangle) {
                     raster::Pipeline p;
                     p.beginFrame(frame(kWidth, kHeight, samples));
                     if (!drawPerTriangle) p.draw(all);
-                    for (size_t t = 0; drawPerTriangle && t < kTriangles; ++t) {
+                    for (size_t t = 0; drawPerTriangle && t < RandomTriangles::kTriangles; ++t) {
                         DrawCall one = all;
                         one.positions = all.positions.subspan(3 * t, 3);
                         one.normals = all.normals.subspan(3 * t, 3);
                         one.vertexColors = all.vertexColors.subspan(3 * t, 3);
+                        if (vertexAlphas) one.vertexAlphas = all.vertexAlphas.subspan(3 * t, 3);
                         p.draw(one);
                     }
                     p.endFrame();
@@ -704,6 +713,62 @@ TEST(CrossTriangleShading, OneDrawGivesTheImageOfADrawPerTriangle) {
                 EXPECT_EQ(differing, 0u) << where;
             }
         }
+    }
+}
+
+// Small triangles' pixels shade together in their tile's CrossTriangleQueue (raster/shade.h): each
+// pixel carries its own triangle's inputs, the queue shades when full, and output merge takes the
+// pixels in the order the depth stage queued them, before any later triangle's own queue.
+TEST(CrossTriangleShading, OneDrawGivesTheImageOfADrawPerTriangle) {
+    expectOneDrawGivesTheImageOfADrawPerTriangle(false, [](raster::DrawState& state) {
+        state.shading = ShadingModel::Lambert;
+        state.lighting.lightCount = 1;
+        state.lighting.lights[0] = directionalLight({0.3f, -0.5f, 0.8f}, glm::vec3(2.0f, 1.5f, 1.0f));
+        state.lighting.ambient = glm::vec3(0.05f, 0.1f, 0.15f);
+    });
+}
+
+// Every other untextured draw lights its triangles' pixels across triangles in the tile's
+// InterpolatedQueue (raster/shade.h): each triangle interpolates its range of the queue, the
+// lights run over the whole queue. Every surface model, with what reads the pixel's place (a
+// shadow mask, ambient occlusion), a point light (the interpolated position), vertex alpha and
+// emission.
+TEST(InterpolatedShading, OneDrawGivesTheImageOfADrawPerTriangle) {
+    constexpr int kPixels = RandomTriangles::kWidth * RandomTriangles::kHeight;
+    static std::vector<float> shadowMask(kPixels), ambientVisibility(kPixels);
+    for (int i = 0; i < kPixels; ++i) shadowMask[i] = float(i % 7) / 6.0f, ambientVisibility[i] = float(i % 5 + 1) / 5.0f;
+    Light point;
+    point.type = LightType::Point;
+    point.position = glm::vec3(60.0f, 40.0f, -30.0f);
+    point.intensity = glm::vec3(900.0f, 800.0f, 700.0f);
+    auto lights = [&](raster::DrawState& state) {
+        state.lighting.lightCount = 2;
+        state.lighting.lights[0] = directionalLight({0.3f, -0.5f, 0.8f}, glm::vec3(2.0f, 1.5f, 1.0f));
+        state.lighting.lights[0].visibility = shadowMask.data();
+        state.lighting.lights[1] = point;
+        state.lighting.ambient = glm::vec3(0.05f, 0.1f, 0.15f);
+        state.lighting.ambientVisibility = ambientVisibility.data();
+        state.emissive = glm::vec3(0.02f, 0.0f, 0.01f);
+    };
+    {
+        SCOPED_TRACE("Lambert, two lights");
+        expectOneDrawGivesTheImageOfADrawPerTriangle(true, [&](raster::DrawState& state) {
+            state.shading = ShadingModel::Lambert;
+            lights(state);
+        });
+    }
+    {
+        SCOPED_TRACE("MetallicRoughness");
+        expectOneDrawGivesTheImageOfADrawPerTriangle(true, [&](raster::DrawState& state) {
+            state.shading = ShadingModel::MetallicRoughness;
+            state.metallic = 0.3f, state.roughness = 0.4f;
+            state.cameraPosition = glm::vec3(75.0f, 45.0f, -100.0f);
+            lights(state);
+        });
+    }
+    {
+        SCOPED_TRACE("Unlit");
+        expectOneDrawGivesTheImageOfADrawPerTriangle(true, [](raster::DrawState& state) { state.shading = ShadingModel::Unlit; });
     }
 }
 
