@@ -217,24 +217,29 @@ public:
     /// halves: each triangle interpolates its attributes into its range of the queue when its
     /// pixels have been queued (interpolateAttributes, the half that reads the triangle), and
     /// the lights run across the whole queue when it is full or the tile ends (shadeInterpolated,
-    /// the half that reads only the pixels). Every model and material but the fused Lambert one
-    /// (which has CrossTriangleQueue) and textured draws (interpolatesAcrossTriangles). The same
-    /// arithmetic per pixel as a queue of one triangle's pixels, so the same bits.
+    /// the half that reads only the pixels, texture fetches included). Every model and material
+    /// but the fused Lambert one (which has CrossTriangleQueue) and normal-mapped draws
+    /// (interpolatesAcrossTriangles). The same arithmetic per pixel as a queue of one triangle's
+    /// pixels, and a texture's sample at a point does not depend on the other points of its
+    /// batch, so the same bits.
     struct InterpolatedQueue {
-        ShadeQueue pixels;            // numerator, firstSample, passMask, pixelIndex; then the colours
+        ShadeQueue pixels;            // numerators, firstSample, passMask, pixelIndex; then the colours
         PixelAttributes attributes;  // written triangle by triangle, lit as one queue
+        /// After a queue is lit: the next one's texture coordinates are others.
+        void forgetFetches() { attributes.fetched.width = 0; }
     };
 
-    /// Whether this draw's small triangles may share an InterpolatedQueue: not a fused Lambert
-    /// draw, and no texture coordinates (a texture's fetches plan a whole queue's footprints
-    /// at once, from the coordinates' derivatives, which the texture passes read from the
-    /// queue's start).
-    bool interpolatesAcrossTriangles() const { return !fusedLambert_ && layout_.texCoord < 0; }
+    /// Whether this draw's triangles may share an InterpolatedQueue: not a fused Lambert draw,
+    /// and no normal map (its tangent frame is the triangle's, and the fetch that perturbs the
+    /// normal comes before the normal faces the viewer).
+    bool interpolatesAcrossTriangles() const {
+        return !fusedLambert_ && !(layout_.tangent >= 0 && (s_.textures.normal || s_.textures.clearcoatNormal));
+    }
 
     /// The half of shade() that reads the triangle, for queue pixels [begin, q.count): the
-    /// perspective weights and the attributes they interpolate, the textures that change them
-    /// (a textured draw's queue holds one triangle: begin is 0), the unit normals facing the
-    /// viewer. What it writes to `a` is per pixel.
+    /// perspective weights and the attributes they interpolate, the texture coordinates and
+    /// their derivatives, the unit normals facing the viewer (normal-mapped: a draw whose queue
+    /// holds one triangle, begin 0). What it writes to `a` is per pixel.
     void interpolateAttributes(const TriangleSetup& t, const float* v, const ShadeQueue& q, int begin, PixelAttributes& a,
                                StageCounters& counters) const {
         const int end = q.count;
@@ -248,19 +253,20 @@ public:
         else
             std::fill(a.alpha[0] + begin, a.alpha[0] + end, s_.constantColor.a);
         counters.varyingsInterpolated += uint64_t(end - begin) * layout_.count;
-        if (layout_.texCoord >= 0) {
-            texCoordsAndDerivatives(t, v, q, a);
-            if (s_.textures.baseColor) applyBaseColorTexture(q.count, a, counters);
-        }
+        if (layout_.texCoord >= 0) texCoordsAndDerivatives(t, v, q, begin, end, a);
         if constexpr (kLit) {
             shadingNormals(t, v, begin, end, a, counters);
             if (layout_.position >= 0) interpolate<3>(v, layout_.position, begin, end, a.w, a.position);
         }
     }
 
-    /// The half of shade() that reads only the pixels' attributes and the draw: occlusion, the
-    /// shading model's lights, emission, a coat, and the colours written to the queue.
+    /// The half of shade() that reads only the pixels' attributes and the draw: the textures
+    /// but the normal map, occlusion, the shading model's lights, emission, a coat, and the
+    /// colours written to the queue. Texture fetches plan the queue's footprints once
+    /// (PixelAttributes::fetched): `a` is a fresh one, or forgetFetches() was called after its
+    /// last queue.
     void shadeInterpolated(ShadeQueue& q, PixelAttributes& a, StageCounters& counters) const {
+        if (layout_.texCoord >= 0 && s_.textures.baseColor) applyBaseColorTexture(q.count, a, counters);
         if constexpr (!kLit) {
             writeOut(q, a.albedo, a.alpha);
         } else {
@@ -326,9 +332,9 @@ private:
     // Those neighbours use unclamped weights, which like a GPU's helper pixels extrapolate the
     // attribute plane past the triangle's edges (clamping would bend it there); a degenerate
     // extrapolation gives NaN, which the level of detail treats as level 0.
-    void texCoordsAndDerivatives(const TriangleSetup& t, const float* v, const ShadeQueue& q,
+    void texCoordsAndDerivatives(const TriangleSetup& t, const float* v, const ShadeQueue& q, int begin, int end,
                                  PixelAttributes& a) const {
-        interpolate<2>(v, layout_.texCoord, 0, q.count, a.w, a.uv);
+        interpolate<2>(v, layout_.texCoord, begin, end, a.w, a.uv);
         const int n = layout_.count, o = layout_.texCoord;
         const float invArea = float(t.invDoubleArea);
         // The division is made whatever the sum, and its result kept only where the sum is
@@ -343,7 +349,7 @@ private:
             return glm::vec2(q0 * v[o] + q1 * v[n + o] + q2 * v[2 * n + o],
                              q0 * v[o + 1] + q1 * v[n + o + 1] + q2 * v[2 * n + o + 1]) * norm;
         };
-        for (int i = 0; i < q.count; ++i) {
+        for (int i = begin; i < end; ++i) {
             const glm::vec2 plane = uvAt(q.numerator, i);
             const glm::vec2 right = uvAt(q.numeratorRight, i);
             const glm::vec2 down = uvAt(q.numeratorDown, i);

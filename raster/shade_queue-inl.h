@@ -91,6 +91,7 @@ template <class Shader>
 [[gnu::noinline, gnu::flatten]] void shadeInterpolatedQueue(const Shader& shader, typename Shader::InterpolatedQueue& queue,
                                                             StageCounters& counters) {
     shader.shadeInterpolated(queue.pixels, queue.attributes, counters);
+    queue.forgetFetches();
 }
 
 }  // namespace

@@ -585,6 +585,12 @@ private:
         const int i = q.count++;
         q.pixelIndex[i] = uint32_t(y) * uint32_t(target_.imageWidth) + uint32_t(x);
         for (int k = 0; k < 3; ++k) q.numerator[k][i] = float(centreEdges[k] - int64_t{t_.fillBias[k]});
+        if (differencesTexCoords_)
+            for (int k = 0; k < 3; ++k) {
+                const int64_t e = centreEdges[k] - int64_t{t_.fillBias[k]};
+                q.numeratorRight[k][i] = float(e + int64_t{t_.edgeA[k]} * kSubpixelsPerPixel);
+                q.numeratorDown[k][i] = float(e + int64_t{t_.edgeB[k]} * kSubpixelsPerPixel);
+            }
         q.firstSample[i] = uint32_t(first);
         q.passMask[i] = pass;
     }
@@ -685,6 +691,7 @@ private:
     bool haveInputs_ = false;
     CrossTriangleInputs inputs_;
     InterpolatedQueueFor<Shader>* interpolated_;
+    bool differencesTexCoords_ = shader_.differencesTexCoords();  // the shader reads numeratorRight and numeratorDown
     bool shareInterpolated_ = false;  // this triangle's pixels go to interpolated_
     int rangeBegin_ = 0;              // its first pixel there not yet interpolated
     ShadeQueue queue_;  // a member, so the compiler sees it alias nothing (the loop vectorises)

@@ -633,11 +633,13 @@ TEST(Effects, SceneSubmitsAFlatUnlitMeshAsTheBarePipeline) {
 
 // Random overlapping triangles in window space for the cross-triangle tests below: of every size
 // (most of a few pixels, some large enough for queues of their own between them), with a zero
-// normal now and then (a model's len2 > 0 branch shades it black), vertex colours and alphas.
+// normal now and then (a model's len2 > 0 branch shades it black), vertex colours and alphas, and
+// texture coordinates that repeat a texture a few times across a triangle or minify it.
 struct RandomTriangles {
     static constexpr int kWidth = 150, kHeight = 90, kTriangles = 4000;
     std::vector<glm::vec3> positions, normals, colors;
     std::vector<float> alphas;
+    std::vector<glm::vec2> texCoords;
     int small = 0;
     RandomTriangles() {
         std::mt19937 rng(23);
@@ -652,6 +654,7 @@ struct RandomTriangles {
                 normals.push_back(unit(rng) < 0.02f ? glm::vec3(0.0f) : glm::vec3(signedUnit(rng), signedUnit(rng), signedUnit(rng)));
                 colors.push_back({unit(rng), unit(rng), unit(rng)});
                 alphas.push_back(0.2f + 0.8f * unit(rng));
+                texCoords.push_back({3.0f * signedUnit(rng), 3.0f * signedUnit(rng)});
             }
         }
     }
@@ -664,7 +667,7 @@ struct RandomTriangles {
 // (where the order of output merge shows in every overlap), at 1 and 4 samples. `configure` sets
 // the draw's shading model, material and lights.
 template <class Configure>
-void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, Configure configure) {
+void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, bool texCoords, Configure configure) {
     static const RandomTriangles scene;
     constexpr int kWidth = RandomTriangles::kWidth, kHeight = RandomTriangles::kHeight;
     ASSERT_GT(scene.small, RandomTriangles::kTriangles / 2);
@@ -675,6 +678,7 @@ void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, Configure c
                 all.space = raster::PositionSpace::Window;
                 all.positions = scene.positions, all.normals = scene.normals, all.vertexColors = scene.colors;
                 if (vertexAlphas) all.vertexAlphas = scene.alphas;
+                if (texCoords) all.texCoords = scene.texCoords;
                 all.state.cull = raster::CullMode::None;  // both facings: back faces' normals reversed
                 all.state.depthTest = depthTest;
                 all.state.alphaMode = mode;
@@ -690,6 +694,7 @@ void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, Configure c
                         one.normals = all.normals.subspan(3 * t, 3);
                         one.vertexColors = all.vertexColors.subspan(3 * t, 3);
                         if (vertexAlphas) one.vertexAlphas = all.vertexAlphas.subspan(3 * t, 3);
+                        if (texCoords) one.texCoords = all.texCoords.subspan(3 * t, 3);
                         p.draw(one);
                     }
                     p.endFrame();
@@ -720,7 +725,7 @@ void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, Configure c
 // pixel carries its own triangle's inputs, the queue shades when full, and output merge takes the
 // pixels in the order the depth stage queued them, before any later triangle's own queue.
 TEST(CrossTriangleShading, OneDrawGivesTheImageOfADrawPerTriangle) {
-    expectOneDrawGivesTheImageOfADrawPerTriangle(false, [](raster::DrawState& state) {
+    expectOneDrawGivesTheImageOfADrawPerTriangle(false, false, [](raster::DrawState& state) {
         state.shading = ShadingModel::Lambert;
         state.lighting.lightCount = 1;
         state.lighting.lights[0] = directionalLight({0.3f, -0.5f, 0.8f}, glm::vec3(2.0f, 1.5f, 1.0f));
@@ -728,11 +733,13 @@ TEST(CrossTriangleShading, OneDrawGivesTheImageOfADrawPerTriangle) {
     });
 }
 
-// Every other untextured draw lights its triangles' pixels across triangles in the tile's
-// InterpolatedQueue (raster/shade.h): each triangle interpolates its range of the queue, the
-// lights run over the whole queue. Every surface model, with what reads the pixel's place (a
-// shadow mask, ambient occlusion), a point light (the interpolated position), vertex alpha and
-// emission.
+// Every other draw but a normal-mapped one lights its triangles' pixels across triangles in the
+// tile's InterpolatedQueue (raster/shade.h): each triangle interpolates its range of the queue,
+// the textures and lights run over the whole queue. Every surface model, with what reads the
+// pixel's place (a shadow mask, ambient occlusion), a point light (the interpolated position),
+// vertex alpha and emission; and textured: sRGB base colour, UNORM metallic-roughness, occlusion
+// and emissive maps (trilinear, so each pixel's level of detail from its own triangle's
+// derivatives), the base colour's under a transform of its own.
 TEST(InterpolatedShading, OneDrawGivesTheImageOfADrawPerTriangle) {
     constexpr int kPixels = RandomTriangles::kWidth * RandomTriangles::kHeight;
     static std::vector<float> shadowMask(kPixels), ambientVisibility(kPixels);
@@ -752,14 +759,14 @@ TEST(InterpolatedShading, OneDrawGivesTheImageOfADrawPerTriangle) {
     };
     {
         SCOPED_TRACE("Lambert, two lights");
-        expectOneDrawGivesTheImageOfADrawPerTriangle(true, [&](raster::DrawState& state) {
+        expectOneDrawGivesTheImageOfADrawPerTriangle(true, false, [&](raster::DrawState& state) {
             state.shading = ShadingModel::Lambert;
             lights(state);
         });
     }
     {
         SCOPED_TRACE("MetallicRoughness");
-        expectOneDrawGivesTheImageOfADrawPerTriangle(true, [&](raster::DrawState& state) {
+        expectOneDrawGivesTheImageOfADrawPerTriangle(true, false, [&](raster::DrawState& state) {
             state.shading = ShadingModel::MetallicRoughness;
             state.metallic = 0.3f, state.roughness = 0.4f;
             state.cameraPosition = glm::vec3(75.0f, 45.0f, -100.0f);
@@ -768,7 +775,31 @@ TEST(InterpolatedShading, OneDrawGivesTheImageOfADrawPerTriangle) {
     }
     {
         SCOPED_TRACE("Unlit");
-        expectOneDrawGivesTheImageOfADrawPerTriangle(true, [](raster::DrawState& state) { state.shading = ShadingModel::Unlit; });
+        expectOneDrawGivesTheImageOfADrawPerTriangle(true, false, [](raster::DrawState& state) { state.shading = ShadingModel::Unlit; });
+    }
+    std::mt19937 rng(5);
+    std::vector<uint8_t> texels(32 * 32 * 4);
+    for (uint8_t& b : texels) b = uint8_t(rng() & 0xff);
+    const Texture srgb(32, 32, texels, raster::TexelFormat::Srgb8), unorm(32, 32, texels, raster::TexelFormat::Unorm8);
+    {
+        SCOPED_TRACE("MetallicRoughness, textured");
+        expectOneDrawGivesTheImageOfADrawPerTriangle(true, true, [&](raster::DrawState& state) {
+            state.shading = ShadingModel::MetallicRoughness;
+            state.cameraPosition = glm::vec3(75.0f, 45.0f, -100.0f);
+            lights(state);
+            state.textures.baseColor.texture = &srgb;
+            state.textures.baseColor.transform.offset = glm::vec2(0.25f, 0.5f);
+            state.textures.metallicRoughness.texture = &unorm;
+            state.textures.occlusion.texture = &unorm;
+            state.textures.emissive.texture = &srgb;
+        });
+    }
+    {
+        SCOPED_TRACE("Unlit, textured");
+        expectOneDrawGivesTheImageOfADrawPerTriangle(true, true, [&](raster::DrawState& state) {
+            state.shading = ShadingModel::Unlit;
+            state.textures.baseColor.texture = &srgb;
+        });
     }
 }
 
