@@ -1055,4 +1055,16 @@ private:
     bool fusedLambert_ = false;
 };
 
+/// The InterpolatedQueue of a shader that has one (raster/shade.h), else an empty stand-in.
+template <class Shader, bool = Shader::kInterpolatesAcrossTriangles>
+struct InterpolatedQueueOf {
+    struct type {};
+};
+template <class Shader>
+struct InterpolatedQueueOf<Shader, true> {
+    using type = typename Shader::InterpolatedQueue;
+};
+template <class Shader>
+using InterpolatedQueueFor = typename InterpolatedQueueOf<Shader>::type;
+
 }  // namespace cuberille::raster

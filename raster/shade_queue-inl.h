@@ -77,6 +77,26 @@ template <class Shader>
     shader.shade(t, varyings, queue, counters);
 }
 
+/// Appends a pixel of triangle `t` to a queue an InterpolatedQueue shades (raster/shade.h), with
+/// the weight numerators `shader` reads converted now: the scalar conversion of
+/// convertWeightNumerators(), the same integers and one rounding, so the same floats. The queue
+/// must have room.
+template <class Shader>
+HWY_INLINE void queueForInterpolation(const Shader& shader, const TriangleSetup& t, const int64_t centreEdges[3],
+                                      uint32_t firstSample, uint32_t passMask, uint32_t pixelIndex, ShadeQueue& q) {
+    const int i = q.count++;
+    for (int k = 0; k < 3; ++k) q.numerator[k][i] = float(centreEdges[k] - int64_t{t.fillBias[k]});
+    if (shader.differencesTexCoords())
+        for (int k = 0; k < 3; ++k) {
+            const int64_t e = centreEdges[k] - int64_t{t.fillBias[k]};
+            q.numeratorRight[k][i] = float(e + int64_t{t.edgeA[k]} * kSubpixelsPerPixel);
+            q.numeratorDown[k][i] = float(e + int64_t{t.edgeB[k]} * kSubpixelsPerPixel);
+        }
+    q.firstSample[i] = firstSample;
+    q.passMask[i] = passMask;
+    q.pixelIndex[i] = pixelIndex;
+}
+
 /// A triangle's half of an InterpolatedQueue (raster/shade.h): the attributes of its pixels,
 /// queued from `begin` on. Its numerators were converted as its pixels were queued.
 template <class Shader>

@@ -132,18 +132,6 @@ template <int S, class Shader>
     mergeInQueueOrder<S>(q, [alpha](int) { return alpha; }, target);
 }
 
-/// The InterpolatedQueue of a shader that has one (raster/shade.h), else an empty stand-in.
-template <class Shader, bool = Shader::kInterpolatesAcrossTriangles>
-struct InterpolatedQueueOf {
-    struct type {};
-};
-template <class Shader>
-struct InterpolatedQueueOf<Shader, true> {
-    using type = typename Shader::InterpolatedQueue;
-};
-template <class Shader>
-using InterpolatedQueueFor = typename InterpolatedQueueOf<Shader>::type;
-
 /// Lights a tile's InterpolatedQueue and merges its pixels in the order they were queued: the
 /// merge of shadeAndMerge() for draws that are neither alpha-tested nor transmissive (their
 /// depths were written at the depth test).
@@ -572,8 +560,7 @@ private:
         queueAcrossTriangles(*shared_, inputs_, centreEdges, uint32_t(first), pass);
     }
 
-    /// Queues a pixel in the tile's InterpolatedQueue, with its weight numerators (the scalar
-    /// conversion of shadeQueue()'s, the same floats); when the queue is full, this triangle's
+    /// Queues a pixel in the tile's InterpolatedQueue; when the queue is full, this triangle's
     /// pixels so far are interpolated and the whole queue lit first.
     void queueInterpolated(int32_t x, int32_t y, size_t first, uint32_t pass, const int64_t centreEdges[3]) {
         ShadeQueue& q = interpolated_->pixels;
@@ -582,17 +569,8 @@ private:
             shadeAndMergeInterpolated<S>(shader_, *interpolated_, target_);
             rangeBegin_ = 0;
         }
-        const int i = q.count++;
-        q.pixelIndex[i] = uint32_t(y) * uint32_t(target_.imageWidth) + uint32_t(x);
-        for (int k = 0; k < 3; ++k) q.numerator[k][i] = float(centreEdges[k] - int64_t{t_.fillBias[k]});
-        if (differencesTexCoords_)
-            for (int k = 0; k < 3; ++k) {
-                const int64_t e = centreEdges[k] - int64_t{t_.fillBias[k]};
-                q.numeratorRight[k][i] = float(e + int64_t{t_.edgeA[k]} * kSubpixelsPerPixel);
-                q.numeratorDown[k][i] = float(e + int64_t{t_.edgeB[k]} * kSubpixelsPerPixel);
-            }
-        q.firstSample[i] = uint32_t(first);
-        q.passMask[i] = pass;
+        queueForInterpolation(shader_, t_, centreEdges, uint32_t(first), pass,
+                              uint32_t(y) * uint32_t(target_.imageWidth) + uint32_t(x), q);
     }
 
     /// This triangle's half of the InterpolatedQueue: the attributes of the pixels it queued.
@@ -691,7 +669,6 @@ private:
     bool haveInputs_ = false;
     CrossTriangleInputs inputs_;
     InterpolatedQueueFor<Shader>* interpolated_;
-    bool differencesTexCoords_ = shader_.differencesTexCoords();  // the shader reads numeratorRight and numeratorDown
     bool shareInterpolated_ = false;  // this triangle's pixels go to interpolated_
     int rangeBegin_ = 0;              // its first pixel there not yet interpolated
     ShadeQueue queue_;  // a member, so the compiler sees it alias nothing (the loop vectorises)

@@ -126,6 +126,29 @@ void shadeDrawPixels(const Shader& shader, const DrawCall& call, const SeenDraw&
     const DrawState& state = call.state;
     ShadeQueue q;
     uint32_t masks[ShadeQueue::kCapacity][kMaxClippedVertices];
+    // Where the draw lights across triangles (raster/shade.h), the block's triangles share one
+    // InterpolatedQueue, as the forward path's small triangles share their tile's: a block of
+    // small triangles would otherwise shade a queue of a pixel or a few per triangle. The depths
+    // are written as pixels are queued (every draw merges as opaque here, so a pixel's depth
+    // and colour are independent writes).
+    [[maybe_unused]] std::conditional_t<Shader::kInterpolatesAcrossTriangles, InterpolatedQueueFor<Shader>, ShadeQueue*>
+        shared;
+    bool sharing = false;
+    if constexpr (Shader::kInterpolatesAcrossTriangles) {
+        sharing = shader.interpolatesAcrossTriangles();
+        shared.pixels.count = 0;
+    }
+    const auto lightShared = [&] {
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            shadeInterpolatedQueue(shader, shared, counters);
+            const ShadeQueue& s = shared.pixels;
+            counters.pixelsShaded += s.count;
+            for (int n = 0; n < s.count; ++n)
+                mergeColor<S>(color + s.firstSample[n], s.passMask[n], glm::vec4(s.red[n], s.green[n], s.blue[n], 1.0f),
+                              state.colorWriteMask);
+            shared.pixels.count = 0;
+        }
+    };
     for (size_t begin = 0; begin < pixels.size();) {
         size_t end = begin;
         while (end < pixels.size() && pixels[end].slot == pixels[begin].slot) ++end;
@@ -155,6 +178,34 @@ void shadeDrawPixels(const Shader& shader, const DrawCall& call, const SeenDraw&
         }
         for (uint32_t p = 0; p < pieces.count; ++p) {
             const TriangleSetup& t = chunk.setups[pieces.first + p];
+            const float* varyings = chunk.varyings.data() + t.varyingOffset;
+            if constexpr (Shader::kInterpolatesAcrossTriangles) {
+                if (sharing) {
+                    ShadeQueue& s = shared.pixels;
+                    int rangeBegin = s.count;
+                    for (size_t i = begin; i < end; ++i) {
+                        const uint32_t pass = masks[i - begin][p];
+                        if (!pass) continue;
+                        if (s.count == ShadeQueue::kCapacity) {
+                            if (s.count > rangeBegin) interpolateQueueRange(shader, t, varyings, shared, rangeBegin, counters);
+                            lightShared();
+                            rangeBegin = 0;
+                        }
+                        const SeenPixel& px = pixels[i];
+                        int64_t e[3];
+                        edgesAtPixelCentre(t, px.x, px.y, e);
+                        const uint32_t first = uint32_t(((px.y - originY) * kTileSizePixels + (px.x - originX)) * S);
+                        queueForInterpolation(shader, t, e, first, pass, uint32_t(px.y) * uint32_t(imageWidth) + uint32_t(px.x), s);
+                        counters.samplesPassed += uint64_t(std::popcount(pass));
+                        if (!state.depthWrite) continue;
+                        float d[S];
+                        sampleDepths<S>(t, px.x, px.y, offsets, d);
+                        mergeDepth<S>(depth + first, pass, d);
+                    }
+                    if (s.count > rangeBegin) interpolateQueueRange(shader, t, varyings, shared, rangeBegin, counters);
+                    continue;
+                }
+            }
             q.count = 0;
             for (size_t i = begin; i < end; ++i) {
                 const uint32_t pass = masks[i - begin][p];
@@ -169,7 +220,7 @@ void shadeDrawPixels(const Shader& shader, const DrawCall& call, const SeenDraw&
                 q.pixelIndex[n] = uint32_t(px.y) * uint32_t(imageWidth) + uint32_t(px.x);
             }
             if (q.count == 0) continue;
-            shadeQueue(shader, t, chunk.varyings.data() + t.varyingOffset, q, counters);
+            shadeQueue(shader, t, varyings, q, counters);
             counters.pixelsShaded += q.count;
             for (int n = 0; n < q.count; ++n) {
                 glm::vec4 c(q.red[n], q.green[n], q.blue[n], q.alpha[n]);
@@ -185,6 +236,9 @@ void shadeDrawPixels(const Shader& shader, const DrawCall& call, const SeenDraw&
             }
         }
         begin = end;
+    }
+    if constexpr (Shader::kInterpolatesAcrossTriangles) {
+        if (sharing && shared.pixels.count) lightShared();
     }
 }
 
