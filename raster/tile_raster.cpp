@@ -167,13 +167,9 @@ public:
         const int pixels = (bounds.maxX - bounds.minX + 1) * (bounds.maxY - bounds.minY + 1);
         const bool few = pixels < kMinPixelsToBatchShading;
         shareQueue_ = few && shared_;
-        // Every triangle of a draw that lights across triangles queues there, whatever its size:
-        // a large triangle fills the shared queue as it would fill its own, and a small one's
-        // few pixels join a full batch (see InterpolatedQueue).
-        shareInterpolated_ = interpolated_ != nullptr;
         shadeImmediately_ = few && !shared_ && !interpolated_;
         if constexpr (Shader::kInterpolatesAcrossTriangles) {
-            if (shareInterpolated_) rangeBegin_ = interpolated_->pixels.count;
+            if (interpolated_) rangeBegin_ = interpolated_->pixels.count;
         }
         if (pixels <= kSmallTrianglePixels) {
             ++target_.counters->smallTriangleEntries;
@@ -182,7 +178,7 @@ public:
             coarse(bounds, sp);
         }
         if constexpr (Shader::kInterpolatesAcrossTriangles) {
-            if (shareInterpolated_) interpolateOwnRange();
+            if (interpolated_) interpolateOwnRange();
         }
     }
 
@@ -537,7 +533,7 @@ private:
             if (shareQueue_) return queueAcross(first, pass, centreEdges);
         }
         if constexpr (Shader::kInterpolatesAcrossTriangles) {
-            if (shareInterpolated_) return queueInterpolated(x, y, first, pass, centreEdges);
+            if (interpolated_) return queueInterpolated(x, y, first, pass, centreEdges);
         }
         const int i = queue_.count++;
         queue_.pixelIndex[i] = uint32_t(y) * uint32_t(target_.imageWidth) + uint32_t(x);
@@ -614,9 +610,6 @@ private:
         if constexpr (Shader::kShadesAcrossTriangles) {
             if (shared_ && shared_->count) shadeAndMergeAcrossTriangles<S>(shader_, *shared_, target_);
         }
-        if constexpr (Shader::kInterpolatesAcrossTriangles) {
-            if (interpolated_ && interpolated_->pixels.count) shadeAndMergeInterpolated<S>(shader_, *interpolated_, target_);
-        }
         const DrawState& state = *target_.state;
         StageCounters& counters = *target_.counters;
         shadeQueue(shader_, t_, varyings_, queue_, counters);
@@ -668,8 +661,10 @@ private:
     bool shareQueue_ = false;  // this triangle's pixels go to shared_
     bool haveInputs_ = false;
     CrossTriangleInputs inputs_;
+    // Every triangle of a draw that lights across triangles queues there, whatever its size: a
+    // large triangle fills the shared queue as it would fill its own, and a small one's few
+    // pixels join a full batch (see InterpolatedQueue).
     InterpolatedQueueFor<Shader>* interpolated_;
-    bool shareInterpolated_ = false;  // this triangle's pixels go to interpolated_
     int rangeBegin_ = 0;              // its first pixel there not yet interpolated
     ShadeQueue queue_;  // a member, so the compiler sees it alias nothing (the loop vectorises)
 };
@@ -691,7 +686,7 @@ void rasterizeBinned(const TriangleBatch& batch, int tile, const Shader& shader,
     SampleSubpixelOffsets<S> offsets;
     computeSampleSubpixelOffsets<S>(sp, offsets);
     const BlockRowLanes<S> lanes(offsets);
-    // The tile's queue shared by small triangles, of the kind the draw takes, if any: never for
+    // The tile's queue shared across triangles, of the kind the draw takes, if any: never for
     // alpha-tested draws (whose depth writes wait for shading) or transmissive ones (whose merge
     // reads the light passed through).
     const DrawState& state = *target.state;
@@ -703,8 +698,7 @@ void rasterizeBinned(const TriangleBatch& batch, int tile, const Shader& shader,
         if (mayShare && shader.shadesAcrossTriangles()) shared = &queue;
     }
     InterpolatedQueueFor<Shader>* interpolated = nullptr;
-    [[maybe_unused]] std::conditional_t<Shader::kInterpolatesAcrossTriangles, InterpolatedQueueFor<Shader>, NoQueue>
-        interpolatedQueue;
+    [[maybe_unused]] InterpolatedQueueFor<Shader> interpolatedQueue;  // an empty stand-in for a shader without one
     if constexpr (Shader::kInterpolatesAcrossTriangles) {
         if (mayShare && shader.interpolatesAcrossTriangles()) interpolated = &interpolatedQueue;
     }

@@ -131,8 +131,7 @@ void shadeDrawPixels(const Shader& shader, const DrawCall& call, const SeenDraw&
     // small triangles would otherwise shade a queue of a pixel or a few per triangle. The depths
     // are written as pixels are queued (every draw merges as opaque here, so a pixel's depth
     // and colour are independent writes).
-    [[maybe_unused]] std::conditional_t<Shader::kInterpolatesAcrossTriangles, InterpolatedQueueFor<Shader>, ShadeQueue*>
-        shared;
+    [[maybe_unused]] InterpolatedQueueFor<Shader> shared;  // an empty stand-in for a shader without one
     bool sharing = false;
     if constexpr (Shader::kInterpolatesAcrossTriangles) {
         sharing = shader.interpolatesAcrossTriangles();
