@@ -145,6 +145,7 @@ public:
     SurfaceShader(const DrawState& state, const VaryingLayout& layout) : s_(state), layout_(layout) {
         hasEmissive_ = state.emissive != glm::vec3(0.0f);
         coated_ = kModel == ShadingModel::MetallicRoughness && state.brdf.clearcoat > 0.0f;
+        mapsNormals_ = kLit && layout.tangent >= 0 && (state.textures.normal || (coated_ && state.textures.clearcoatNormal));
         if (kModel == ShadingModel::MetallicRoughness && state.brdf.sheenColor != glm::vec3(0.0f))
             sheenAlbedo_ = sheenAlbedoTable();
         transmissive_ = state.transmits();
@@ -186,6 +187,11 @@ private:
         float alpha[1][N];
         float uv[2][N], dUVdx[2][N], dUVdy[2][N];
         float normal[3][N];      // world space, unit length
+        // Normal-mapped draws only: the interpolated tangent and handedness, and the sign that
+        // turns the pixel's normal to the viewer (its triangle's), for the second half, which
+        // perturbs and turns the normal (a queue may hold several triangles' pixels).
+        float tangent[4][N];
+        float facing[N];
         float position[3][N];    // world space
         float radiance[3][N];    // the result
         // KHR_materials_clearcoat only: the coat's normal (its own normal map's, or the surface's
@@ -218,10 +224,11 @@ public:
     /// pixels have been queued (interpolateAttributes, the half that reads the triangle), and
     /// the lights run across the whole queue when it is full or the tile ends (shadeInterpolated,
     /// the half that reads only the pixels, texture fetches included). Every model and material
-    /// but the fused Lambert one (which has CrossTriangleQueue) and normal-mapped draws
-    /// (interpolatesAcrossTriangles). The same arithmetic per pixel as a queue of one triangle's
-    /// pixels, and a texture's sample at a point does not depend on the other points of its
-    /// batch, so the same bits.
+    /// but the fused Lambert one, which has CrossTriangleQueue (interpolatesAcrossTriangles). A
+    /// normal map's tangent frame is per pixel like every other attribute: the first half keeps
+    /// each pixel's tangent and facing sign, the second fetches the map and turns the normal. The
+    /// same arithmetic per pixel as a queue of one triangle's pixels, and a texture's sample at a
+    /// point does not depend on the other points of its batch, so the same bits.
     struct InterpolatedQueue {
         ShadeQueue pixels;            // numerators, firstSample, passMask, pixelIndex; then the colours
         PixelAttributes attributes;  // written triangle by triangle, lit as one queue
@@ -229,17 +236,15 @@ public:
         void forgetFetches() { attributes.fetched.width = 0; }
     };
 
-    /// Whether this draw's triangles may share an InterpolatedQueue: not a fused Lambert draw,
-    /// and no normal map (its tangent frame is the triangle's, and the fetch that perturbs the
-    /// normal comes before the normal faces the viewer).
-    bool interpolatesAcrossTriangles() const {
-        return !fusedLambert_ && !(layout_.tangent >= 0 && (s_.textures.normal || s_.textures.clearcoatNormal));
-    }
+    /// Whether this draw's triangles may share an InterpolatedQueue: every draw but a fused
+    /// Lambert one.
+    bool interpolatesAcrossTriangles() const { return !fusedLambert_; }
 
     /// The half of shade() that reads the triangle, for queue pixels [begin, q.count): the
     /// perspective weights and the attributes they interpolate, the texture coordinates and
-    /// their derivatives, the unit normals facing the viewer (normal-mapped: a draw whose queue
-    /// holds one triangle, begin 0). What it writes to `a` is per pixel.
+    /// their derivatives, the unit normals facing the viewer (normal-mapped: the normals as
+    /// interpolated, with the tangents and facing signs the second half needs). What it writes
+    /// to `a` is per pixel.
     void interpolateAttributes(const TriangleSetup& t, const float* v, const ShadeQueue& q, int begin, PixelAttributes& a,
                                StageCounters& counters) const {
         const int end = q.count;
@@ -255,17 +260,20 @@ public:
         counters.varyingsInterpolated += uint64_t(end - begin) * layout_.count;
         if (layout_.texCoord >= 0) texCoordsAndDerivatives(t, v, q, begin, end, a);
         if constexpr (kLit) {
-            shadingNormals(t, v, begin, end, a, counters);
+            shadingNormals(t, v, begin, end, a);
             if (layout_.position >= 0) interpolate<3>(v, layout_.position, begin, end, a.w, a.position);
         }
     }
 
-    /// The half of shade() that reads only the pixels' attributes and the draw: the textures
-    /// but the normal map, occlusion, the shading model's lights, emission, a coat, and the
-    /// colours written to the queue. Texture fetches plan the queue's footprints once
+    /// The half of shade() that reads only the pixels' attributes and the draw: the normal map
+    /// and the normals' facing, the other textures, occlusion, the shading model's lights,
+    /// emission, a coat, and the colours written to the queue. Texture fetches plan the queue's footprints once
     /// (PixelAttributes::fetched): `a` is a fresh one, or forgetFetches() was called after its
     /// last queue.
     void shadeInterpolated(ShadeQueue& q, PixelAttributes& a, StageCounters& counters) const {
+        if constexpr (kLit) {
+            if (mapsNormals_) mappedNormals(q.count, a, counters);
+        }
         if (layout_.texCoord >= 0 && s_.textures.baseColor) applyBaseColorTexture(q.count, a, counters);
         if constexpr (!kLit) {
             writeOut(q, a.albedo, a.alpha);
@@ -391,25 +399,33 @@ private:
     }
 
     // Unit world-space normals: interpolated, perturbed by the normal map when there is one,
-    // and reversed on back faces (glTF 2.0 §3.9.3, double-sided materials).
-    void shadingNormals(const TriangleSetup& t, const float* v, int begin, int end, PixelAttributes& a,
-                        StageCounters& counters) const {
+    // and reversed on back faces (glTF 2.0 §3.9.3, double-sided materials). A normal-mapped
+    // draw's are finished in the second half (mappedNormals).
+    void shadingNormals(const TriangleSetup& t, const float* v, int begin, int end, PixelAttributes& a) const {
         interpolate<3>(v, layout_.normal, begin, end, a.w, a.normal);
         const bool coatNormal = coated_ && layout_.tangent >= 0;  // else the coat follows a.normal
         if (coatNormal)
             for (int k = 0; k < 3; ++k) std::copy(a.normal[k] + begin, a.normal[k] + end, a.coatNormal[k] + begin);
-        if (layout_.tangent >= 0) {
-            float tangent[4][N];
-            interpolate<4>(v, layout_.tangent, begin, end, a.w, tangent);
-            // Normal maps are textures: only a draw with texture coordinates has them, and its
-            // queue holds one triangle (begin is 0).
-            if (s_.textures.normal) normalMapped(s_.textures.normal, s_.normalScale, tangent, end, a, a.normal, counters);
-            if (coatNormal && s_.textures.clearcoatNormal)
-                normalMapped(s_.textures.clearcoatNormal, s_.brdf.clearcoatNormalScale, tangent, end, a, a.coatNormal, counters);
-        }
         const float facing = t.backFacing ? -1.0f : 1.0f;
+        if (mapsNormals_) {
+            interpolate<4>(v, layout_.tangent, begin, end, a.w, a.tangent);
+            std::fill(a.facing + begin, a.facing + end, facing);
+            return;
+        }
         unitFacing(begin, end, facing, a.normal);
         if (coatNormal) unitFacing(begin, end, facing, a.coatNormal);
+    }
+
+    // The normals of a normal-mapped draw, for the whole queue: perturbed by the maps (normal
+    // maps are textures: only a draw with texture coordinates has them), then unit length and
+    // turned by each pixel's facing sign, as shadingNormals turns an unmapped draw's.
+    void mappedNormals(int count, PixelAttributes& a, StageCounters& counters) const {
+        const bool coatNormal = coated_;  // mapsNormals_ implies tangents
+        if (s_.textures.normal) normalMapped(s_.textures.normal, s_.normalScale, a.tangent, count, a, a.normal, counters);
+        if (coatNormal && s_.textures.clearcoatNormal)
+            normalMapped(s_.textures.clearcoatNormal, s_.brdf.clearcoatNormalScale, a.tangent, count, a, a.coatNormal, counters);
+        unitFacing(count, a.facing, a.normal);
+        if (coatNormal) unitFacing(count, a.facing, a.coatNormal);
     }
 
     // `normal` perturbed by a tangent-space normal map, in the frame of the interpolated tangent
@@ -435,6 +451,15 @@ private:
             const float x = normal[0][i], y = normal[1][i], z = normal[2][i];
             const float len2 = x * x + y * y + z * z;
             const float inv = len2 > 0.0f ? facing / std::sqrt(len2) : 0.0f;
+            normal[0][i] = x * inv, normal[1][i] = y * inv, normal[2][i] = z * inv;
+        }
+    }
+    /// The same, each pixel with its own sign.
+    static void unitFacing(int count, const float* facing, float (&normal)[3][N]) {
+        for (int i = 0; i < count; ++i) {
+            const float x = normal[0][i], y = normal[1][i], z = normal[2][i];
+            const float len2 = x * x + y * y + z * z;
+            const float inv = len2 > 0.0f ? facing[i] / std::sqrt(len2) : 0.0f;
             normal[0][i] = x * inv, normal[1][i] = y * inv, normal[2][i] = z * inv;
         }
     }
@@ -1046,6 +1071,7 @@ private:
     VaryingLayout layout_;
     bool hasEmissive_ = false;
     bool coated_ = false;  // KHR_materials_clearcoat
+    bool mapsNormals_ = false;  // a normal map perturbs the normal or the coat's (needs tangents)
     const float* sheenAlbedo_ = nullptr;  // KHR_materials_sheen: its albedo table, when the draw has a sheen
     bool transmissive_ = false;           // KHR_materials_transmission
     bool volume_ = false;                 // KHR_materials_volume: an attenuating thickness

@@ -640,6 +640,7 @@ struct RandomTriangles {
     std::vector<glm::vec3> positions, normals, colors;
     std::vector<float> alphas;
     std::vector<glm::vec2> texCoords;
+    std::vector<glm::vec4> tangents;  // any direction, either handedness; one now and then along the normal
     int small = 0;
     RandomTriangles() {
         std::mt19937 rng(23);
@@ -655,6 +656,9 @@ struct RandomTriangles {
                 colors.push_back({unit(rng), unit(rng), unit(rng)});
                 alphas.push_back(0.2f + 0.8f * unit(rng));
                 texCoords.push_back({3.0f * signedUnit(rng), 3.0f * signedUnit(rng)});
+                const float handedness = unit(rng) < 0.5f ? -1.0f : 1.0f;
+                tangents.push_back(unit(rng) < 0.02f ? glm::vec4(normals.back(), handedness)
+                                                     : glm::vec4(signedUnit(rng), signedUnit(rng), signedUnit(rng), handedness));
             }
         }
     }
@@ -665,9 +669,10 @@ struct RandomTriangles {
 // triangles' pixels — the same bits, and the same counts of shaded pixels, light evaluations and
 // interpolated varyings. With and without a depth test (the last drawn must win) and blended
 // (where the order of output merge shows in every overlap), at 1 and 4 samples. `configure` sets
-// the draw's shading model, material and lights.
+// the draw's shading model, material and lights; `tangents` gives the vertices tangents (for a
+// normal map, which needs texture coordinates too).
 template <class Configure>
-void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, bool texCoords, Configure configure) {
+void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, bool texCoords, Configure configure, bool tangents = false) {
     static const RandomTriangles scene;
     constexpr int kWidth = RandomTriangles::kWidth, kHeight = RandomTriangles::kHeight;
     ASSERT_GT(scene.small, RandomTriangles::kTriangles / 2);
@@ -679,6 +684,7 @@ void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, bool texCoo
                 all.positions = scene.positions, all.normals = scene.normals, all.vertexColors = scene.colors;
                 if (vertexAlphas) all.vertexAlphas = scene.alphas;
                 if (texCoords) all.texCoords = scene.texCoords;
+                if (tangents) all.tangents = scene.tangents;
                 all.state.cull = raster::CullMode::None;  // both facings: back faces' normals reversed
                 all.state.depthTest = depthTest;
                 all.state.alphaMode = mode;
@@ -695,6 +701,7 @@ void expectOneDrawGivesTheImageOfADrawPerTriangle(bool vertexAlphas, bool texCoo
                         one.vertexColors = all.vertexColors.subspan(3 * t, 3);
                         if (vertexAlphas) one.vertexAlphas = all.vertexAlphas.subspan(3 * t, 3);
                         if (texCoords) one.texCoords = all.texCoords.subspan(3 * t, 3);
+                        if (tangents) one.tangents = all.tangents.subspan(3 * t, 3);
                         p.draw(one);
                     }
                     p.endFrame();
@@ -733,13 +740,14 @@ TEST(CrossTriangleShading, OneDrawGivesTheImageOfADrawPerTriangle) {
     });
 }
 
-// Every other draw but a normal-mapped one lights its triangles' pixels across triangles in the
-// tile's InterpolatedQueue (raster/shade.h): each triangle interpolates its range of the queue,
-// the textures and lights run over the whole queue. Every surface model, with what reads the
-// pixel's place (a shadow mask, ambient occlusion), a point light (the interpolated position),
-// vertex alpha and emission; and textured: sRGB base colour, UNORM metallic-roughness, occlusion
-// and emissive maps (trilinear, so each pixel's level of detail from its own triangle's
-// derivatives), the base colour's under a transform of its own.
+// Every other draw lights its triangles' pixels across triangles in the tile's InterpolatedQueue
+// (raster/shade.h): each triangle interpolates its range of the queue, the textures and lights run
+// over the whole queue. Every surface model, with what reads the pixel's place (a shadow mask,
+// ambient occlusion), a point light (the interpolated position), vertex alpha and emission; and
+// textured: sRGB base colour, UNORM metallic-roughness, occlusion and emissive maps (trilinear,
+// so each pixel's level of detail from its own triangle's derivatives), the base colour's under a
+// transform of its own; and normal-mapped (each pixel in its own triangle's tangent frame and
+// facing: the random triangles come in both windings), with a clear coat's own normal map.
 TEST(InterpolatedShading, OneDrawGivesTheImageOfADrawPerTriangle) {
     constexpr int kPixels = RandomTriangles::kWidth * RandomTriangles::kHeight;
     static std::vector<float> shadowMask(kPixels), ambientVisibility(kPixels);
@@ -793,6 +801,34 @@ TEST(InterpolatedShading, OneDrawGivesTheImageOfADrawPerTriangle) {
             state.textures.occlusion.texture = &unorm;
             state.textures.emissive.texture = &srgb;
         });
+    }
+    {
+        SCOPED_TRACE("MetallicRoughness, normal-mapped, with a coat's normal map");
+        expectOneDrawGivesTheImageOfADrawPerTriangle(
+            true, true,
+            [&](raster::DrawState& state) {
+                state.shading = ShadingModel::MetallicRoughness;
+                state.cameraPosition = glm::vec3(75.0f, 45.0f, -100.0f);
+                lights(state);
+                state.textures.baseColor.texture = &srgb;
+                state.textures.normal.texture = &unorm;
+                state.normalScale = 0.8f;
+                state.brdf.clearcoat = 0.5f, state.brdf.clearcoatRoughness = 0.3f;
+                state.textures.clearcoatNormal.texture = &unorm;
+                state.textures.clearcoatNormal.transform.offset = glm::vec2(0.5f, 0.125f);
+            },
+            true);
+    }
+    {
+        SCOPED_TRACE("Lambert, normal-mapped");
+        expectOneDrawGivesTheImageOfADrawPerTriangle(
+            true, true,
+            [&](raster::DrawState& state) {
+                state.shading = ShadingModel::Lambert;
+                lights(state);
+                state.textures.normal.texture = &unorm;
+            },
+            true);
     }
     {
         SCOPED_TRACE("Unlit, textured");
