@@ -222,7 +222,8 @@ glm::vec4 Texture::sampleBilinear(int level, glm::vec2 uv) const { return blend(
 
 TexelPyramid Texture::lanePyramid() const {
     return {packed_.data(), format_ == TexelFormat::Srgb8, decodeRgb_, levelCount(), wrapU_, wrapV_,
-            filter_, levels_.width, levels_.height, levels_.offset, levels_.tileRowStride};
+            filter_, levels_.width, levels_.height, levels_.offset, levels_.tileRowStride,
+            packed_.size() * sizeof(uint32_t) >= kPrefetchTextureBytes};
 }
 
 void Texture::sampleBatch(int count, const float* u, const float* v, const float* lod, Channels out,
