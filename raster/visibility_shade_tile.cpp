@@ -114,131 +114,170 @@ struct FanPieces {
     }
 };
 
-/// One draw's seen pixels of a block, sorted by slot: each slot's pixels shaded as one queue
-/// per piece, then merged. Every draw merges as opaque (the header says why).
+/// Each of a slot's pixels' samples split among the triangle's pieces: masks[i][p] goes to piece
+/// pieces.first + p. Most seen triangles are one piece; a clipped one's pixels are split among
+/// its fan, at a test a block where one piece takes them all (FanPieces::wholeRect).
+template <int S>
+void splitAmongPieces(const SetupChunk& chunk, const SeenPieces& pieces, std::span<const SeenPixel> pixels,
+                      uint32_t (*masks)[kMaxClippedVertices]) {
+    if (pieces.count == 1) {
+        for (size_t i = 0; i < pixels.size(); ++i) masks[i][0] = pixels[i].pass;
+        return;
+    }
+    const FanPieces<S> fan(chunk, pieces);
+    int32_t x0 = pixels[0].x, x1 = x0, y0 = pixels[0].y, y1 = y0;
+    for (const SeenPixel& px : pixels.subspan(1))
+        x0 = std::min(x0, px.x), x1 = std::max(x1, px.x), y0 = std::min(y0, px.y), y1 = std::max(y1, px.y);
+    if (const int whole = fan.wholeRect(x0, y0, x1, y1); whole >= 0) {
+        for (size_t i = 0; i < pixels.size(); ++i)
+            for (uint32_t p = 0; p < pieces.count; ++p) masks[i][p] = int(p) == whole ? pixels[i].pass : 0;
+        return;
+    }
+    for (size_t i = 0; i < pixels.size(); ++i) fan.split(pixels[i].x, pixels[i].y, pixels[i].pass, masks[i]);
+}
+
+/// One draw's shading in one block: its seen pixels, piece by piece, queued and lit. Where the
+/// draw lights across triangles (raster/shade.h) every piece's pixels join one InterpolatedQueue,
+/// as the forward path's small triangles share their tile's (a block of small triangles would
+/// otherwise shade a queue of a pixel or a few per triangle); else each piece has a queue of its
+/// own. Every draw merges as opaque here (the header says why), so a pixel's depth and colour are
+/// independent writes: its depths are written as it is queued, its colour when its queue is lit.
+template <int S, class Shader>
+class DrawShading {
+public:
+    DrawShading(const Shader& shader, const DrawState& state, int originX, int originY, int imageWidth, glm::vec4* color,
+                float* depth, StageCounters& counters)
+        : shader_(shader), state_(state), originX_(originX), originY_(originY), imageWidth_(imageWidth), color_(color),
+          depth_(depth), counters_(counters) {
+        computeSampleSubpixelOffsets<S>(standardSamplePattern(S), offsets_);
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            sharing_ = shader.interpolatesAcrossTriangles();
+            shared_.pixels.count = 0;
+        }
+    }
+
+    /// The samples of `pixels` that masks[i][piece] gives to piece `t`.
+    void shadePiece(const TriangleSetup& t, const float* varyings, std::span<const SeenPixel> pixels,
+                    const uint32_t (*masks)[kMaxClippedVertices], uint32_t piece) {
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            if (sharing_) return queueShared(t, varyings, pixels, masks, piece);
+        }
+        own_.count = 0;
+        eachPixel(t, pixels, masks, piece, [&](const int64_t (&e)[3], uint32_t first, uint32_t pass, uint32_t pixelIndex) {
+            const int n = own_.count++;
+            own_.edge0[n] = e[0], own_.edge1[n] = e[1], own_.edge2[n] = e[2];
+            own_.firstSample[n] = first, own_.passMask[n] = pass, own_.pixelIndex[n] = pixelIndex;
+        });
+        if (own_.count == 0) return;
+        shadeQueue(shader_, t, varyings, own_, counters_);
+        merge(own_);
+    }
+
+    /// Lights what the shared queue still holds, at the end of the draw's pixels in the block.
+    void finish() {
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            if (sharing_ && shared_.pixels.count) lightShared();
+        }
+    }
+
+private:
+    static constexpr bool kSurface = !std::is_same_v<Shader, ConstantColorShader>;
+
+    /// A piece's pixels in the shared queue: its range interpolated when the queue fills (then the
+    /// whole queue lit) and when its pixels are in.
+    void queueShared(const TriangleSetup& t, const float* varyings, std::span<const SeenPixel> pixels,
+                     const uint32_t (*masks)[kMaxClippedVertices], uint32_t piece) {
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            ShadeQueue& q = shared_.pixels;
+            int rangeBegin = q.count;
+            eachPixel(t, pixels, masks, piece, [&](const int64_t (&e)[3], uint32_t first, uint32_t pass, uint32_t pixelIndex) {
+                if (q.count == ShadeQueue::kCapacity) {
+                    if (q.count > rangeBegin) interpolateQueueRange(shader_, t, varyings, shared_, rangeBegin, counters_);
+                    lightShared();
+                    rangeBegin = 0;
+                }
+                queueForInterpolation(shader_, t, e, first, pass, pixelIndex, q);
+            });
+            if (q.count > rangeBegin) interpolateQueueRange(shader_, t, varyings, shared_, rangeBegin, counters_);
+        }
+    }
+
+    void lightShared() {
+        if constexpr (Shader::kInterpolatesAcrossTriangles) {
+            shadeInterpolatedQueue(shader_, shared_, counters_);
+            merge(shared_.pixels);
+        }
+    }
+
+    /// For each pixel with samples of this piece: queue(edges at its centre, its first sample in
+    /// the tile, the samples, its index in the image); then its depths written.
+    template <class Queue>
+    void eachPixel(const TriangleSetup& t, std::span<const SeenPixel> pixels, const uint32_t (*masks)[kMaxClippedVertices],
+                   uint32_t piece, Queue queue) {
+        for (size_t i = 0; i < pixels.size(); ++i) {
+            const uint32_t pass = masks[i][piece];
+            if (!pass) continue;
+            const SeenPixel& px = pixels[i];
+            int64_t e[3];
+            edgesAtPixelCentre(t, px.x, px.y, e);
+            const uint32_t first = uint32_t(((px.y - originY_) * kTileSizePixels + (px.x - originX_)) * S);
+            queue(e, first, pass, uint32_t(px.y) * uint32_t(imageWidth_) + uint32_t(px.x));
+            counters_.samplesPassed += uint64_t(std::popcount(pass));
+            if (!state_.depthWrite) continue;
+            float d[S];
+            sampleDepths<S>(t, px.x, px.y, offsets_, d);
+            mergeDepth<S>(depth_ + first, pass, d);
+        }
+    }
+
+    /// Output merge of a lit queue's colours, opaque; empties the queue.
+    void merge(ShadeQueue& q) {
+        counters_.pixelsShaded += q.count;
+        for (int n = 0; n < q.count; ++n)
+            mergeColor<S>(color_ + q.firstSample[n], q.passMask[n],
+                          glm::vec4(q.red[n], q.green[n], q.blue[n], kSurface ? 1.0f : q.alpha[n]), state_.colorWriteMask);
+        q.count = 0;
+    }
+
+    const Shader& shader_;
+    const DrawState& state_;
+    int originX_, originY_, imageWidth_;
+    glm::vec4* color_;
+    float* depth_;
+    StageCounters& counters_;
+    SampleSubpixelOffsets<S> offsets_;
+    ShadeQueue own_;
+    [[maybe_unused]] InterpolatedQueueFor<Shader> shared_;  // an empty stand-in for a shader without one
+    bool sharing_ = false;
+};
+
+/// One draw's seen pixels of a block, sorted by slot: each slot's pixels split among its
+/// triangle's pieces, and each piece's shaded (DrawShading).
 template <int S, class Shader>
 void shadeDrawPixels(const Shader& shader, const DrawCall& call, const SeenDraw& seenDraw, std::span<const SeenPixel> pixels,
                      int originX, int originY, int imageWidth, glm::vec4* color, float* depth, StageCounters& counters,
                      uint64_t& withoutSetUp) {
-    constexpr bool kSurface = !std::is_same_v<Shader, ConstantColorShader>;
-    SampleSubpixelOffsets<S> offsets;
-    computeSampleSubpixelOffsets<S>(standardSamplePattern(S), offsets);
-    const DrawState& state = call.state;
-    ShadeQueue q;
+    DrawShading<S, Shader> shading(shader, call.state, originX, originY, imageWidth, color, depth, counters);
     uint32_t masks[ShadeQueue::kCapacity][kMaxClippedVertices];
-    // Where the draw lights across triangles (raster/shade.h), the block's triangles share one
-    // InterpolatedQueue, as the forward path's small triangles share their tile's: a block of
-    // small triangles would otherwise shade a queue of a pixel or a few per triangle. The depths
-    // are written as pixels are queued (every draw merges as opaque here, so a pixel's depth
-    // and colour are independent writes).
-    [[maybe_unused]] InterpolatedQueueFor<Shader> shared;  // an empty stand-in for a shader without one
-    bool sharing = false;
-    if constexpr (Shader::kInterpolatesAcrossTriangles) {
-        sharing = shader.interpolatesAcrossTriangles();
-        shared.pixels.count = 0;
-    }
-    const auto lightShared = [&] {
-        if constexpr (Shader::kInterpolatesAcrossTriangles) {
-            shadeInterpolatedQueue(shader, shared, counters);
-            const ShadeQueue& s = shared.pixels;
-            counters.pixelsShaded += s.count;
-            for (int n = 0; n < s.count; ++n)
-                mergeColor<S>(color + s.firstSample[n], s.passMask[n], glm::vec4(s.red[n], s.green[n], s.blue[n], 1.0f),
-                              state.colorWriteMask);
-            shared.pixels.count = 0;
-        }
-    };
     for (size_t begin = 0; begin < pixels.size();) {
         size_t end = begin;
         while (end < pixels.size() && pixels[end].slot == pixels[begin].slot) ++end;
-        const uint32_t slot = pixels[begin].slot;
+        const std::span<const SeenPixel> slotPixels = pixels.subspan(begin, end - begin);
+        begin = end;
+        const uint32_t slot = slotPixels[0].slot;
         const SeenPieces pieces = seenDraw.pieces[slot];
-        const SetupChunk& chunk = seenDraw.chunks[slot / kSeenTrianglesPerChunk];
         if (pieces.count == 0) {
-            for (size_t i = begin; i < end; ++i) withoutSetUp += uint64_t(std::popcount(pixels[i].pass));
-            begin = end;
+            for (const SeenPixel& px : slotPixels) withoutSetUp += uint64_t(std::popcount(px.pass));
             continue;
         }
-        // Most seen triangles are one piece; a clipped one's pixels are split among its fan.
-        if (pieces.count == 1) {
-            for (size_t i = begin; i < end; ++i) masks[i - begin][0] = pixels[i].pass;
-        } else {
-            const FanPieces<S> fan(chunk, pieces);
-            int32_t x0 = pixels[begin].x, x1 = x0, y0 = pixels[begin].y, y1 = y0;
-            for (size_t i = begin + 1; i < end; ++i)
-                x0 = std::min(x0, pixels[i].x), x1 = std::max(x1, pixels[i].x), y0 = std::min(y0, pixels[i].y),
-                y1 = std::max(y1, pixels[i].y);
-            if (const int whole = fan.wholeRect(x0, y0, x1, y1); whole >= 0) {
-                for (size_t i = begin; i < end; ++i)
-                    for (uint32_t p = 0; p < pieces.count; ++p) masks[i - begin][p] = int(p) == whole ? pixels[i].pass : 0;
-            } else {
-                for (size_t i = begin; i < end; ++i) fan.split(pixels[i].x, pixels[i].y, pixels[i].pass, masks[i - begin]);
-            }
-        }
+        const SetupChunk& chunk = seenDraw.chunks[slot / kSeenTrianglesPerChunk];
+        splitAmongPieces<S>(chunk, pieces, slotPixels, masks);
         for (uint32_t p = 0; p < pieces.count; ++p) {
             const TriangleSetup& t = chunk.setups[pieces.first + p];
-            const float* varyings = chunk.varyings.data() + t.varyingOffset;
-            if constexpr (Shader::kInterpolatesAcrossTriangles) {
-                if (sharing) {
-                    ShadeQueue& s = shared.pixels;
-                    int rangeBegin = s.count;
-                    for (size_t i = begin; i < end; ++i) {
-                        const uint32_t pass = masks[i - begin][p];
-                        if (!pass) continue;
-                        if (s.count == ShadeQueue::kCapacity) {
-                            if (s.count > rangeBegin) interpolateQueueRange(shader, t, varyings, shared, rangeBegin, counters);
-                            lightShared();
-                            rangeBegin = 0;
-                        }
-                        const SeenPixel& px = pixels[i];
-                        int64_t e[3];
-                        edgesAtPixelCentre(t, px.x, px.y, e);
-                        const uint32_t first = uint32_t(((px.y - originY) * kTileSizePixels + (px.x - originX)) * S);
-                        queueForInterpolation(shader, t, e, first, pass, uint32_t(px.y) * uint32_t(imageWidth) + uint32_t(px.x), s);
-                        counters.samplesPassed += uint64_t(std::popcount(pass));
-                        if (!state.depthWrite) continue;
-                        float d[S];
-                        sampleDepths<S>(t, px.x, px.y, offsets, d);
-                        mergeDepth<S>(depth + first, pass, d);
-                    }
-                    if (s.count > rangeBegin) interpolateQueueRange(shader, t, varyings, shared, rangeBegin, counters);
-                    continue;
-                }
-            }
-            q.count = 0;
-            for (size_t i = begin; i < end; ++i) {
-                const uint32_t pass = masks[i - begin][p];
-                if (!pass) continue;
-                const SeenPixel& px = pixels[i];
-                int64_t e[3];
-                edgesAtPixelCentre(t, px.x, px.y, e);
-                const int n = q.count++;
-                q.edge0[n] = e[0], q.edge1[n] = e[1], q.edge2[n] = e[2];
-                q.firstSample[n] = uint32_t(((px.y - originY) * kTileSizePixels + (px.x - originX)) * S);
-                q.passMask[n] = pass;
-                q.pixelIndex[n] = uint32_t(px.y) * uint32_t(imageWidth) + uint32_t(px.x);
-            }
-            if (q.count == 0) continue;
-            shadeQueue(shader, t, varyings, q, counters);
-            counters.pixelsShaded += q.count;
-            for (int n = 0; n < q.count; ++n) {
-                glm::vec4 c(q.red[n], q.green[n], q.blue[n], q.alpha[n]);
-                if (kSurface) c.a = 1.0f;
-                const uint32_t first = q.firstSample[n], pass = q.passMask[n];
-                mergeColor<S>(color + first, pass, c, state.colorWriteMask);
-                counters.samplesPassed += uint64_t(std::popcount(pass));
-                if (!state.depthWrite) continue;
-                const int pixel = int(first) / S;
-                float d[S];
-                sampleDepths<S>(t, originX + pixel % kTileSizePixels, originY + pixel / kTileSizePixels, offsets, d);
-                mergeDepth<S>(depth + first, pass, d);
-            }
+            shading.shadePiece(t, chunk.varyings.data() + t.varyingOffset, slotPixels, masks, p);
         }
-        begin = end;
     }
-    if constexpr (Shader::kInterpolatesAcrossTriangles) {
-        if (sharing && shared.pixels.count) lightShared();
-    }
+    shading.finish();
 }
 
 template <int S>
