@@ -6,6 +6,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "raster/huge_pages.h"
+
 namespace cuberille::raster {
 
 glm::mat4 perspectiveProjection(float fovyRadians, float aspect, float nearPlane, float farPlane, DepthConvention convention) {
@@ -30,10 +32,12 @@ void Framebuffer::reset(const FramebufferDesc& desc) {
     const size_t samples = size_t(tileCount()) * samplesPerTile();
     if (samples > sampleCapacity_) {
         depth_ = std::make_unique_for_overwrite<float[]>(samples);
+        adviseHugePages(depth_.get(), samples * sizeof(float));
         sampleCapacity_ = samples;
     }
     if (desc.colorAttachment && samples > colorCapacity_) {
         color_ = std::make_unique_for_overwrite<glm::vec4[]>(samples);
+        adviseHugePages(color_.get(), samples * sizeof(glm::vec4));
         colorCapacity_ = samples;
     }
     if (size_t(tileCount()) * kBlocksPerTile > blockCapacity_) {

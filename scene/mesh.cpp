@@ -2,17 +2,20 @@
 
 #include <cmath>
 
+#include "raster/huge_pages.h"
+
 namespace cuberille::scene {
 
 void computeVertexNormals(Mesh& mesh) {
-    std::vector<glm::dvec3> sum(mesh.positions.size(), glm::dvec3(0.0));
+    std::vector<glm::dvec3> sum;
+    raster::resizeAdvised(sum, mesh.positions.size(), glm::dvec3(0.0));
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
         const glm::dvec3 n = glm::cross(glm::dvec3(mesh.positions[b] - mesh.positions[a]),
                                         glm::dvec3(mesh.positions[c] - mesh.positions[a]));
         sum[a] += n, sum[b] += n, sum[c] += n;
     }
-    mesh.normals.resize(mesh.positions.size());
+    raster::resizeAdvised(mesh.normals, mesh.positions.size());
     for (size_t i = 0; i < sum.size(); ++i) {
         const double len = glm::length(sum[i]);
         mesh.normals[i] = len > 0.0 ? glm::vec3(sum[i] / len) : glm::vec3(0.0f, 0.0f, 1.0f);

@@ -14,6 +14,7 @@
 
 #include <libdeflate.h>
 
+#include "raster/huge_pages.h"
 #include "scene/input_error.h"
 #include "scene/text_parsing.h"
 #include "scene/file_names.h"
@@ -356,7 +357,8 @@ size_t readIndexLists(const Element& e, bool strips, size_t vertexCount, BodyRea
     const bool signedIndices = list.type == Type::Int32;
     const bool raw32 = !swap && (signedIndices || list.type == Type::UInt32);
     // Most scans' faces are triangles of uchar counts and int indices: room for that many.
-    if (!strips) mesh.indices.reserve(mesh.indices.size() + 3 * std::min(e.count, reader.remaining() / (countBytes + 3 * indexBytes)));
+    if (!strips)
+        raster::reserveAdvised(mesh.indices, mesh.indices.size() + 3 * std::min(e.count, reader.remaining() / (countBytes + 3 * indexBytes)));
     std::vector<uint32_t> polygon;
     size_t taken = 0;
     for (; taken < e.count; ++taken) {
@@ -411,9 +413,9 @@ Mesh parsePly(std::string_view bytes, const std::string& file) {
             sawVertices = true;
             vertexCount = e.count;
             hasNormals = nx >= 0 && ny >= 0 && nz >= 0;
-            mesh.positions.resize(e.count);
-            if (hasNormals) mesh.normals.resize(e.count);
-            if (hasColors) mesh.colors.resize(e.count);
+            raster::resizeAdvised(mesh.positions, e.count);
+            if (hasNormals) raster::resizeAdvised(mesh.normals, e.count);
+            if (hasColors) raster::resizeAdvised(mesh.colors, e.count);
         }
         if ((isFace || isStrips) && list < 0) fail(file, "element '" + e.name + "'", "no vertex_indices list");
         if ((isFace || isStrips) && !sawVertices) fail(file, "element '" + e.name + "'", e.name + " before vertices");
