@@ -267,9 +267,9 @@ public:
 
     /// The half of shade() that reads only the pixels' attributes and the draw: the normal map
     /// and the normals' facing, the other textures, occlusion, the shading model's lights,
-    /// emission, a coat, and the colours written to the queue. Texture fetches plan the queue's footprints once
-    /// (PixelAttributes::fetched): `a` is a fresh one, or forgetFetches() was called after its
-    /// last queue.
+    /// emission, a coat, and the colours written to the queue. Texture fetches plan the queue's
+    /// footprints once (PixelAttributes::fetched): `a` is a fresh one, or forgetFetches() was
+    /// called after its last queue.
     void shadeInterpolated(ShadeQueue& q, PixelAttributes& a, StageCounters& counters) const {
         if constexpr (kLit) {
             if (mapsNormals_) mappedNormals(q.count, a, counters);
