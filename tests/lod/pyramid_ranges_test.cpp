@@ -128,7 +128,9 @@ TEST(PyramidRanges, JoinedRangesWriteTheWholePyramidsBytesForAnyPlan) {
                              ", " + std::to_string(j.plan.rangeCount()) + " ranges");
                 splitLevelsSeen.insert(j.plan.splitLevel);
                 EXPECT_LE(j.plan.rangeCount(), wanted);
-                if (wanted > 1) EXPECT_GT(j.plan.rangeCount(), 1u);
+                if (wanted > 1) {
+                    EXPECT_GT(j.plan.rangeCount(), 1u);
+                }
                 EXPECT_TRUE(j.cvox == whole.cvox);  // not EXPECT_EQ: megabytes of bytes on failure
                 EXPECT_EQ(j.cvox.size(), whole.cvox.size());
                 EXPECT_TRUE(j.exportText == whole.exportText);
@@ -176,7 +178,9 @@ TEST(PyramidRanges, RangesStartOnSplitLevelSubtreesAndEachHoldsBlocks) {
         if (wanted > 1) {
             const size_t enough = std::min(2 * wanted, distinct.size());
             EXPECT_GE(subtreesAt(plan.splitLevel), enough);
-            if (plan.splitLevel + 1 < levels) EXPECT_LT(subtreesAt(plan.splitLevel + 1), enough);
+            if (plan.splitLevel + 1 < levels) {
+                EXPECT_LT(subtreesAt(plan.splitLevel + 1), enough);
+            }
         }
         std::vector<size_t> perRange(plan.rangeCount(), 0);
         for (uint64_t c : distinct) {
@@ -187,7 +191,9 @@ TEST(PyramidRanges, RangesStartOnSplitLevelSubtreesAndEachHoldsBlocks) {
         }
         for (size_t k = 0; k < plan.rangeCount(); ++k) {
             EXPECT_EQ(plan.rangeBegin(k) % subtree, 0u);
-            if (k > 0) EXPECT_LT(plan.rangeBegin(k - 1), plan.rangeBegin(k));
+            if (k > 0) {
+                EXPECT_LT(plan.rangeBegin(k - 1), plan.rangeBegin(k));
+            }
             EXPECT_GT(perRange[k], 0u) << "range " << k << " of " << plan.rangeCount();
         }
     }
