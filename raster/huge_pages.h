@@ -2,13 +2,14 @@
 // Transparent huge pages for the renderer's large buffers.
 //
 // A process that renders one image takes every page of its buffers fresh from the kernel: the
-// dragon at 1080p faulted 36,000 4 KiB pages (the framebuffer, the set-up records and varyings of
-// 871k triangles, the resolved float image), a third of its CPU time in the fault handler on this
+// dragon at 1080p faulted 36,000 4 KiB pages, a third of its CPU time in the fault handler on this
 // VM. Linux backs a range marked MADV_HUGEPAGE with 2 MiB pages where it can, one fault each
-// instead of 512 (Debian's default is `madvise`: only marked ranges get them). Measured with
-// glibc's equivalent switch (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, every large allocation):
-// `cuberille render dragon_vrip.binary.ply --width 1920 --height 1080`, six alternating runs,
-// 36,000 -> 6,000 faults and 148 -> 107 ms (medians) spawn to exit.
+// instead of 512 (Debian's default is `madvise`: only marked ranges get them). Advising the
+// buffers of kHugePageAdviceBytes or more (vertex outputs, framebuffer, resolved image, the PLY
+// loader's arrays): `cuberille render dragon_vrip.binary.ply --width 1920 --height 1080`, eight
+// alternating runs, 36,000 -> 16,000 faults and 154-160 -> 129-136 ms spawn to exit. Most faults
+// left are the front end's batches (4,096 triangles' set-up records and varyings, 557 KiB each),
+// too small to hold a 2 MiB page of their own.
 //
 // Only advice: where the kernel has no huge page free or THP is off, the range stays in 4 KiB
 // pages; nothing else changes, and no result depends on it.

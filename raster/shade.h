@@ -412,8 +412,9 @@ private:
             std::fill(a.facing + begin, a.facing + end, facing);
             return;
         }
-        unitFacing(begin, end, facing, a.normal);
-        if (coatNormal) unitFacing(begin, end, facing, a.coatNormal);
+        const auto triangleFacing = [facing](int) { return facing; };
+        unitFacing(begin, end, triangleFacing, a.normal);
+        if (coatNormal) unitFacing(begin, end, triangleFacing, a.coatNormal);
     }
 
     // The normals of a normal-mapped draw, for the whole queue: perturbed by the maps (normal
@@ -424,8 +425,9 @@ private:
         if (s_.textures.normal) normalMapped(s_.textures.normal, s_.normalScale, a.tangent, count, a, a.normal, counters);
         if (coatNormal && s_.textures.clearcoatNormal)
             normalMapped(s_.textures.clearcoatNormal, s_.brdf.clearcoatNormalScale, a.tangent, count, a, a.coatNormal, counters);
-        unitFacing(count, a.facing, a.normal);
-        if (coatNormal) unitFacing(count, a.facing, a.coatNormal);
+        const auto pixelFacing = [&a](int i) { return a.facing[i]; };
+        unitFacing(0, count, pixelFacing, a.normal);
+        if (coatNormal) unitFacing(0, count, pixelFacing, a.coatNormal);
     }
 
     // `normal` perturbed by a tangent-space normal map, in the frame of the interpolated tangent
@@ -446,20 +448,15 @@ private:
         counters.textureSamples += uint64_t(count);
     }
 
-    static void unitFacing(int begin, int end, float facing, float (&normal)[3][N]) {
+    /// Normals [begin, end) to unit length, each times facingAt(i), its pixel's sign: the
+    /// triangle's for a queue range (shadingNormals), each pixel's own over a normal-mapped queue
+    /// (mappedNormals). A zero normal stays zero.
+    template <class FacingAt>
+    static void unitFacing(int begin, int end, FacingAt facingAt, float (&normal)[3][N]) {
         for (int i = begin; i < end; ++i) {
             const float x = normal[0][i], y = normal[1][i], z = normal[2][i];
             const float len2 = x * x + y * y + z * z;
-            const float inv = len2 > 0.0f ? facing / std::sqrt(len2) : 0.0f;
-            normal[0][i] = x * inv, normal[1][i] = y * inv, normal[2][i] = z * inv;
-        }
-    }
-    /// The same, each pixel with its own sign.
-    static void unitFacing(int count, const float* facing, float (&normal)[3][N]) {
-        for (int i = 0; i < count; ++i) {
-            const float x = normal[0][i], y = normal[1][i], z = normal[2][i];
-            const float len2 = x * x + y * y + z * z;
-            const float inv = len2 > 0.0f ? facing[i] / std::sqrt(len2) : 0.0f;
+            const float inv = len2 > 0.0f ? facingAt(i) / std::sqrt(len2) : 0.0f;
             normal[0][i] = x * inv, normal[1][i] = y * inv, normal[2][i] = z * inv;
         }
     }

@@ -278,8 +278,9 @@ HWY_INLINE Texel sampleStored(const TexelPyramid& t, const SampleFootprints& f, 
 /// model with large textures is bound by these misses (DamagedHelmet at one sample: the first
 /// gather of each tap was a third of its cycles, waiting for its line), and a gather waits for its
 /// lanes before the next one issues; prefetches do not wait, so the misses of the whole batch are
-/// in flight together. The top-left and bottom-right texels' lines cover a footprint but where it crosses a
-/// tile corner (1 in 16 at a texel a pixel); a line just asked for is not asked again.
+/// in flight together. The top-left and bottom-right texels' lines cover a footprint but where
+/// it crosses a tile corner (1 in 16 at a texel a pixel); a line just asked for is not asked
+/// again.
 HWY_INLINE void prefetchFootprints(const TexelPyramid& t, const SampleFootprints& f) {
     const int32_t* mixLevels = f.mixLevels;
     intptr_t lastLine = -1;
