@@ -320,7 +320,7 @@ std::vector<AccuracySetting> accuracySweep(const SceneTraits& t, bool soft, int 
     // (the same image from each; the time differs). A voxel model's rays see its finest level of
     // solid voxels, where the rasterizer draws the level of detail's active faces.
     if (t.threeD || t.voxel) {
-        const std::vector<const char*> structures = t.voxel ? std::vector<const char*>{"", "bvh", "kdtree", "octree"}
+        const std::vector<const char*> structures = t.voxel ? std::vector<const char*>{"", "bvh", "kdtree", "octree", "bvh8"}
                                                             : std::vector<const char*>{"", "bvh", "grid"};
         for (size_t i = 0; i < structures.size(); ++i) {
             Knobs k = balanced;

@@ -109,7 +109,8 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& o, RenderNames& names) 
                        "hybrid/raytraced/auto and --ao): bvh (built once, kept for every view and following each "
                        "--animate pose as --bvh-update says) or grid (a uniform grid rebuilt from scratch for every "
                        "frame, Wald et al. 2006); for a voxel model's camera rays, bvh, kdtree or octree over its "
-                       "voxels (Chajdas 2015, chapter 5). The same images whichever")
+                       "voxels (Chajdas 2015, chapter 5), or bvh8 (that BVH with eight children a node, tested in "
+                       "vector lanes). The same images whichever")
         ->capture_default_str();
     render->add_option("--pixel-error", o.pixelError,
                        "Voxel models: refine blocks until a voxel's edge projects to at most this many pixels "

@@ -122,7 +122,7 @@ void applyAccel(const std::string& name, FrameSettings& f) {
         f.accel = rt::CasterAccel::Bvh;
         f.voxelAccel = voxel;
     } else {
-        throw scene::InputError("--accel: '" + name + "' is not bvh, grid, kdtree or octree");
+        throw scene::InputError("--accel: '" + name + "' is not bvh, grid, kdtree, octree or bvh8");
     }
 }
 

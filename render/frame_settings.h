@@ -145,7 +145,7 @@ raster::DepthConvention parseDepthConvention(const std::string& name);
 rt::BvhUpdateMethod parseBvhUpdate(const std::string& name);
 rt::CasterAccel parseAccel(const std::string& name);  // bvh or grid; throws scene::InputError
 /// --accel NAME into both fields: bvh (either kind of scene), grid (triangle scenes; voxel models
-/// refuse it when they render), kdtree or octree (voxel models). Throws scene::InputError.
+/// refuse it when they render), kdtree, octree or bvh8 (voxel models). Throws scene::InputError.
 void applyAccel(const std::string& name, FrameSettings& f);
 const char* accelName(rt::CasterAccel accel);
 Renderer parseRenderer(const std::string& name);  // raster or raytrace; throws scene::InputError

@@ -113,7 +113,7 @@ void validate(const State& s, const FrameSettings& o) {
     if (o.renderer == Renderer::Raytrace && tri)
         throw InputError("--renderer raytrace: only for 3D scenes (glTF, PLY, OBJ, built-in) and voxel models, not " + s.name);
     if (o.renderer == Renderer::Raytrace && voxel && o.accel == rt::CasterAccel::Grid)
-        throw InputError("--accel grid: a grid over triangles; a voxel model's rays take bvh, kdtree or octree");
+        throw InputError("--accel grid: a grid over triangles; a voxel model's rays take bvh, kdtree, octree or bvh8");
     if (o.voxelAccel != rt::VoxelStructure::Bvh && !(voxel && o.renderer == Renderer::Raytrace))
         throw InputError(std::string("--accel ") + rt::voxelStructureName(o.voxelAccel) +
                          ": a tree over voxels, for voxel models (.cvox) with --renderer raytrace");

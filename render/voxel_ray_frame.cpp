@@ -57,6 +57,7 @@ VoxelRayScene::VoxelRayScene(const voxel::VoxelModel& model, uint32_t level, rt:
         case rt::VoxelStructure::Bvh: tree_.emplace<rt::VoxelBvh>(coords_); break;
         case rt::VoxelStructure::KdTree: tree_.emplace<rt::VoxelKdTree>(coords_); break;
         case rt::VoxelStructure::Octree: tree_.emplace<rt::VoxelOctree>(coords_); break;
+        case rt::VoxelStructure::WideBvh: tree_.emplace<rt::WideVoxelBvh>(coords_); break;
     }
     gatherMs_ = t1 - t0;
     buildMs_ = raster::nowMs() - t1;

@@ -3,7 +3,8 @@
 // voxels (Chajdas 2015, chapter 5), shaded as the rasterizer shades voxel faces.
 //
 //   gather   the level's voxels into 16-bit grid coordinates (kept with the tree between frames)
-//   build    the --accel tree over them: bvh, kdtree or octree (rt/voxel_trees.h)
+//   build    the --accel tree over them: bvh, kdtree or octree (rt/voxel_trees.h), or bvh8
+//            (rt/wide_voxel_bvh.h)
 //   trace    a ray per sample of the rasterizer's pattern, near plane to far plane, in grid units;
 //            each hit is a voxel and the face the ray enters it by
 //   light    with --shadows raytraced and --ao: at each pixel centre's face, rays toward the
@@ -39,6 +40,7 @@
 #include "raster/draw.h"
 #include "raster/pipeline.h"
 #include "rt/voxel_trees.h"
+#include "rt/wide_voxel_bvh.h"
 #include "scene/camera.h"
 #include "voxel/voxel_model.h"
 
@@ -107,7 +109,7 @@ private:
     std::vector<rt::VoxelCoord> coords_;
     std::vector<uint32_t> normals_, colors_;  // per voxel, packed as in the .cvox
     std::optional<glm::vec3> uncoloured_;     // a model without colours: the albedo lod::VoxelScene gives it
-    std::variant<std::monostate, rt::VoxelBvh, rt::VoxelKdTree, rt::VoxelOctree> tree_;
+    std::variant<std::monostate, rt::VoxelBvh, rt::VoxelKdTree, rt::VoxelOctree, rt::WideVoxelBvh> tree_;
     double gatherMs_ = 0, buildMs_ = 0;
     bool reported_ = false;  // gather and build times go to the first frame's stats only
     // The last frame's face quads: the recorded draw points into them until endFrame.

@@ -20,12 +20,13 @@ const char* voxelStructureName(VoxelStructure s) {
         case VoxelStructure::Bvh: return "bvh";
         case VoxelStructure::KdTree: return "kdtree";
         case VoxelStructure::Octree: return "octree";
+        case VoxelStructure::WideBvh: return "bvh8";
     }
     return "?";
 }
 
 bool parseVoxelStructure(const std::string& name, VoxelStructure* out) {
-    for (VoxelStructure s : {VoxelStructure::Bvh, VoxelStructure::KdTree, VoxelStructure::Octree})
+    for (VoxelStructure s : {VoxelStructure::Bvh, VoxelStructure::KdTree, VoxelStructure::Octree, VoxelStructure::WideBvh})
         if (name == voxelStructureName(s)) {
             *out = s;
             return true;

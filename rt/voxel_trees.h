@@ -58,9 +58,9 @@ struct VoxelTreeSize {
     double meanLeafDepth = 0;
 };
 
-enum class VoxelStructure { Bvh, KdTree, Octree };
+enum class VoxelStructure { Bvh, KdTree, Octree, WideBvh };
 const char* voxelStructureName(VoxelStructure s);
-/// "bvh", "kdtree", "octree"; false for anything else.
+/// "bvh", "kdtree", "octree", "bvh8" (rt/wide_voxel_bvh.h); false for anything else.
 bool parseVoxelStructure(const std::string& name, VoxelStructure* out);
 
 /// Voxels' bounds as a cell range: [lo, hi) on each axis, in grid units (empty: lo > hi).
@@ -104,6 +104,11 @@ public:
     /// The arrays as laid out (the same bits at every thread count the build ran on).
     std::span<const Node> nodes() const { return nodes_; }
     const VoxelLeaves& leafData() const { return data_; }
+    /// The root's reference (VoxelNodeRef; kNull for an empty tree) and the box a traversal
+    /// starts in, [rootLo, rootHi).
+    uint32_t root() const { return root_; }
+    glm::vec3 rootLo() const { return rootLo_; }
+    glm::vec3 rootHi() const { return rootHi_; }
 
 protected:
     /// Copies the voxels, each remembering its index in `voxels`.

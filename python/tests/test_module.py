@@ -91,7 +91,7 @@ def test_the_grid_answers_the_shadow_stages_rays_as_the_bvh_does(examples):
     through_grid = scene.render(accel="grid", **settings)
     assert scene.stats["shadows"]["accel"] == "grid"
     assert np.array_equal(through_grid, through_bvh)
-    with pytest.raises(cuberille.InputError, match="--accel: 'octtree' is not bvh, grid, kdtree or octree"):
+    with pytest.raises(cuberille.InputError, match="--accel: 'octtree' is not bvh, grid, kdtree, octree or bvh8"):
         scene.render(accel="octtree", **settings)
     with pytest.raises(cuberille.InputError, match="--accel octree: a tree over voxels"):
         scene.render(accel="octree", **settings)

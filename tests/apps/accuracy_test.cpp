@@ -261,7 +261,7 @@ TEST(AccuracySweep, TheRendererKnobSetsRaysThroughEachStructureFor3dScenesAndVox
     rendererKnobValues(voxel, forVoxel);
     rendererKnobValues(SceneTraits{}, forTri);
     EXPECT_EQ(forThreeD, (std::vector<std::string>{"raster", "raytrace, bvh", "raytrace, grid"}));
-    EXPECT_EQ(forVoxel, (std::vector<std::string>{"raster", "raytrace, bvh", "raytrace, kdtree", "raytrace, octree"}));
+    EXPECT_EQ(forVoxel, (std::vector<std::string>{"raster", "raytrace, bvh", "raytrace, kdtree", "raytrace, octree", "raytrace, bvh8"}));
     EXPECT_TRUE(forTri.empty());  // a 2D .tri scene has no rays
 }
 

@@ -53,7 +53,8 @@ TEST_F(VoxelRayFrame, EveryTreeGivesTheSameBitsAtEveryThreadCount) {
         ASSERT_TRUE(reference.voxelRays);
         EXPECT_EQ(reference.voxelRays->rays, uint64_t(f.width) * uint64_t(f.height) * uint64_t(msaa));
         EXPECT_GT(reference.voxelRays->hits, reference.voxelRays->rays / 10);  // the sphere fills a sixth of the frame
-        for (rt::VoxelStructure tree : {rt::VoxelStructure::Bvh, rt::VoxelStructure::KdTree, rt::VoxelStructure::Octree})
+        for (rt::VoxelStructure tree : {rt::VoxelStructure::Bvh, rt::VoxelStructure::KdTree, rt::VoxelStructure::Octree,
+                                        rt::VoxelStructure::WideBvh})
             for (int threads : {1, 2, 7}) {
                 SCOPED_TRACE(::testing::Message() << rt::voxelStructureName(tree) << ", " << threads << " threads, " << msaa << " samples");
                 const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
@@ -206,7 +207,7 @@ TEST_F(VoxelRayFrame, ShadowsAndOcclusionAreTheSameBitsFromEveryTreeAndThreadCou
     f = frame();
     f.shadows = {.mode = rt::ShadowMode::RayTraced, .soft = true, .lightRadius = 0.2f};
     f.ambientOcclusion.raysPerPixel = 8;
-    for (rt::VoxelStructure tree : {rt::VoxelStructure::KdTree, rt::VoxelStructure::Octree})
+    for (rt::VoxelStructure tree : {rt::VoxelStructure::KdTree, rt::VoxelStructure::Octree, rt::VoxelStructure::WideBvh})
         for (int threads : {1, 7}) {
             const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
             f.voxelAccel = tree;

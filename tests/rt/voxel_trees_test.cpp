@@ -3,7 +3,8 @@
 // random voxel sets and on the rays that break naive traversals (axis-parallel rays in the planes
 // between voxels, rays along edges, origins on faces and corners, -0 components); the hit rule
 // needs no offset for rays leaving a face; the builds keep their rules; the lane simulation counts
-// what it says.
+// what it says. The wide BVH (rt/wide_voxel_bvh.h) is held to the same hits; its suite runs once
+// per instruction set (tests/CMakeLists.txt), so every compiled slab test is.
 
 #include <gtest/gtest.h>
 
@@ -17,6 +18,7 @@
 
 #include "rt/voxel_traversal.h"
 #include "rt/voxel_trees.h"
+#include "rt/wide_voxel_bvh.h"
 
 namespace cuberille::rt {
 namespace {
@@ -97,16 +99,25 @@ void expectBruteForcesHits(const Tree& tree, std::span<const VoxelHit> bruteForc
     }
 }
 
-TEST(VoxelTrees, EveryStructureAndStackSizeGivesBruteForcesHit) {
+/// The three test scenes, each with 3,000 rays and brute force's hits for them:
+/// check(voxels, bruteForce, rays).
+template <class Check>
+void onTestScenes(Check&& check) {
     for (uint32_t seed : {1u, 2u, 3u}) {
         const std::vector<VoxelCoord> voxels = voxelScene(seed);
         const std::vector<Ray> rays = testRays(seed + 10, 3000);
         std::vector<VoxelHit> bruteForce;
         for (const Ray& r : rays) bruteForce.push_back(closestVoxelBruteForce(voxels, VoxelRay(r)));
+        check(voxels, bruteForce, rays);
+    }
+}
+
+TEST(VoxelTrees, EveryStructureAndStackSizeGivesBruteForcesHit) {
+    onTestScenes([](const std::vector<VoxelCoord>& voxels, const std::vector<VoxelHit>& bruteForce, const std::vector<Ray>& rays) {
         expectBruteForcesHits(VoxelBvh(voxels), bruteForce, rays, "bvh");
         expectBruteForcesHits(VoxelKdTree(voxels), bruteForce, rays, "kdtree");
         expectBruteForcesHits(VoxelOctree(voxels), bruteForce, rays, "octree");
-    }
+    });
 }
 
 TEST(VoxelTrees, TinyAndEmptySetsAnswerLikeBruteForce) {
@@ -120,6 +131,7 @@ TEST(VoxelTrees, TinyAndEmptySetsAnswerLikeBruteForce) {
             EXPECT_EQ(VoxelBvh(voxels).trace(ray, {}).voxel, expected.voxel);
             EXPECT_EQ(VoxelKdTree(voxels).trace(ray, {}).voxel, expected.voxel);
             EXPECT_EQ(VoxelOctree(voxels).trace(ray, {}).voxel, expected.voxel);
+            EXPECT_EQ(WideVoxelBvh(voxels).trace(ray, {}).voxel, expected.voxel);
         }
     }
 }
@@ -243,6 +255,72 @@ TEST(VoxelTrees, BuildsAreTheSameBitsAtEveryThreadCount) {
         expectSameLayout(*kd, VoxelKdTree(voxels));
         expectSameLayout(*octree, VoxelOctree(voxels));
     }
+}
+
+TEST(WideVoxelBvh, GivesBruteForcesHitOnRandomAndDegenerateRays) {
+    onTestScenes([](const std::vector<VoxelCoord>& voxels, const std::vector<VoxelHit>& bruteForce, const std::vector<Ray>& rays) {
+        expectBruteForcesHits(WideVoxelBvh(voxels), bruteForce, rays, "bvh8");
+    });
+}
+
+TEST(WideVoxelBvh, TinyAndEmptySetsAnswerLikeBruteForce) {
+    const std::vector<Ray> rays = testRays(5, 300);
+    for (size_t n : {0, 1, 2, 8, 9, 64, 65}) {
+        std::vector<VoxelCoord> voxels;
+        for (size_t i = 0; i < n; ++i) voxels.push_back({uint16_t(130 + i % 9), uint16_t(36 + (i % 3)), uint16_t(330 + i / 2)});
+        const WideVoxelBvh tree(voxels);
+        for (const Ray& r : rays) {
+            const VoxelRay ray(r);
+            const VoxelHit expected = closestVoxelBruteForce(voxels, ray);
+            const VoxelHit got = tree.trace(ray, {});
+            EXPECT_EQ(got.voxel, expected.voxel);
+            EXPECT_EQ(std::bit_cast<uint32_t>(got.t), std::bit_cast<uint32_t>(expected.t));
+            EXPECT_EQ(tree.trace(ray, {.anyHit = true}).hit(), expected.hit());
+        }
+    }
+}
+
+TEST(WideVoxelBvh, HoldsEveryBinaryLeafOnceUnderFewerLevels) {
+    const std::vector<VoxelCoord> voxels = voxelScene(4);
+    const VoxelBvh binary(voxels);
+    const WideVoxelBvh wide(binary);
+    // Every leaf of the binary tree is a child of exactly one wide node; unused slots are null
+    // with an inverted box, and every used box holds its subtree's voxels.
+    std::vector<int> seen(binary.leafData().leaves.size(), 0);
+    size_t usedSlots = 0;
+    for (const WideVoxelBvhNode& n : wide.nodes())
+        for (int c = 0; c < kWideVoxelBvhWidth; ++c) {
+            if (n.child[c] == VoxelNodeRef::kNull) {
+                EXPECT_GT(n.lo[0][c], n.hi[0][c]);
+                continue;
+            }
+            ++usedSlots;
+            if (!VoxelNodeRef::isLeaf(n.child[c])) continue;
+            ++seen[VoxelNodeRef::index(n.child[c])];
+            const VoxelLeaf& leaf = wide.leafData().leaves[VoxelNodeRef::index(n.child[c])];
+            for (uint32_t i = leaf.first; i < leaf.first + leaf.count; ++i) {
+                const VoxelCoord& v = wide.leafData().voxels[i];
+                EXPECT_TRUE(v.x >= n.lo[0][c] && v.x <= n.hi[0][c] && v.y >= n.lo[1][c] && v.y <= n.hi[1][c] &&
+                            v.z >= n.lo[2][c] && v.z <= n.hi[2][c]);
+            }
+        }
+    for (int count : seen) EXPECT_EQ(count, 1);
+    // A wide node of k children absorbs the k - 1 binary nodes it opened, each binary node once.
+    EXPECT_EQ(usedSlots - wide.nodes().size(), binary.nodes().size());
+    EXPECT_LT(wide.nodes().size() * 2, binary.nodes().size());
+    EXPECT_LT(wide.height() * 2, binary.size().depth);
+    // The same leaves, the same voxels in the same order: hits name the same source voxels.
+    EXPECT_EQ(wide.leafData().voxels, binary.leafData().voxels);
+    EXPECT_EQ(wide.leafData().sourceIndex, binary.leafData().sourceIndex);
+    // A ray visits fewer interior nodes than through the binary tree, and no more leaves.
+    VoxelTraversalCounters wideCounts, binaryCounts;
+    for (const Ray& r : testRays(8, 500)) {
+        wide.trace(VoxelRay(r), {}, &wideCounts);
+        binary.trace(VoxelRay(r), {}, &binaryCounts);
+    }
+    EXPECT_EQ(wideCounts.hits, binaryCounts.hits);
+    EXPECT_LT(wideCounts.interiorSteps * 2, binaryCounts.interiorSteps);
+    EXPECT_LE(wideCounts.leafSteps, binaryCounts.leafSteps);
 }
 
 TEST(VoxelLaneOccupancy, CountsUsefulLaneSlotsOfLockstepIterations) {
