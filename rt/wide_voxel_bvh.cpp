@@ -108,15 +108,15 @@ VoxelHit traceWideVoxelBvhOnTarget(const WideVoxelBvh& tree, const VoxelRay& ray
         // The children met, farthest first (ties in slot order), so the nearest is popped next.
         // Any-hit rays too: pushed in slot order instead, soft-shadow and occlusion rays visited
         // more nodes and ran 6-13% slower on the 2048³ dragon (voxel_rays_bench).
-        Pending met[kWideVoxelBvhWidth];
-        int count = 0;
+        // Sorted in place on the stack: gathered first and copied there, the copy became a
+        // `rep movsq`, with 15% of a soft-shadow frame's traversal samples (perf).
+        const int base = top;
         for (unsigned bits = childrenEntered(node, ray, sceneEnter, sceneExit, best.t, entry); bits != 0; bits &= bits - 1) {
             const int c = std::countr_zero(bits);
-            int at = count++;
-            for (; at > 0 && met[at - 1].entry < entry[c]; --at) met[at] = met[at - 1];
-            met[at] = {node.child[c], entry[c]};
+            int at = top++;
+            for (; at > base && stack[at - 1].entry < entry[c]; --at) stack[at] = stack[at - 1];
+            stack[at] = {node.child[c], entry[c]};
         }
-        for (int i = 0; i < count; ++i) stack[top++] = met[i];
     }
     return best;
 }
