@@ -16,7 +16,7 @@
 // operations in its order (the same integer planes, the same half-open parallel slabs), a child is
 // entered when its segment has positive length and starts no later than the best hit, and the leaf
 // routine is the shared one. The hit is brute force's bit for bit, whatever order the children are
-// visited in (VoxelTrees tests, once per instruction set through CUBERILLE_SIMD).
+// visited in (the WideVoxelBvh tests of tests/rt/voxel_trees_test.cpp, run once per instruction set).
 //
 // The stack is a full one, never the short stack of §5.4.4: a wide node pushes up to seven
 // children at once, so a ring of a few entries would lose most of them and restart at nearly every
